@@ -1,0 +1,10 @@
+"""lanelib: camera-based lane finding, stage by stage.
+
+The stages live in their own modules (camera, perspective, thresholds, lanes, tracking, draw,
+hough); ``lanelib.pipeline.LanePipeline`` wires them from one ``PipelineConfig``.
+"""
+from .errors import CalibrationError, ConfigError, InputError, LaneLibError
+
+__version__ = "0.1.0"
+
+__all__ = ["LaneLibError", "InputError", "CalibrationError", "ConfigError", "__version__"]

@@ -1,0 +1,135 @@
+"""Perspective transform between the (undistorted) road image and a bird's-eye view.
+
+The default points belong to the Udacity highway camera at 1280x720 (and to lanelib's synthetic
+camera, which is built to match it). They were chosen on the undistorted ``straight_lines1.jpg``
+and ``straight_lines2.jpg``: both straight lane lines, fitted in the undistorted image, meet at the
+vanishing point (640, 418), and the lane is 894 px wide on the bottom row. The trapezoid's sides
+run through that vanishing point, so a straight lane becomes two vertical lines in the bird's-eye
+view, and its bottom corners lie on a 3.7 m lane centred on the camera, so the two dst lines are
+3.7 m apart. The visible road length (bottom row to the top of the trapezoid) follows from the
+same geometry: with the camera 1.255 m above the road the trapezoid spans 4.8 m to 34.3 m ahead,
+29.6 m in all (the synthetic camera's ground truth gives the exact figure).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .errors import ConfigError, InputError
+
+Point = tuple[float, float]
+
+# src: top-left, bottom-left, bottom-right, top-right (undistorted 1280x720 image)
+DEFAULT_SRC_1280x720: tuple[Point, ...] = ((578.0, 460.0), (193.0, 720.0), (1087.0, 720.0), (702.0, 460.0))
+# dst: the same corners in the bird's-eye view (1280x720)
+DEFAULT_DST_1280x720: tuple[Point, ...] = ((320.0, 0.0), (320.0, 720.0), (960.0, 720.0), (960.0, 0.0))
+DEFAULT_LANE_WIDTH_M = 3.7
+DEFAULT_VISIBLE_LENGTH_M = 29.6
+
+
+@dataclass(frozen=True)
+class PerspectiveConfig:
+    """Source and destination points of the bird's-eye transform and the metric scale they carry.
+
+    Parameters
+    ----------
+    src_px : four (x, y) points in the undistorted image: top-left, bottom-left, bottom-right,
+        top-right of a stretch of straight lane.
+    dst_px : the same four points in the bird's-eye image (a rectangle).
+    size_px : (width, height) of the images the points belong to; the bird's-eye view has this size.
+    lane_width_m : the real distance between the dst left and right lines (US lane: 3.7 m).
+    visible_length_m : the real road length between the dst top and bottom rows.
+    """
+
+    src_px: tuple[Point, ...] = DEFAULT_SRC_1280x720
+    dst_px: tuple[Point, ...] = DEFAULT_DST_1280x720
+    size_px: tuple[int, int] = (1280, 720)
+    lane_width_m: float = DEFAULT_LANE_WIDTH_M
+    visible_length_m: float = DEFAULT_VISIBLE_LENGTH_M
+
+    def __post_init__(self):
+        for name in ("src_px", "dst_px"):
+            pts = getattr(self, name)
+            if len(pts) != 4 or any(len(p) != 2 for p in pts):
+                raise ConfigError(f"perspective.{name}: needs four (x, y) points, got {pts!r}")
+        if self.lane_width_m <= 0 or self.visible_length_m <= 0:
+            raise ConfigError("perspective.lane_width_m and visible_length_m must be positive")
+
+    @property
+    def xm_per_px(self) -> float:
+        """Metres per bird's-eye pixel across the road."""
+        d = np.asarray(self.dst_px, dtype=float)
+        width_px = abs((d[2, 0] + d[3, 0]) / 2 - (d[0, 0] + d[1, 0]) / 2)
+        return self.lane_width_m / width_px
+
+    @property
+    def ym_per_px(self) -> float:
+        """Metres per bird's-eye pixel along the road."""
+        d = np.asarray(self.dst_px, dtype=float)
+        length_px = abs((d[1, 1] + d[2, 1]) / 2 - (d[0, 1] + d[3, 1]) / 2)
+        return self.visible_length_m / length_px
+
+
+def trapezoid_src(top_y: float, bottom_y: float, top_width: float, bottom_width: float,
+                  centre_x: float) -> tuple[Point, ...]:
+    """Return src points (tl, bl, br, tr) of a symmetric trapezoid; all arguments in pixels."""
+    return ((centre_x - top_width / 2, top_y), (centre_x - bottom_width / 2, bottom_y),
+            (centre_x + bottom_width / 2, bottom_y), (centre_x + top_width / 2, top_y))
+
+
+def scaled(config: PerspectiveConfig, size_px: tuple[int, int]) -> PerspectiveConfig:
+    """Return ``config`` with its points scaled to images of ``size_px`` (w, h)."""
+    sx = size_px[0] / config.size_px[0]
+    sy = size_px[1] / config.size_px[1]
+    sc = lambda pts: tuple((x * sx, y * sy) for x, y in pts)  # noqa: E731
+    return PerspectiveConfig(sc(config.src_px), sc(config.dst_px), tuple(size_px),
+                             config.lane_width_m, config.visible_length_m)
+
+
+class Perspective:
+    """Warp between the undistorted image and the bird's-eye view, with its metric scale.
+
+    ``M`` maps undistorted-image points to bird's-eye points; ``Minv`` maps back.
+    """
+
+    def __init__(self, config: PerspectiveConfig = PerspectiveConfig()):
+        self.config = config
+        src = np.float32(config.src_px)
+        dst = np.float32(config.dst_px)
+        if abs(cv2.contourArea(src)) < 1 or abs(cv2.contourArea(dst)) < 1:
+            raise ConfigError("perspective: the src or dst points are collinear or repeated; "
+                              "choose four corners of a trapezoid")
+        self.M = cv2.getPerspectiveTransform(src, dst)
+        self.Minv = cv2.getPerspectiveTransform(dst, src)
+        self.size = tuple(int(v) for v in config.size_px)
+        self.xm_per_px = config.xm_per_px
+        self.ym_per_px = config.ym_per_px
+
+    def _check(self, image: np.ndarray) -> None:
+        h, w = image.shape[:2]
+        if (w, h) != self.size:
+            raise InputError(f"perspective: image is {w}x{h} but the points are for "
+                             f"{self.size[0]}x{self.size[1]}; use perspective.scaled() or a config "
+                             "made for this camera")
+
+    def warp(self, image: np.ndarray, interpolation: int = cv2.INTER_LINEAR) -> np.ndarray:
+        """Return the bird's-eye view of an undistorted image (same size)."""
+        self._check(image)
+        return cv2.warpPerspective(image, self.M, self.size, flags=interpolation)
+
+    def unwarp(self, image: np.ndarray, interpolation: int = cv2.INTER_LINEAR) -> np.ndarray:
+        """Return a bird's-eye image mapped back into the undistorted camera view."""
+        self._check(image)
+        return cv2.warpPerspective(image, self.Minv, self.size, flags=interpolation)
+
+    def warp_points(self, pts: np.ndarray) -> np.ndarray:
+        """Map (N, 2) undistorted-image points to bird's-eye points."""
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
+        return cv2.perspectiveTransform(p, self.M).reshape(-1, 2)
+
+    def unwarp_points(self, pts: np.ndarray) -> np.ndarray:
+        """Map (N, 2) bird's-eye points back to undistorted-image points."""
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
+        return cv2.perspectiveTransform(p, self.Minv).reshape(-1, 2)
