@@ -1,0 +1,133 @@
+"""``PipelineConfig``: every tunable parameter of the pipelines, nested, saved and loaded as JSON.
+
+Each stage owns its parameter record (``PerspectiveConfig`` in perspective, ``ThresholdConfig``
+in thresholds, ...); this module nests them and converts the nest to and from JSON. Loading is
+strict: an unknown key or a value of the wrong type raises ``ConfigError`` naming the key by its
+dotted path (e.g. ``thresholds.white.low``). A JSON file may hold only some keys; the others keep
+their defaults.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+import types
+import typing
+from dataclasses import dataclass, fields, is_dataclass
+from pathlib import Path
+
+from . import io
+from .draw import DrawConfig
+from .errors import ConfigError
+from .hough import HoughConfig
+from .lanes import SearchConfig
+from .perspective import PerspectiveConfig
+from .thresholds import ThresholdConfig
+from .tracking import TrackerConfig
+
+
+@dataclass(frozen=True)
+class PipelineConfig:
+    """All parameters of the advanced pipeline (and of the basic Hough pipeline)."""
+
+    perspective: PerspectiveConfig = PerspectiveConfig()
+    thresholds: ThresholdConfig = ThresholdConfig()
+    search: SearchConfig = SearchConfig()
+    tracking: TrackerConfig = TrackerConfig()
+    draw: DrawConfig = DrawConfig()
+    hough: HoughConfig = HoughConfig()
+
+
+def to_dict(obj) -> dict:
+    """Return a dataclass nest as plain dicts, lists and numbers (JSON-able)."""
+    if is_dataclass(obj):
+        return {f.name: to_dict(getattr(obj, f.name)) for f in fields(obj)}
+    if isinstance(obj, (tuple, list)):
+        return [to_dict(v) for v in obj]
+    return obj
+
+
+def _convert(value, tp, key: str):
+    """Return ``value`` converted to type ``tp``; a mismatch raises ConfigError naming ``key``."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        options = typing.get_args(tp)
+        if value is None and type(None) in options:
+            return None
+        errors = []
+        for opt in options:
+            if opt is type(None):
+                continue
+            try:
+                return _convert(value, opt, key)
+            except ConfigError as e:
+                errors.append(str(e))
+        raise ConfigError(errors[0] if errors else f"{key}: unexpected value {value!r}")
+    if is_dataclass(tp):
+        if not isinstance(value, dict):
+            raise ConfigError(f"{key}: expected an object of {tp.__name__} fields, got {value!r}")
+        return from_dict(tp, value, prefix=key)
+    if origin is tuple:
+        args = typing.get_args(tp)
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f"{key}: expected a list, got {value!r}")
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_convert(v, args[0], f"{key}[{i}]") for i, v in enumerate(value))
+        if len(value) != len(args):
+            raise ConfigError(f"{key}: expected {len(args)} values, got {len(value)}")
+        return tuple(_convert(v, a, f"{key}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{key}: expected a number, got {value!r}")
+        return float(value)
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{key}: expected a whole number, got {value!r}")
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(f"{key}: expected true or false, got {value!r}")
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{key}: expected a string, got {value!r}")
+        return value
+    return value
+
+
+def from_dict(cls, data: dict, prefix: str = ""):
+    """Return an instance of dataclass ``cls`` from a (partial) dict; strict about keys and types."""
+    hints = typing.get_type_hints(cls)
+    names = {f.name for f in fields(cls) if f.init}
+    base = cls()
+    kwargs = {}
+    for key, value in data.items():
+        dotted = f"{prefix}.{key}" if prefix else key
+        if key not in names:
+            raise ConfigError(f"{dotted}: unknown key; known keys here: {', '.join(sorted(names))}")
+        tp = hints[key]
+        if is_dataclass(tp) and isinstance(value, dict):
+            # a partial nested object keeps the defaults of the keys it leaves out
+            current = to_dict(getattr(base, key))
+            current.update(value)
+            value = current
+        kwargs[key] = _convert(value, tp, dotted)
+    try:
+        return dataclasses.replace(base, **kwargs)
+    except ConfigError as e:
+        raise ConfigError(f"{prefix + ': ' if prefix else ''}{e}") from None
+
+
+def save_config(config: PipelineConfig, path: str | os.PathLike) -> Path:
+    """Write ``config`` as JSON (atomically); return the path."""
+    return io.write_json(path, to_dict(config))
+
+
+def load_config(path: str | os.PathLike) -> PipelineConfig:
+    """Read a PipelineConfig JSON file (keys left out keep their defaults)."""
+    data = io.read_json(path, "config file")
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: a config file holds a JSON object")
+    try:
+        return from_dict(PipelineConfig, data)
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None

@@ -1,0 +1,222 @@
+"""``LanePipeline``: the advanced lane-finding pipeline wired from one ``PipelineConfig``.
+
+One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
+search -> fits -> measurements -> overlay on the undistorted frame. The notebooks, the tuners and
+the CLI all use this object, so what a slider tunes is exactly what a video run uses.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from . import draw, lanes, thresholds
+from .camera import Calibration, Undistorter
+from .config import PipelineConfig
+from .errors import InputError
+from .lanes import LaneMeasurement, LaneSearch, LineFit
+from .perspective import Perspective, scaled
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What the pipeline found in one frame.
+
+    ``found`` is true when both lines were found (the measurements need both); ``reason`` says
+    what was missing otherwise. ``left_conf``/``right_conf`` are 0-1 confidences per line.
+    ``images`` holds the stage images (undistorted, birdseye, binary, search, result) when the
+    pipeline was asked to keep them.
+    """
+
+    left: LineFit
+    right: LineFit
+    measurement: LaneMeasurement
+    method: str
+    left_conf: float
+    right_conf: float
+    reason: str = ""
+    search: LaneSearch | None = field(default=None, repr=False)
+    images: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def left_found(self) -> bool:
+        return self.left.found
+
+    @property
+    def right_found(self) -> bool:
+        return self.right.found
+
+    @property
+    def found(self) -> bool:
+        return self.left.found and self.right.found
+
+    @property
+    def radius_m(self) -> float:
+        return self.measurement.radius_m
+
+    @property
+    def curvature_1pm(self) -> float:
+        return self.measurement.curvature_1pm
+
+    @property
+    def offset_m(self) -> float:
+        return self.measurement.offset_m
+
+    @property
+    def lane_width_m(self) -> float:
+        return self.measurement.lane_width_m
+
+    def summary(self) -> dict:
+        """Return the per-image record written to results.json (NaN where not found)."""
+        return {"found": self.found, "left_found": self.left_found, "right_found": self.right_found,
+                "radius_m": _round(self.radius_m, 1), "offset_m": _round(self.offset_m, 3),
+                "lane_width_m": _round(self.lane_width_m, 3), "reason": self.reason}
+
+
+def _round(v: float, nd: int) -> float:
+    return v if math.isnan(v) else round(float(v), nd)
+
+
+def line_confidence(fit: LineFit, height_px: int, config: lanes.SearchConfig) -> float:
+    """Return a 0-1 confidence of a fitted line: vertical span covered times pixel support."""
+    if not fit.found:
+        return 0.0
+    span = min(1.0, fit.span_px / (0.75 * height_px))
+    support = min(1.0, fit.n_pixels / (4.0 * config.min_line_pixels))
+    return round(span * support, 3)
+
+
+class LanePipeline:
+    """Find the lane in frames of one size with one configuration and (optional) calibration.
+
+    Parameters
+    ----------
+    config : all parameters; its perspective points are scaled if ``size`` differs from theirs.
+    calibration : the camera's calibration, or None for an undistorted (or uncalibrated) camera.
+    size : (width, height) of the frames; defaults to the perspective's ``size_px``.
+
+    Everything that depends only on the configuration (remap maps, matrices, the car's position
+    in the bird's-eye view) is computed here, once.
+    """
+
+    def __init__(self, config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                 size: tuple[int, int] | None = None):
+        self.config = config
+        self.size = tuple(int(v) for v in (size or config.perspective.size_px))
+        pconf = config.perspective
+        if tuple(pconf.size_px) != self.size:
+            pconf = scaled(pconf, self.size)
+        self.perspective = Perspective(pconf)
+        self.undistorter = Undistorter(calibration, self.size)
+        self._birdseye_maps = self.undistorter.maps_through(self.perspective.Minv, self.size)
+        w, h = self.size
+        self.car_x_px = float(self.perspective.warp_points([(w / 2, h - 1)])[0, 0])
+
+    # ---- stages ---------------------------------------------------------------------------
+
+    def birdseye(self, raw: np.ndarray) -> np.ndarray:
+        """Return the bird's-eye view of a RAW frame (undistortion and warp in one remap)."""
+        self.undistorter.check(raw)
+        return cv2.remap(raw, self._birdseye_maps[0], self._birdseye_maps[1], cv2.INTER_LINEAR)
+
+    def undistort(self, raw: np.ndarray) -> np.ndarray:
+        """Return the undistorted frame."""
+        return self.undistorter.undistort(raw)
+
+    def binary(self, birdseye: np.ndarray) -> np.ndarray:
+        """Return the combined 0/255 lane-pixel mask of a bird's-eye image."""
+        return thresholds.combine(birdseye, self.config.thresholds)
+
+    def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None) -> LaneSearch:
+        """Return the lane search: around ``prior`` fits when given, else sliding windows."""
+        if prior is not None:
+            return lanes.search_around(binary, prior[0], prior[1], self.config.search)
+        return lanes.sliding_windows(binary, self.config.search, car_x=self.car_x_px)
+
+    def measure(self, left: LineFit, right: LineFit) -> LaneMeasurement:
+        """Return curvature, radius, offset and lane width in metres for two fits."""
+        p = self.perspective
+        return lanes.measure(left, right, self.size[1], self.car_x_px, p.xm_per_px, p.ym_per_px)
+
+    # ---- one frame ------------------------------------------------------------------------
+
+    def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
+               keep_images: bool = False) -> FrameResult:
+        """Return the lane found in one RAW frame, without drawing (the per-frame hot path)."""
+        bird = self.birdseye(raw)
+        mask = self.binary(bird)
+        search = self.search(mask, prior)
+        return self._result(search, {"birdseye": bird, "binary": mask} if keep_images else {})
+
+    def _result(self, search: LaneSearch, images: dict) -> FrameResult:
+        h = self.size[1]
+        reasons = [f"{side} line not found ({fit.reason})"
+                   for side, fit in (("left", search.left), ("right", search.right)) if not fit.found]
+        return FrameResult(search.left, search.right, self.measure(search.left, search.right),
+                           search.method, line_confidence(search.left, h, self.config.search),
+                           line_confidence(search.right, h, self.config.search),
+                           "; ".join(reasons), search, images)
+
+    def process(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
+        """Return the lane in one RAW frame with the annotated frame in ``images["result"]``.
+
+        With ``keep_images`` the stage images (undistorted, birdseye, binary, search) are kept too.
+        """
+        result = self.detect(raw, keep_images=keep_images)
+        und = self.undistort(raw)
+        result.images["result"] = self.annotate(und, result)
+        if keep_images:
+            result.images["undistorted"] = und
+            result.images["search"] = draw.search_view(result.images["binary"], result.search,
+                                                       self.config.draw, self.config.search.prior_margin_px)
+        return result
+
+    def annotate(self, undistorted: np.ndarray, result: FrameResult) -> np.ndarray:
+        """Return the undistorted frame with the lane, the lines and the measurements drawn."""
+        out = draw.lane_overlay(undistorted, result.left.coeffs_px, result.right.coeffs_px,
+                                self.perspective.Minv, self.config.draw, self.size[1])
+        return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
+                                                          result.lane_width_m, result.found,
+                                                          result.reason), self.config.draw)
+
+    def debug_composite(self, result: FrameResult) -> np.ndarray:
+        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result."""
+        im = result.images
+        if "search" not in im:
+            raise InputError("debug_composite needs a result from process(frame, keep_images=True)")
+        return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
+                               ("search and fits", im["search"]), ("result", im["result"])], self.size)
+
+
+def pipeline_for(image: np.ndarray, config: PipelineConfig = PipelineConfig(),
+                 calibration: Calibration | None = None) -> LanePipeline:
+    """Return a LanePipeline for frames of ``image``'s size."""
+    return LanePipeline(config, calibration, size=(image.shape[1], image.shape[0]))
+
+
+def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
+                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                   debug: bool = False) -> list[dict]:
+    """Run the pipeline on image files; write annotated images and ``results.json``; return rows.
+
+    Frames of several sizes are allowed: one pipeline is built per size (the calibration is
+    rescaled or refused per ``Calibration.for_size``).
+    """
+    from .runs import run_images
+
+    cache: dict[tuple[int, int], LanePipeline] = {}
+
+    def process(rgb: np.ndarray):
+        size = (rgb.shape[1], rgb.shape[0])
+        if size not in cache:
+            cache[size] = LanePipeline(config, calibration, size=size)
+        pipe = cache[size]
+        result = pipe.process(rgb, keep_images=debug)
+        image = pipe.debug_composite(result) if debug else result.images["result"]
+        return image, result.summary()
+
+    return run_images([Path(f) for f in files], out_dir, process)

@@ -1,0 +1,315 @@
+"""Colour and gradient thresholds that turn a road image into a binary mask of lane-line pixels.
+
+Every mask is a ``uint8`` array of 0 and 255. ``ThresholdConfig`` holds one parameter record per
+named mask and a ``rule`` that combines them, a boolean expression over the mask names with
+``|`` (or), ``&`` (and), ``~`` (not) and parentheses, e.g. ``"yellow | white | (sobel_x & s_channel)"``.
+A disabled mask drops out of the rule (it neither adds pixels to an ``|`` nor removes them
+through an ``&``), so the tuner's on/off toggles do what a user expects.
+
+Colour spaces: ``rgb``, ``hls``, ``hsv``, ``luv``, ``lab`` and ``gray``; channels are named by
+their letter (``h``, ``l``, ``s``, ``v``, ``b`` ...) as OpenCV's 8-bit conversions scale them
+(hue 0-179, the rest 0-255).
+"""
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass, fields
+from typing import Callable
+
+import cv2
+import numpy as np
+
+from .errors import ConfigError
+
+SPACES: dict[str, tuple[int | None, str]] = {
+    "rgb": (None, "rgb"),
+    "hls": (cv2.COLOR_RGB2HLS, "hls"),
+    "hsv": (cv2.COLOR_RGB2HSV, "hsv"),
+    "luv": (cv2.COLOR_RGB2Luv, "luv"),
+    "lab": (cv2.COLOR_RGB2Lab, "lab"),
+    "gray": (cv2.COLOR_RGB2GRAY, "y"),
+}
+
+
+def _check_channel(space: str, channel: str, where: str) -> None:
+    if space not in SPACES:
+        raise ConfigError(f"{where}: unknown colour space {space!r}; use one of {', '.join(SPACES)}")
+    if channel not in SPACES[space][1]:
+        raise ConfigError(f"{where}: colour space {space!r} has no channel {channel!r}; "
+                          f"use one of {', '.join(SPACES[space][1])}")
+
+
+@dataclass(frozen=True)
+class ChannelMask:
+    """Pixels whose value in one channel lies in [low, high] (channel units, 0-255; hue 0-179)."""
+
+    space: str = "hls"
+    channel: str = "s"
+    low: int = 170
+    high: int = 255
+    enabled: bool = True
+
+    def __post_init__(self):
+        _check_channel(self.space, self.channel, "ChannelMask")
+
+
+@dataclass(frozen=True)
+class ColorRange:
+    """Pixels inside a box in one colour space (``cv2.inRange``), bounds per channel."""
+
+    space: str = "hsv"
+    low: tuple[int, int, int] = (15, 80, 120)
+    high: tuple[int, int, int] = (35, 255, 255)
+    enabled: bool = True
+
+    def __post_init__(self):
+        if self.space == "gray" or self.space not in SPACES:
+            raise ConfigError(f"ColorRange: colour space {self.space!r} must be one of "
+                              "rgb, hls, hsv, luv, lab")
+        if len(self.low) != 3 or len(self.high) != 3:
+            raise ConfigError("ColorRange: low and high need three values, one per channel")
+
+
+@dataclass(frozen=True)
+class SobelMask:
+    """Pixels whose gradient lies in [low, high].
+
+    ``kind`` is ``x``, ``y``, ``mag`` (gradient magnitude) or ``dir`` (direction
+    atan2(|gy|, |gx|) in radians, 0 = a vertical edge). For x, y and mag the gradient is expressed
+    as the height of an intensity step (0-255) across the kernel, so thresholds mean the same for
+    every ``kernel_px``.
+    """
+
+    kind: str = "x"
+    space: str = "hls"
+    channel: str = "l"
+    kernel_px: int = 3
+    low: float = 20.0
+    high: float = 255.0
+    enabled: bool = True
+
+    def __post_init__(self):
+        _check_channel(self.space, self.channel, "SobelMask")
+        if self.kind not in ("x", "y", "mag", "dir"):
+            raise ConfigError(f"SobelMask: kind {self.kind!r} must be x, y, mag or dir")
+        if self.kernel_px not in (1, 3, 5, 7):
+            raise ConfigError(f"SobelMask: kernel_px {self.kernel_px} must be 1, 3, 5 or 7")
+
+
+@dataclass(frozen=True)
+class TopHatMask:
+    """Pixels brighter than the road beside them: a horizontal white top-hat of one channel.
+
+    ``width_px`` is the width of the opening (wider than a line, narrower than the road between
+    lines); the mask holds pixels whose top-hat value lies in [low, high]. It keeps lines and
+    drops shadows, light concrete and exposure changes, which are wider than ``width_px``.
+    """
+
+    space: str = "hls"
+    channel: str = "l"
+    width_px: int = 61
+    low: int = 30
+    high: int = 255
+    enabled: bool = True
+
+    def __post_init__(self):
+        _check_channel(self.space, self.channel, "TopHatMask")
+        if self.width_px < 3:
+            raise ConfigError(f"TopHatMask: width_px {self.width_px} must be 3 or more")
+
+
+@dataclass(frozen=True)
+class ThresholdConfig:
+    """The named masks and the rule that combines them (see the module docstring).
+
+    ``close_px`` closes gaps in the combined mask with a square kernel of that size (0: off);
+    ``open_px`` removes specks smaller than that (0: off).
+    """
+
+    yellow: ColorRange = ColorRange("hsv", (15, 80, 120), (35, 255, 255))
+    white: ColorRange = ColorRange("hls", (0, 200, 0), (179, 255, 255))
+    lab_b: ChannelMask = ChannelMask("lab", "b", 150, 255)
+    s_channel: ChannelMask = ChannelMask("hls", "s", 170, 255)
+    line_tophat: TopHatMask = TopHatMask("hls", "l", 61, 30, 255)
+    sobel_x: SobelMask = SobelMask("x", "hls", "l", 3, 20.0, 255.0)
+    sobel_y: SobelMask = SobelMask("y", "hls", "l", 3, 20.0, 255.0, enabled=False)
+    sobel_mag: SobelMask = SobelMask("mag", "hls", "l", 3, 30.0, 255.0, enabled=False)
+    sobel_dir: SobelMask = SobelMask("dir", "hls", "l", 7, 0.0, 0.7, enabled=False)
+    rule: str = "yellow | lab_b | (white & line_tophat) | (line_tophat & sobel_x)"
+    close_px: int = 0
+    open_px: int = 0
+
+    def __post_init__(self):
+        compile_rule(self.rule, mask_names(self))
+
+
+def mask_names(config: ThresholdConfig) -> tuple[str, ...]:
+    """Return the names of the masks a ThresholdConfig holds (the names a rule may use)."""
+    return tuple(f.name for f in fields(config) if f.name not in ("rule", "close_px", "open_px"))
+
+
+# --------------------------------------------------------------------------- channels
+
+class Channels:
+    """Colour-space conversions of one RGB image, each computed at most once."""
+
+    def __init__(self, rgb: np.ndarray):
+        self.rgb = rgb
+        self._spaces: dict[str, np.ndarray] = {"rgb": rgb}
+
+    def space(self, name: str) -> np.ndarray:
+        """Return the image converted to colour space ``name``."""
+        if name not in self._spaces:
+            self._spaces[name] = cv2.cvtColor(self.rgb, SPACES[name][0])
+        return self._spaces[name]
+
+    def channel(self, space: str, channel: str) -> np.ndarray:
+        """Return one channel (uint8, H x W) of the image in ``space``."""
+        img = self.space(space)
+        if img.ndim == 2:
+            return img
+        return cv2.extractChannel(img, SPACES[space][1].index(channel))
+
+
+def channel(rgb: np.ndarray, space: str, name: str) -> np.ndarray:
+    """Return channel ``name`` of ``rgb`` in colour space ``space`` (uint8, H x W)."""
+    _check_channel(space, name, "channel")
+    return Channels(rgb).channel(space, name)
+
+
+# --------------------------------------------------------------------------- masks
+
+def in_range(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Return a 0/255 mask of ``values`` within [low, high]."""
+    return cv2.inRange(values, float(low), float(high))
+
+
+def channel_mask(rgb: np.ndarray | Channels, spec: ChannelMask) -> np.ndarray:
+    """Return the 0/255 mask of ``spec`` on an RGB image."""
+    ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
+    return in_range(ch.channel(spec.space, spec.channel), spec.low, spec.high)
+
+
+def color_range_mask(rgb: np.ndarray | Channels, spec: ColorRange) -> np.ndarray:
+    """Return the 0/255 mask of pixels inside the colour box ``spec``."""
+    ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
+    return cv2.inRange(ch.space(spec.space), np.array(spec.low, np.uint8), np.array(spec.high, np.uint8))
+
+
+def _sobel_step_scale(kernel_px: int) -> float:
+    """Return the Sobel response to a unit step edge for a kernel size (1 gives 1)."""
+    kx, ky = cv2.getDerivKernels(1, 0, kernel_px)
+    return float(np.abs(kx).sum() / 2 * ky.sum())
+
+
+def sobel(gray: np.ndarray, kind: str, kernel_px: int = 3) -> np.ndarray:
+    """Return the gradient of a channel as float32: step height (0-255) for x/y/mag, radians for dir."""
+    scale = 1.0 / _sobel_step_scale(kernel_px)
+    if kind in ("x", "y"):
+        dx, dy = (1, 0) if kind == "x" else (0, 1)
+        return np.abs(cv2.Sobel(gray, cv2.CV_32F, dx, dy, ksize=kernel_px, scale=scale))
+    gx = cv2.Sobel(gray, cv2.CV_32F, 1, 0, ksize=kernel_px, scale=scale)
+    gy = cv2.Sobel(gray, cv2.CV_32F, 0, 1, ksize=kernel_px, scale=scale)
+    if kind == "mag":
+        return cv2.magnitude(gx, gy)
+    if kind == "dir":
+        return cv2.phase(np.abs(gx), np.abs(gy))
+    raise ConfigError(f"sobel: kind {kind!r} must be x, y, mag or dir")
+
+
+def sobel_mask(rgb: np.ndarray | Channels, spec: SobelMask) -> np.ndarray:
+    """Return the 0/255 mask of pixels whose gradient ``spec.kind`` lies in [low, high]."""
+    ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
+    return in_range(sobel(ch.channel(spec.space, spec.channel), spec.kind, spec.kernel_px),
+                    spec.low, spec.high)
+
+
+def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
+    """Return the 0/255 mask of pixels brighter than their surroundings by [low, high]."""
+    ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
+    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (spec.width_px, 1))
+    th = cv2.morphologyEx(ch.channel(spec.space, spec.channel), cv2.MORPH_TOPHAT, kernel)
+    return in_range(th, spec.low, spec.high)
+
+
+MASK_FUNCTIONS: dict[type, Callable] = {
+    ChannelMask: channel_mask,
+    ColorRange: color_range_mask,
+    SobelMask: sobel_mask,
+    TopHatMask: tophat_mask,
+}
+
+
+def mask(rgb: np.ndarray | Channels, spec) -> np.ndarray:
+    """Return the 0/255 mask of any mask record (ChannelMask, ColorRange, SobelMask, TopHatMask)."""
+    return MASK_FUNCTIONS[type(spec)](rgb, spec)
+
+
+# --------------------------------------------------------------------------- rule
+
+def compile_rule(rule: str, names: tuple[str, ...]) -> ast.expr:
+    """Return the parsed rule; anything but mask names, ``| & ~`` and parentheses raises."""
+    try:
+        tree = ast.parse(rule, mode="eval").body
+    except SyntaxError as e:
+        raise ConfigError(f"thresholds.rule {rule!r}: not a valid expression ({e.msg}); "
+                          "combine mask names with |, & and ~") from None
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            if node.id not in names:
+                raise ConfigError(f"thresholds.rule: unknown mask {node.id!r}; "
+                                  f"use one of {', '.join(names)}")
+        elif not isinstance(node, (ast.BinOp, ast.UnaryOp, ast.BitOr, ast.BitAnd, ast.Invert,
+                                   ast.Load)):
+            raise ConfigError(f"thresholds.rule {rule!r}: only mask names, |, &, ~ and "
+                              "parentheses are allowed")
+    return tree
+
+
+def _evaluate(node: ast.expr, get: Callable[[str], np.ndarray | None]) -> np.ndarray | None:
+    """Evaluate a compiled rule; disabled masks (None) drop out of the expression."""
+    if isinstance(node, ast.Name):
+        return get(node.id)
+    if isinstance(node, ast.UnaryOp):
+        m = _evaluate(node.operand, get)
+        return None if m is None else cv2.bitwise_not(m)
+    a, b = _evaluate(node.left, get), _evaluate(node.right, get)
+    if a is None or b is None:
+        return b if a is None else a
+    return cv2.bitwise_or(a, b) if isinstance(node.op, ast.BitOr) else cv2.bitwise_and(a, b)
+
+
+def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
+          names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """Return the 0/255 mask of each enabled mask (all of them, or those in ``names``)."""
+    ch = Channels(rgb)
+    wanted = names if names is not None else mask_names(config)
+    return {n: mask(ch, getattr(config, n)) for n in wanted if getattr(config, n).enabled}
+
+
+def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
+            computed: dict[str, np.ndarray] | None = None) -> np.ndarray:
+    """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule``.
+
+    Only masks that the rule names and that are enabled are computed; ``computed`` may pass
+    masks already made (e.g. by ``masks``) so the tuner does not compute them twice.
+    """
+    ch = Channels(rgb)
+    cache = dict(computed or {})
+
+    def get(name: str) -> np.ndarray | None:
+        spec = getattr(config, name)
+        if not spec.enabled:
+            return None
+        if name not in cache:
+            cache[name] = mask(ch, spec)
+        return cache[name]
+
+    out = _evaluate(compile_rule(config.rule, mask_names(config)), get)
+    if out is None:
+        out = np.zeros(rgb.shape[:2], np.uint8)
+    if config.open_px > 1:
+        out = cv2.morphologyEx(out, cv2.MORPH_OPEN, np.ones((config.open_px, config.open_px), np.uint8))
+    if config.close_px > 1:
+        out = cv2.morphologyEx(out, cv2.MORPH_CLOSE, np.ones((config.close_px, config.close_px), np.uint8))
+    return out
