@@ -23,7 +23,86 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     # one line per subcommand, in the order of the pipeline
+    _add_calibrate(sub)
+    _add_images(sub)
     return parser
+
+
+def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--calibration", type=Path, metavar="FILE",
+                   help="camera calibration JSON from `calibrate` (default: none, frames are "
+                        "taken as undistorted)")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="PipelineConfig JSON (e.g. saved by a notebook tuner; default: built-in)")
+
+
+def _load_pipeline_inputs(args):
+    from .camera import Calibration
+    from .config import PipelineConfig, load_config
+
+    config = load_config(args.config) if args.config else PipelineConfig()
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    return config, calibration
+
+
+def _add_calibrate(sub) -> None:
+    p = sub.add_parser("calibrate", help="calibrate a camera from chessboard photos",
+                       description="Find the chessboard in every image of CAL_DIR, calibrate the "
+                                   "camera and write the calibration as JSON (camera_matrix, "
+                                   "dist_coeffs, image_size [w, h], rms_px, used, skipped).")
+    p.add_argument("cal_dir", type=Path, metavar="CAL_DIR", help="folder of chessboard photos")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE",
+                   help="calibration JSON to write")
+    p.add_argument("--pattern", default="9x6",
+                   help="inner corners per row x per column (default: 9x6)")
+    p.set_defaults(func=_run_calibrate)
+
+
+def _run_calibrate(args) -> int:
+    import warnings
+
+    from .camera import calibrate, parse_pattern
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cal = calibrate(args.cal_dir, parse_pattern(args.pattern))
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    cal.save(args.output)
+    print(f"{args.output}: {len(cal.used)} boards used, {len(cal.skipped)} skipped, "
+          f"RMS reprojection error {cal.rms_px:.3f} px, image size "
+          f"{cal.image_size[0]}x{cal.image_size[1]}")
+    return 0
+
+
+def _add_images(sub) -> None:
+    p = sub.add_parser("images", help="find the lane in a folder of images",
+                       description="Run the lane pipeline on every image of IN_DIR; write one "
+                                   "annotated image per input and OUT_DIR/results.json (file, found, "
+                                   "left_found, right_found, radius_m, offset_m, lane_width_m).")
+    p.add_argument("in_dir", type=Path, metavar="IN_DIR", help="folder of road images")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT_DIR",
+                   help="folder for the annotated images and results.json")
+    _common_pipeline_args(p)
+    p.add_argument("--debug", action="store_true",
+                   help="write the 2x2 debug composite instead of the annotated frame")
+    p.set_defaults(func=_run_images)
+
+
+def _run_images(args) -> int:
+    from .io import list_images
+    from .pipeline import process_images
+
+    files = list_images(args.in_dir)
+    config, calibration = _load_pipeline_inputs(args)
+    rows = process_images(files, args.output, config, calibration, debug=args.debug)
+    for r in rows:
+        status = (f"radius {r['radius_m']} m, offset {r['offset_m']} m, width {r['lane_width_m']} m"
+                  if r["found"] else f"no lane found: {r['reason']}")
+        print(f"{r['file']}: {status}")
+    print(f"{sum(r['found'] for r in rows)} of {len(rows)} images: lane found; "
+          f"results in {args.output / 'results.json'}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
