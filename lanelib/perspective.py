@@ -2,13 +2,15 @@
 
 The default points belong to the Udacity highway camera at 1280x720 (and to lanelib's synthetic
 camera, which is built to match it). They were chosen on the undistorted ``straight_lines1.jpg``
-and ``straight_lines2.jpg``: both straight lane lines, fitted in the undistorted image, meet at the
-vanishing point (640, 418), and the lane is 894 px wide on the bottom row. The trapezoid's sides
-run through that vanishing point, so a straight lane becomes two vertical lines in the bird's-eye
-view, and its bottom corners lie on a 3.7 m lane centred on the camera, so the two dst lines are
-3.7 m apart. The visible road length (bottom row to the top of the trapezoid) follows from the
-same geometry: with the camera 1.255 m above the road the trapezoid spans 4.8 m to 34.3 m ahead,
-29.6 m in all (the synthetic camera's ground truth gives the exact figure).
+and ``straight_lines2.jpg``: the straight lane lines, fitted in each undistorted image, meet at
+(640.1, 421.4) and (638.3, 417.6); the trapezoid's sides run through (640, 419), the point that
+balances the two, so a straight lane becomes two vertical lines in the bird's-eye view (within
+1.3 px per 100 px on both images, see tests/test_perspective.py). The top row is 470, 51 px below
+that vanishing point: a row nearer the horizon would magnify a one-pixel error in the vanishing
+point into a visible slant. The bottom corners lie on a 3.7 m lane centred on the camera (894 px
+wide on row 720), so the two dst lines are 3.7 m apart. The visible road length follows from the
+same geometry: with fx = 1156 px the bottom row is 4.79 m ahead, the camera 1.25 m above the
+road, and row 470 is 28.25 m ahead: 23.5 m in all.
 """
 from __future__ import annotations
 
@@ -22,11 +24,11 @@ from .errors import ConfigError, InputError
 Point = tuple[float, float]
 
 # src: top-left, bottom-left, bottom-right, top-right (undistorted 1280x720 image)
-DEFAULT_SRC_1280x720: tuple[Point, ...] = ((578.0, 460.0), (193.0, 720.0), (1087.0, 720.0), (702.0, 460.0))
+DEFAULT_SRC_1280x720: tuple[Point, ...] = ((564.3, 470.0), (193.0, 720.0), (1087.0, 720.0), (715.7, 470.0))
 # dst: the same corners in the bird's-eye view (1280x720)
 DEFAULT_DST_1280x720: tuple[Point, ...] = ((320.0, 0.0), (320.0, 720.0), (960.0, 720.0), (960.0, 0.0))
 DEFAULT_LANE_WIDTH_M = 3.7
-DEFAULT_VISIBLE_LENGTH_M = 29.6
+DEFAULT_VISIBLE_LENGTH_M = 23.5
 
 
 @dataclass(frozen=True)
