@@ -111,11 +111,12 @@ class Calibration:
 
 @dataclass(frozen=True)
 class BoardDetection:
-    """Chessboard corners found in one image (sub-pixel, (N, 2) float32), or None."""
+    """Chessboard corners found in one image (sub-pixel, (N, 2) float32), or None and why."""
 
     file: str
-    size: tuple[int, int]
+    size: tuple[int, int] | None
     corners: np.ndarray | None
+    reason: str = ""
 
 
 def board_points(pattern: tuple[int, int], square: float = 1.0) -> np.ndarray:
@@ -139,11 +140,17 @@ def find_corners(rgb: np.ndarray, pattern: tuple[int, int] = (9, 6)) -> np.ndarr
 
 
 def detect_boards(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6)) -> list[BoardDetection]:
-    """Return one detection per image of ``folder`` (corners None where no board was found)."""
+    """Return one detection per image of ``folder`` (corners None, with a reason, where none)."""
     out = []
     for f in io.list_images(folder):
-        rgb = io.read_image(f)
-        out.append(BoardDetection(f.name, (rgb.shape[1], rgb.shape[0]), find_corners(rgb, pattern)))
+        try:
+            rgb = io.read_image(f)
+        except InputError:
+            out.append(BoardDetection(f.name, None, None, "unreadable image"))
+            continue
+        corners = find_corners(rgb, pattern)
+        reason = "" if corners is not None else f"no {pattern[0]}x{pattern[1]} board found"
+        out.append(BoardDetection(f.name, (rgb.shape[1], rgb.shape[0]), corners, reason))
     return out
 
 
@@ -161,7 +168,7 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
     ``CalibrationError``.
     """
     dets = detections if detections is not None else detect_boards(folder, pattern)
-    reasons = {d.file: f"no {pattern[0]}x{pattern[1]} board found" for d in dets if d.corners is None}
+    reasons = {d.file: d.reason for d in dets if d.corners is None}
     found = [d for d in dets if d.corners is not None]
     if found:
         size = Counter(d.size for d in found).most_common(1)[0][0]

@@ -1,0 +1,113 @@
+"""Colour and gradient masks and the rule that combines them, against images of known content."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lanelib import thresholds as th
+from lanelib.errors import ConfigError
+
+YELLOW = (230, 190, 40)
+WHITE = (235, 235, 235)
+ASPHALT = (90, 90, 95)
+
+
+@pytest.fixture()
+def road():
+    """A grey road with a yellow line at x 100-119 and a white line at x 300-319."""
+    img = np.zeros((120, 400, 3), np.uint8)
+    img[:] = ASPHALT
+    img[:, 100:120] = YELLOW
+    img[:, 300:320] = WHITE
+    return img
+
+
+def cols(mask):
+    return set(np.nonzero(mask.any(axis=0))[0])
+
+
+def test_color_ranges_separate_yellow_from_white(road):
+    cfg = th.ThresholdConfig()
+    assert cols(th.color_range_mask(road, cfg.yellow)) == set(range(100, 120))
+    assert cols(th.color_range_mask(road, cfg.white)) == set(range(300, 320))
+
+
+def test_masks_are_uint8_zero_or_255(road):
+    for name, m in th.masks(road).items():
+        assert m.dtype == np.uint8 and set(np.unique(m)) <= {0, 255}, name
+
+
+@pytest.mark.parametrize("space,channel,expected", [
+    ("hls", "s", 255), ("hsv", "v", 255), ("rgb", "r", 255), ("gray", "y", 76), ("lab", "l", 136)])  # L* 53.2 of sRGB red, x 255/100
+def test_channel_values_of_pure_red(space, channel, expected):
+    red = np.zeros((4, 4, 3), np.uint8)
+    red[..., 0] = 255
+    assert abs(int(th.channel(red, space, channel)[0, 0]) - expected) <= 1
+
+
+@pytest.mark.parametrize("kernel", [1, 3, 5, 7])
+def test_sobel_reports_the_step_height(kernel):
+    img = np.zeros((40, 40), np.uint8)
+    img[:, 20:] = 100  # a vertical step of 100 grey levels
+    gx = th.sobel(img, "x", kernel)
+    assert gx.max() == pytest.approx(100, rel=0.02)
+    assert th.sobel(img, "y", kernel).max() == pytest.approx(0, abs=1e-3)
+
+
+def test_sobel_direction_of_vertical_and_horizontal_edges():
+    img = np.zeros((40, 40), np.uint8)
+    img[:, 20:] = 100
+    d = th.sobel(img, "dir", 3)
+    m = th.sobel(img, "mag", 3) > 50
+    assert np.allclose(d[m], 0, atol=1e-3)
+    d2 = th.sobel(img.T.copy(), "dir", 3)
+    assert np.allclose(d2[m.T], np.pi / 2, atol=1e-3)
+
+
+def test_tophat_keeps_narrow_lines_and_drops_wide_bright_areas():
+    img = np.full((50, 400, 3), 80, np.uint8)
+    img[:, 50:70] = 200     # a 20 px line
+    img[:, 200:350] = 170   # a 150 px patch of light concrete
+    m = th.tophat_mask(img, th.TopHatMask(width_px=61, low=30))
+    assert cols(m) == set(range(50, 70))
+
+
+def test_rule_combines_and_disabled_masks_drop_out(road):
+    cfg = th.ThresholdConfig(rule="yellow | white")
+    assert cols(th.combine(road, cfg)) == set(range(100, 120)) | set(range(300, 320))
+    off = th.ThresholdConfig(rule="yellow | white", white=th.ColorRange("hls", (0, 200, 0), (179, 255, 255), False))
+    assert cols(th.combine(road, off)) == set(range(100, 120))
+    # a disabled mask inside an & neither adds nor removes pixels
+    both = th.ThresholdConfig(rule="yellow & white", white=off.white)
+    assert cols(th.combine(road, both)) == set(range(100, 120))
+    inv = th.ThresholdConfig(rule="~yellow & ~white")
+    assert cols(th.combine(road, inv)).isdisjoint(range(100, 120))
+
+
+def test_morphology_closes_gaps():
+    img = np.full((60, 100, 3), 80, np.uint8)
+    img[:, 40:50] = WHITE
+    img[28:31, :] = 80  # a 3 px gap across the line
+    cfg = th.ThresholdConfig(rule="white", close_px=7)
+    assert th.combine(img, cfg)[29, 45] == 255
+    assert th.combine(img, th.ThresholdConfig(rule="white"))[29, 45] == 0
+
+
+@pytest.mark.parametrize("rule,message", [
+    ("yellow | purple", "unknown mask 'purple'"),
+    ("yellow |", "not a valid expression"),
+    ("__import__('os')", "only mask names"),
+    ("yellow + white", "only mask names"),
+])
+def test_bad_rules_are_rejected_with_the_reason(rule, message):
+    with pytest.raises(ConfigError, match=message):
+        th.ThresholdConfig(rule=rule)
+
+
+def test_bad_mask_parameters():
+    with pytest.raises(ConfigError, match="no channel 'q'"):
+        th.ChannelMask("hls", "q")
+    with pytest.raises(ConfigError, match="unknown colour space"):
+        th.ChannelMask("xyz", "x")
+    with pytest.raises(ConfigError, match="kernel_px"):
+        th.SobelMask(kernel_px=4)
