@@ -236,9 +236,11 @@ class Undistorter:
 
     def check(self, image: np.ndarray, name: str = "frame") -> None:
         """Raise InputError if ``image`` is not a frame of this undistorter's size."""
-        if image.ndim not in (2, 3) or image.dtype != np.uint8:
-            raise InputError(f"{name}: expected a uint8 image (H x W x 3), got {image.dtype} "
-                             f"array of shape {image.shape}")
+        if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] != 3 \
+                or image.dtype != np.uint8:
+            raise InputError(f"{name}: expected an RGB uint8 image (H x W x 3), got "
+                             f"{getattr(image, 'dtype', type(image).__name__)} array of shape "
+                             f"{getattr(image, 'shape', '?')}; read images with lanelib.io.read_image")
         h, w = image.shape[:2]
         if (w, h) != self.size:
             raise InputError(f"{name}: is {w}x{h} but the pipeline is set up for "

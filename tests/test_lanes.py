@@ -1,0 +1,119 @@
+"""Lane-pixel search, fits and measurements against masks drawn from known geometry."""
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import lanes
+from lanelib.lanes import LineFit, SearchConfig
+
+H, W = 720, 1280
+
+
+def draw_curve(mask, coeffs, thickness=20):
+    ys = np.arange(H)
+    pts = np.column_stack([np.polyval(coeffs, ys), ys]).round().astype(np.int32)
+    cv2.polylines(mask, [pts.reshape(-1, 1, 2)], False, 255, thickness)
+    return mask
+
+
+def lane_mask(left, right, thickness=20):
+    m = np.zeros((H, W), np.uint8)
+    draw_curve(m, left, thickness)
+    draw_curve(m, right, thickness)
+    return m
+
+
+def test_parabolas_drawn_into_a_mask_are_recovered():
+    left, right = (2e-4, -0.1, 340.0), (2e-4, -0.1, 980.0)
+    search = lanes.sliding_windows(lane_mask(left, right))
+    ys = np.arange(0, H, 40)
+    for fit, truth in ((search.left, left), (search.right, right)):
+        assert fit.found
+        assert np.abs(fit.x_at(ys) - np.polyval(truth, ys)).max() < 1.5
+    assert search.method == "windows" and len(search.windows) == 18
+
+
+def test_search_around_previous_fit_follows_a_moved_lane():
+    old = (LineFit((1e-4, 0.0, 300.0)), LineFit((1e-4, 0.0, 950.0)))
+    moved = lane_mask((1e-4, 0.0, 330.0), (1e-4, 0.0, 980.0))
+    search = lanes.search_around(moved, *old, SearchConfig(prior_margin_px=60))
+    assert search.method == "prior"
+    assert search.left.x_at(H - 1) == pytest.approx(330 + 1e-4 * (H - 1) ** 2, abs=1.5)
+    assert search.right.x_at(0) == pytest.approx(980, abs=1.5)
+
+
+def test_metric_coefficients_are_an_exact_scaling():
+    coeffs = (3e-4, -0.2, 400.0)
+    xm, ym = 3.7 / 640, 23.5 / 720
+    ys = np.linspace(0, H, 50)
+    xs = np.polyval(coeffs, ys)
+    refit = np.polyfit(ys * ym, xs * xm, 2)
+    np.testing.assert_allclose(lanes.fit_to_metres(coeffs, xm, ym), refit, rtol=1e-8)
+
+
+@pytest.mark.parametrize("radius_m,direction", [(300.0, 1), (1000.0, -1), (150.0, -1)])
+def test_radius_of_a_circle_is_returned_in_metres(radius_m, direction):
+    xm, ym = 3.7 / 640, 23.5 / 720
+    # a circle in metres tangent to the vertical at the car (bottom row), bending left or right
+    y_m = np.arange(H) * ym
+    y_car = (H - 1) * ym
+    dy = y_car - y_m
+    x_m = 3.0 + direction * (radius_m - np.sqrt(radius_m ** 2 - dy ** 2))
+    coeffs_px = np.polyfit(np.arange(H), x_m / xm, 2)
+    k = lanes.curvature(lanes.fit_to_metres(coeffs_px, xm, ym), y_car)
+    assert k == pytest.approx(direction / radius_m, rel=0.02)
+    assert lanes.radius(k) == pytest.approx(radius_m, rel=0.02)
+
+
+def test_offset_width_and_sign_conventions():
+    xm, ym = 3.7 / 640, 23.5 / 720
+    # lane from x=300 to x=940: centre 620; the car at 640 is 20 px right of centre
+    left, right = LineFit((0.0, 0.0, 300.0)), LineFit((0.0, 0.0, 940.0))
+    m = lanes.measure(left, right, H, 640.0, xm, ym)
+    assert m.offset_m == pytest.approx(20 * xm) and m.offset_m > 0
+    assert m.lane_width_m == pytest.approx(3.7)
+    assert m.curvature_1pm == 0 and m.radius_m == lanes.RADIUS_MAX_M
+
+
+def test_missing_line_is_reported_not_raised():
+    m = np.zeros((H, W), np.uint8)
+    draw_curve(m, (0.0, 0.0, 350.0))
+    search = lanes.sliding_windows(m)
+    assert search.left.found and not search.right.found
+    assert "no lane pixels right of the car" in search.right.reason
+    meas = lanes.measure(search.left, search.right, H, 640.0, 0.005, 0.03)
+    assert math.isnan(meas.offset_m) and math.isnan(meas.radius_m) and not math.isnan(meas.left_curvature_1pm)
+
+
+def test_too_few_pixels_and_short_span_are_not_found():
+    cfg = SearchConfig(min_line_pixels=150)
+    ys, xs = np.arange(700, 710), np.full(10, 300)
+    fit = lanes.fit_line(ys, xs, H, cfg)
+    assert not fit.found and "only 10 lane pixels" in fit.reason
+    ys, xs = np.repeat(np.arange(700, 720), 20), np.tile(np.arange(300, 320), 20)
+    fit = lanes.fit_line(ys, xs, H, cfg)
+    assert not fit.found and "span only" in fit.reason
+
+
+def test_short_span_is_fitted_straight():
+    ys = np.repeat(np.arange(500, 640), 5)  # 140 px: above min_found_span, below min_span
+    xs = 300 + 0.1 * ys
+    fit = lanes.fit_line(ys, xs, H)
+    assert fit.found and fit.coeffs_px[0] == 0.0 and fit.coeffs_px[1] == pytest.approx(0.1)
+
+
+def test_empty_mask_finds_nothing_and_says_why():
+    search = lanes.sliding_windows(np.zeros((H, W), np.uint8))
+    assert not search.left.found and not search.right.found
+    assert search.bases_px == (None, None)
+
+
+def test_histogram_and_bases():
+    m = lane_mask((0, 0, 300.0), (0, 0, 1000.0), thickness=1)
+    hist = lanes.histogram(m, 0.5)
+    assert hist[300] == H // 2 and hist[1000] == H // 2
+    assert lanes.find_bases(hist, 640) == (300.0, 1000.0)
