@@ -81,6 +81,33 @@ def trapezoid_src(top_y: float, bottom_y: float, top_width: float, bottom_width:
             (centre_x + bottom_width / 2, bottom_y), (centre_x + top_width / 2, top_y))
 
 
+def _row_widths(src_px) -> tuple[float, float]:
+    """Return the (top, bottom) widths in px of a src trapezoid (tl, bl, br, tr)."""
+    (tlx, _), (blx, _), (brx, _), (trx, _) = src_px
+    top, bottom = trx - tlx, brx - blx
+    if not 0 < top < bottom:
+        raise ConfigError(f"perspective.src_px {src_px!r}: the top must be narrower than the "
+                          "bottom and both wider than 0 (a trapezoid of road ahead)")
+    return top, bottom
+
+
+def road_length_m(src_px, lane_width_m: float, focal_px: float) -> float:
+    """Return the road length (m) from the bottom to the top row of a src trapezoid.
+
+    Pinhole camera over a flat road: a lane ``lane_width_m`` wide that spans ``w`` px on a row
+    lies ``focal_px * lane_width_m / w`` metres ahead, so the trapezoid's top and bottom widths
+    give the two distances. ``focal_px`` is the horizontal focal length of the undistorted image.
+    """
+    top, bottom = _row_widths(src_px)
+    return focal_px * lane_width_m * (1.0 / top - 1.0 / bottom)
+
+
+def implied_focal_px(config: PerspectiveConfig) -> float:
+    """Return the focal length (px) for which ``config.visible_length_m`` fits its trapezoid."""
+    top, bottom = _row_widths(config.src_px)
+    return config.visible_length_m / (config.lane_width_m * (1.0 / top - 1.0 / bottom))
+
+
 def scaled(config: PerspectiveConfig, size_px: tuple[int, int]) -> PerspectiveConfig:
     """Return ``config`` with its points scaled to images of ``size_px`` (w, h)."""
     sx = size_px[0] / config.size_px[0]
