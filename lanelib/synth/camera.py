@@ -1,0 +1,119 @@
+"""The synthetic camera: the Udacity highway camera's intrinsics, mounted on a car.
+
+The matrix and distortion are those of the Udacity ``camera_cal`` boards, calibrated once with
+plain OpenCV (``findChessboardCorners`` 9x6 + ``cornerSubPix`` + ``calibrateCamera`` on the 17
+boards that are found, RMS 1.003 px) and kept here so that the generator needs no outside data.
+
+The mounting is chosen so that lanelib's default bird's-eye points fit this camera: in the
+undistorted image the car's forward direction vanishes at (640, 418), and a straight 3.7 m lane
+centred on the car crosses the bottom row (720) at x = 192.8 and x = 1086.8 (the default src
+corners are 193 and 1087; with three mounting angles for four pixel targets the last 0.2 px cannot
+be met). The camera sits 1.2556 m above the road, pitched 1.432 deg up and turned 1.551 deg to the
+right (the principal point is at x = 671, right of the image centre).
+
+Frames: the car frame has its origin on the road surface below the camera, x to the right,
+y down and z forward, in metres. The road is the plane y = 0.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+# Udacity camera_cal, 17 boards, plain OpenCV calibration (RMS 1.003 px).
+UDACITY_CAMERA_MATRIX = ((1156.4576, 0.0, 671.3197),
+                         (0.0, 1151.2673, 389.2167),
+                         (0.0, 0.0, 1.0))
+UDACITY_DIST_COEFFS = (-0.24667049, -0.025444482, -0.00067022409, 0.00013403439, 0.010671371)
+IMAGE_SIZE_PX = (1280, 720)
+
+# Mounting that makes the default perspective points fit (see the module docstring).
+MOUNT_HEIGHT_M = 1.2555908
+MOUNT_PITCH_DEG = -1.4321755
+MOUNT_YAW_DEG = 1.5508444
+
+_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera with radial and tangential distortion, mounted on a car.
+
+    Parameters
+    ----------
+    camera_matrix : 3x3 intrinsic matrix (pixels).
+    dist_coeffs : OpenCV distortion (k1, k2, p1, p2, k3).
+    size_px : image (width, height).
+    height_m : height of the optical centre above the road.
+    pitch_deg : tilt of the optical axis, positive down.
+    yaw_deg : turn of the optical axis from the car's forward direction, positive right.
+    """
+
+    camera_matrix: tuple[tuple[float, ...], ...] = UDACITY_CAMERA_MATRIX
+    dist_coeffs: tuple[float, ...] = UDACITY_DIST_COEFFS
+    size_px: tuple[int, int] = IMAGE_SIZE_PX
+    height_m: float = MOUNT_HEIGHT_M
+    pitch_deg: float = MOUNT_PITCH_DEG
+    yaw_deg: float = MOUNT_YAW_DEG
+
+    @property
+    def K(self) -> np.ndarray:
+        """Return the 3x3 camera matrix as float64."""
+        return np.asarray(self.camera_matrix, dtype=np.float64)
+
+    @property
+    def dist(self) -> np.ndarray:
+        """Return the distortion coefficients as float64."""
+        return np.asarray(self.dist_coeffs, dtype=np.float64)
+
+    def rotation(self) -> np.ndarray:
+        """Return R (3x3) with camera = R @ (car - centre); rows are the camera axes in the car frame."""
+        p, y = np.radians(self.pitch_deg), np.radians(self.yaw_deg)
+        z_axis = np.array([np.sin(y) * np.cos(p), np.sin(p), np.cos(y) * np.cos(p)])
+        x_axis = np.array([np.cos(y), 0.0, -np.sin(y)])
+        return np.stack([x_axis, np.cross(z_axis, x_axis), z_axis])
+
+    def centre(self) -> np.ndarray:
+        """Return the optical centre in the car frame (m)."""
+        return np.array([0.0, -self.height_m, 0.0])
+
+    def to_camera(self, points_car: np.ndarray) -> np.ndarray:
+        """Return (N, 3) car-frame points (m) in camera coordinates (m)."""
+        return (np.asarray(points_car, dtype=np.float64) - self.centre()) @ self.rotation().T
+
+    def project(self, points_car: np.ndarray, distort: bool = True) -> np.ndarray:
+        """Return the (N, 2) pixel positions of (N, 3) car-frame points (m); NaN behind the camera.
+
+        ``distort=False`` gives positions in the undistorted image (same camera matrix).
+        """
+        pc = self.to_camera(points_car).reshape(-1, 3)
+        dist = self.dist if distort else np.zeros(5)
+        uv, _ = cv2.projectPoints(pc.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), self.K, dist)
+        uv = uv.reshape(-1, 2)
+        uv[pc[:, 2] <= 1e-6] = np.nan
+        return uv
+
+    def rays(self, uv: np.ndarray, distorted: bool = True) -> np.ndarray:
+        """Return the (N, 3) car-frame ray directions (z_cam = 1 scale) through (N, 2) pixels."""
+        pts = np.asarray(uv, dtype=np.float64).reshape(-1, 1, 2)
+        dist = self.dist if distorted else np.zeros(5)
+        norm = cv2.undistortPoints(pts, self.K, dist, None, None, None, _UNDISTORT_CRITERIA)
+        norm = norm.reshape(-1, 2)
+        cam = np.column_stack([norm, np.ones(len(norm))])
+        return cam @ self.rotation()
+
+    def ground_points(self, uv: np.ndarray, distorted: bool = True) -> np.ndarray:
+        """Return the (N, 2) road points (x, z) in metres seen at (N, 2) pixels; NaN above the horizon."""
+        r = self.rays(uv, distorted)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = np.where(r[:, 1] > 0, self.height_m / r[:, 1], np.nan)
+        return np.column_stack([lam * r[:, 0], lam * r[:, 2]])
+
+    def ground_z_on_line(self, row_px: float, x_m: float) -> float:
+        """Return the distance ahead (m) where the road line x = ``x_m`` crosses an undistorted image row."""
+        # The row's plane through the camera centre: n . (P - C) = 0 with n = R^T (0, fy, cy - row).
+        n = self.rotation().T @ np.array([0.0, self.K[1, 1], self.K[1, 2] - row_px])
+        c = self.centre()
+        # P = (x_m, 0, z): n0 (x_m - c0) + n1 (0 - c1) + n2 z = 0
+        return float(-(n[0] * (x_m - c[0]) + n[1] * (0.0 - c[1])) / n[2])

@@ -1,0 +1,395 @@
+"""The road-scene renderer: a textured road plane seen through the distorted camera.
+
+Everything that depends only on the camera is computed once (``GroundGrid``): the road point
+(x, z) under every pixel of the raw, distorted image, the pixel's footprint on the road (the
+Jacobian of (x, z) over (column, row)), the horizon coverage, the sky directions, the hood.
+Everything that depends only on the scene is drawn once (``textures``). Per frame the renderer
+only maps car-frame road points to road coordinates (s, t) through two table lookups along the
+centre line, and shades them. Anti-aliasing is analytic: every painted line, dash, streak and
+edge is box-filtered over the pixel's footprint on the road, and the maps are sampled from the
+mipmap level that matches the footprint, so distant dashes fade instead of shimmering.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .camera import Camera
+from .road import CarPose, Road, car_frame, world_to_car
+from .scene import Line, Scene
+from .textures import (AMBIENT, CONCRETE, DIRECT, GRAIN_TEXEL_M, GRAIN_TILE_PX, MAP_TEXEL_M,
+                       MAX_STREAKS, MIP_LEVELS, SKYLINE_STEP_DEG, Mipmap, SurfaceMap, grain, hood_profile,
+                       light_table, skyline, streak_table, surface_map)
+
+LOOK_AHEAD_M = 220.0    # centre line used ahead of the car
+LOOK_BEHIND_M = 10.0    # and behind it (the bottom image corners see the road beside the car)
+Z_MAX_M = 200.0         # farthest road distance shaded in detail; beyond it only haze
+Z_STEP_M = 0.05
+MAX_ROAD_ANGLE_RAD = np.radians(75.0)  # the road ahead is used until it turns this far
+FAR_M = 1e3             # lateral offset given to road points off the tabulated road
+MAX_FOOTPRINT_M = 50.0
+CONCRETE_JOINT_M = 4.5  # transverse joints of concrete slabs
+SKYLINE_BAND_DEG = (-1.0, 7.0)
+NOISE_MARGIN_PX = 16
+
+
+def _box(a: np.ndarray, b: np.ndarray, inv_w: np.ndarray, lo, hi) -> np.ndarray:
+    """Return the share of the footprint [b, a] (width 1/inv_w) that lies in [lo, hi]."""
+    return (np.clip(a, lo, hi) - np.clip(b, lo, hi)) * inv_w
+
+
+def _dash_integral(s: np.ndarray, period_m: float, dash_m: float) -> np.ndarray:
+    """Return the painted length of a dash pattern (dashes start at multiples of the period) up to s."""
+    n = np.floor(s * (1.0 / period_m))
+    return n * dash_m + np.minimum(s - n * period_m, dash_m)
+
+
+@dataclass(frozen=True)
+class GroundGrid:
+    """Camera-only precomputation for rendering: rows ``row0:`` see the road, rows ``:sky_rows`` the sky."""
+
+    camera: Camera
+    row0: int
+    x_m: np.ndarray          # (B, W) float32 road point under each pixel of the ground band
+    z_m: np.ndarray
+    distance_m: np.ndarray   # (B, W) distance ahead, not clamped (for the haze)
+    jacobian: np.ndarray     # (4, B, W) dx/du, dx/dv, dz/du, dz/dv (m per px)
+    ground: np.ndarray       # (B, W) share of each pixel below the horizon
+    z_index: np.ndarray      # (B, W) z / Z_STEP_M
+    bands: tuple[tuple[int, int, int, int], ...]  # (row from, row to, map level, grain level)
+    sky_rows: int
+    elevation_deg: np.ndarray  # (sky_rows, W)
+    azimuth_deg: np.ndarray    # (sky_rows, W), from the car's forward axis, positive right
+    rays: np.ndarray           # (sky_rows, W, 3) car-frame ray directions
+    skyline_rows: tuple[int, int]
+    hood_row0: int             # first row the hood reaches
+    hood_alpha: np.ndarray     # (R, W, 1) hood coverage of the rows from hood_row0
+    hood_shade: np.ndarray     # (R, 1, 1) hood brightness (darker towards the bottom)
+    vignette: np.ndarray       # (H, W) float32
+
+    @staticmethod
+    def build(camera: Camera = Camera()) -> "GroundGrid":
+        """Return the grid of ``camera`` (about a second of work)."""
+        w, h = camera.size_px
+        u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        rays = camera.rays(np.column_stack([u.ravel(), v.ravel()])).reshape(h, w, 3)
+        horiz = np.hypot(rays[..., 0], rays[..., 2])
+        elevation = -np.degrees(np.arctan2(rays[..., 1], horiz))
+        below = rays[..., 1] > 0
+        row0 = int(np.argmax(below.any(axis=1)))
+        sky_rows = int(h - np.argmax((~below).any(axis=1)[::-1]))
+        r = rays[row0:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = np.where(r[..., 1] > 0, camera.height_m / r[..., 1], np.inf)
+        distance = np.minimum(lam * r[..., 2], 1e5)
+        scale = np.minimum(lam, Z_MAX_M / r[..., 2])
+        x, z = scale * r[..., 0], scale * r[..., 2]
+        jac = np.stack([np.gradient(x, axis=1), np.gradient(x, axis=0),
+                        np.gradient(z, axis=1), np.gradient(z, axis=0)])
+        jac = np.clip(np.nan_to_num(jac), -MAX_FOOTPRINT_M, MAX_FOOTPRINT_M)
+        elev_step = np.abs(np.gradient(elevation, axis=0))[row0:]
+        ground = np.clip(0.5 - elevation[row0:] / np.maximum(elev_step, 1e-6), 0.0, 1.0)
+        footprint = np.maximum(np.abs(jac[:2]).sum(axis=0), np.abs(jac[2:]).sum(axis=0))
+        sky_el = elevation[:sky_rows]
+        sky_band = np.flatnonzero(((sky_el > SKYLINE_BAND_DEG[0]) & (sky_el < SKYLINE_BAND_DEG[1])).any(axis=1))
+        return GroundGrid(
+            camera=camera, row0=row0,
+            x_m=x.astype(np.float32), z_m=z.astype(np.float32),
+            distance_m=distance.astype(np.float32), jacobian=jac.astype(np.float32),
+            ground=ground.astype(np.float32), z_index=(z / Z_STEP_M).astype(np.float32),
+            bands=_mip_bands(np.median(footprint, axis=1)),
+            sky_rows=sky_rows, elevation_deg=sky_el.astype(np.float32),
+            azimuth_deg=np.degrees(np.arctan2(rays[:sky_rows, :, 0], rays[:sky_rows, :, 2])).astype(np.float32),
+            rays=rays[:sky_rows].astype(np.float32),
+            skyline_rows=(int(sky_band[0]), int(sky_band[-1]) + 1),
+            **_hood(camera.size_px),
+            vignette=_vignette(camera).astype(np.float32))
+
+
+def _mip_bands(footprint_m: np.ndarray) -> tuple[tuple[int, int, int, int], ...]:
+    """Return runs of band rows (from, to, map level, grain level) for per-row footprints (m)."""
+    def level(texel_m: float) -> np.ndarray:
+        return np.clip(np.floor(np.log2(np.maximum(footprint_m / texel_m, 1.0))), 0, MIP_LEVELS - 1).astype(int)
+
+    key = level(MAP_TEXEL_M) * MIP_LEVELS + level(GRAIN_TEXEL_M)
+    edges = np.flatnonzero(np.diff(key)) + 1
+    starts = np.concatenate([[0], edges])
+    ends = np.concatenate([edges, [len(key)]])
+    return tuple((int(a), int(b), int(key[a] // MIP_LEVELS), int(key[a] % MIP_LEVELS)) for a, b in zip(starts, ends))
+
+
+def _hood(size_px: tuple[int, int]) -> dict:
+    """Return the hood's first row, coverage (anti-aliased) and shading for the grid."""
+    top = hood_profile(size_px)
+    row0 = int(np.floor(top.min()))
+    rows = np.arange(row0, size_px[1], dtype=np.float32)[:, None]
+    alpha = np.clip(rows + 0.5 - top[None, :], 0.0, 1.0)[..., None]
+    shade = (1.0 - 0.35 * (rows - row0) / max(size_px[1] - row0, 1))[..., None]
+    return dict(hood_row0=row0, hood_alpha=alpha.astype(np.float32), hood_shade=shade.astype(np.float32))
+
+
+def _vignette(camera: Camera) -> np.ndarray:
+    """Return the lens falloff (H, W): cos^4 of the angle off the axis, softened to 15 % in the corners."""
+    w, h = camera.size_px
+    u, v = np.meshgrid(np.arange(w), np.arange(h))
+    rr = ((u - camera.K[0, 2]) / camera.K[0, 0]) ** 2 + ((v - camera.K[1, 2]) / camera.K[1, 1]) ** 2
+    cos4 = 1.0 / (1.0 + rr) ** 2
+    return 1.0 - 0.45 * (1.0 - cos4)
+
+
+def _sample(mip: Mipmap, bands, band_level: int, cols: np.ndarray, rows: np.ndarray,
+            wrap: bool) -> np.ndarray:
+    """Return ``mip`` sampled at level-0 texel coordinates (cols, rows), each run of band rows from
+    its own level; coordinates wrap around (a tile) or are clamped to the edge (a map)."""
+    h, w = mip.levels[0].shape[:2]
+    if wrap:
+        cols = cols - np.floor(cols * (1.0 / w)) * w
+        rows = rows - np.floor(rows * (1.0 / h)) * h
+    else:
+        cols = np.clip(cols, 0, w - 1)
+        rows = np.clip(rows, 0, h - 1)
+    border = cv2.BORDER_WRAP if wrap else cv2.BORDER_REPLICATE
+    out = None
+    for r0, r1, map_level, grain_level in bands:
+        lvl = (map_level, grain_level)[band_level]
+        f = 0.5 ** lvl
+        c = cols[r0:r1] * f + (0.5 * f - 0.5)
+        r = rows[r0:r1] * f + (0.5 * f - 0.5)
+        part = cv2.remap(mip.levels[lvl], c, r, cv2.INTER_LINEAR, borderMode=border)
+        if out is None:
+            out = np.empty((cols.shape[0],) + part.shape[1:], part.dtype)
+        out[r0:r1] = part
+    return out
+
+
+def _lookup(table: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Return rows of ``table`` (N, C) linearly interpolated at fractional ``index`` (clamped), (B, W, C)."""
+    n = table.shape[0]
+    src = np.ascontiguousarray(np.broadcast_to(table.astype(np.float32)[None], (2,) + table.shape))
+    index = np.clip(index, 0, n - 1).astype(np.float32, copy=False)
+    return cv2.remap(src, index, np.zeros_like(index), cv2.INTER_LINEAR)
+
+
+@dataclass(frozen=True)
+class RoadCoords:
+    """Road coordinates of the ground band for one car pose: s (m, from the car), t (m), footprints (m)."""
+
+    s_m: np.ndarray
+    t_m: np.ndarray
+    ws_m: np.ndarray
+    wt_m: np.ndarray
+    profiles: tuple[np.ndarray, ...]  # 7 x (B, W): the scene's profiles along s (streaks, light)
+
+
+class Renderer:
+    """Render frames of one scene through one camera grid; holds only precomputed, read-only maps."""
+
+    def __init__(self, scene: Scene, grid: GroundGrid):
+        rng = np.random.default_rng(scene.seed)
+        self.scene = scene
+        self.grid = grid
+        self.road = Road.build(scene.profile, scene.s_from_m, scene.s_to_m)
+        self.lines: tuple[Line, ...] = scene.layout.lines()
+        self.surface: SurfaceMap = surface_map(scene, rng)
+        self.grain: Mipmap = grain(rng)
+        self.tables = np.concatenate([streak_table(scene, self.road.s_m, rng),
+                                      light_table(scene, self.road.s_m)], axis=1)
+        hills, trees = skyline(rng)
+        self.skyline = np.column_stack([np.append(hills, hills[0]), np.append(trees, trees[0])])
+        w, h = grid.camera.size_px
+        self.noise = rng.standard_normal((h + NOISE_MARGIN_PX, w + NOISE_MARGIN_PX, 3)).astype(np.float32)
+        look = scene.look
+        self.haze = (1.0 - np.exp(-grid.distance_m / look.haze_m)).astype(np.float32)
+        self.sky = self._sky()
+
+    # ------------------------------------------------------------------ geometry
+
+    def pose_range_m(self) -> tuple[float, float]:
+        """Return the arc lengths (m) between which a car may stand in this scene."""
+        return (self.scene.s_from_m + LOOK_BEHIND_M, self.scene.s_to_m - LOOK_AHEAD_M)
+
+    def road_coords(self, pose: CarPose) -> tuple[RoadCoords, float]:
+        """Return the ground band's road coordinates for ``pose`` and the car's world heading (rad).
+
+        The centre line is tabulated against the distance ahead z; a road point (x, z) takes the
+        centre point at its own z, steps along the tangent to its foot point, and corrects the
+        offset for the curvature (second order in the step, exact to well below a millimetre for
+        the lane's own lines).
+        """
+        g, road = self.grid, self.road
+        origin, heading = car_frame(road, pose)
+        i0 = int(np.floor(road.index(pose.s_m - LOOK_BEHIND_M)))
+        i1 = int(np.ceil(road.index(pose.s_m + LOOK_AHEAD_M))) + 1
+        if i0 < 0 or i1 > len(road.s_m):
+            raise ValueError(f"car at s={pose.s_m:.1f} m needs road from {pose.s_m - LOOK_BEHIND_M:.0f} "
+                             f"to {pose.s_m + LOOK_AHEAD_M:.0f} m; the scene spans "
+                             f"{self.scene.s_from_m:.0f} to {self.scene.s_to_m:.0f} m")
+        xz = world_to_car(road.xy_m[i0:i1], origin, heading)
+        angle = road.heading_rad[i0:i1] - heading
+        # Use the road ahead while it keeps coming closer and has not turned too far.
+        ok = (np.abs(angle) < MAX_ROAD_ANGLE_RAD) & (np.diff(xz[:, 1], prepend=-np.inf) > 0)
+        n = len(ok) if ok.all() else int(np.argmin(ok))
+        zs = xz[:n, 1]
+        z_grid = np.arange(int(Z_MAX_M / Z_STEP_M) + 1) * Z_STEP_M
+        index = np.interp(z_grid, zs, np.arange(i0, i0 + n, dtype=np.float64))
+        at = lambda values: np.interp(index, np.arange(len(values)), values)  # noqa: E731
+        columns = [np.interp(z_grid, zs, xz[:n, 0]), at(road.s_m) - pose.s_m,
+                   np.sin(at(road.heading_rad) - heading), np.cos(at(road.heading_rad) - heading),
+                   at(road.curvature_per_m)] + [at(col) for col in self.tables.T]
+        near = cv2.split(_lookup(np.column_stack(columns), g.z_index))
+        x_c, s_c, sin, cos, curv = near[:5]
+        dx = g.x_m - x_c
+        step = dx * sin
+        t0 = dx * cos
+        s = s_c + step * (1.0 + curv * t0)
+        t = t0 - 0.5 * curv * step * step
+        t[g.z_m > zs[-1]] = FAR_M
+        dxu, dxv, dzu, dzv = g.jacobian
+        wt = np.abs(dxu * cos - dzu * sin) + np.abs(dxv * cos - dzv * sin) + 1e-4
+        ws = np.minimum(np.abs(dxu * sin + dzu * cos) + np.abs(dxv * sin + dzv * cos), MAX_FOOTPRINT_M) + 1e-4
+        return RoadCoords(s, t, ws, wt, tuple(near[5:])), heading
+
+    # ------------------------------------------------------------------ shading
+
+    def _line_paint(self, rc: RoadCoords, pose: CarPose, a: np.ndarray, b: np.ndarray,
+                    inv_wt: np.ndarray, paint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the (white, yellow) paint coverage of every band pixel (0..1)."""
+        white = np.zeros_like(a)
+        yellow = np.zeros_like(a)
+        for line in self.lines:
+            half = line.width_m / 2
+            near = np.flatnonzero((np.abs(rc.t_m - line.t_m) < half + rc.wt_m).ravel())
+            if near.size == 0:
+                continue
+            cov = _box(a.ravel()[near] - line.t_m, b.ravel()[near] - line.t_m, inv_wt.ravel()[near], -half, half)
+            if line.dash_m > 0:
+                period = line.dash_m + line.gap_m
+                s = rc.s_m.ravel()[near] + (pose.s_m % period)
+                ws = rc.ws_m.ravel()[near]
+                cov *= (_dash_integral(s + ws / 2, period, line.dash_m)
+                        - _dash_integral(s - ws / 2, period, line.dash_m)) / ws
+            target = yellow if line.yellow else white
+            target.ravel()[near] += cov * paint.ravel()[near]
+        return white, yellow
+
+    def _surface_grey(self, rc: RoadCoords, pose: CarPose, tone: np.ndarray,
+                      a: np.ndarray, b: np.ndarray, inv_wt: np.ndarray) -> np.ndarray:
+        """Return the grey brightness of the paved surface under full sun (band, float32)."""
+        look = self.scene.look
+        concrete = rc.profiles[MAX_STREAKS + CONCRETE]
+        grey = look.asphalt_grey + (look.concrete_grey - look.asphalt_grey) * concrete
+        grey *= tone
+        for k, streak in enumerate(look.streaks[:MAX_STREAKS]):
+            off = rc.profiles[k]
+            half = streak.width_m / 2
+            grey *= 1.0 - streak.darkness * _box(a - off, b - off, inv_wt, -half, half)
+        if look.concrete_m:
+            s = rc.s_m + (pose.s_m % CONCRETE_JOINT_M) + 0.01
+            joint = (_dash_integral(s + rc.ws_m / 2, CONCRETE_JOINT_M, 0.02)
+                     - _dash_integral(s - rc.ws_m / 2, CONCRETE_JOINT_M, 0.02)) / rc.ws_m
+            grey *= 1.0 - 0.5 * joint * concrete
+        return grey
+
+    def _ground(self, pose: CarPose) -> tuple[np.ndarray, float]:
+        """Return the ground band's RGB under the scene light and haze (float32, B x W x 3) and the heading."""
+        look, grid = self.scene.look, self.grid
+        rc, heading = self.road_coords(pose)
+        sm = self.surface
+        cols = (rc.t_m - sm.t0_m) * (1.0 / sm.mip.texel_m)
+        rows = (rc.s_m + (pose.s_m - sm.s0_m)) * (1.0 / sm.mip.texel_m)
+        tone, sun, paint = (c.astype(np.float32) for c in cv2.split(_sample(sm.mip, grid.bands, 0, cols, rows, wrap=False)))
+        tone *= 1.0 / 128.0
+        cols = rc.t_m * (1.0 / self.grain.texel_m)
+        rows = (rc.s_m + (pose.s_m % (GRAIN_TILE_PX * self.grain.texel_m))) * (1.0 / self.grain.texel_m)
+        tone *= 1.0 + look.grain * _sample(self.grain, grid.bands, 1, cols, rows, wrap=True)
+        inv_wt = 1.0 / rc.wt_m
+        a, b = rc.t_m + rc.wt_m / 2, rc.t_m - rc.wt_m / 2
+        grey = self._surface_grey(rc, pose, tone, a, b, inv_wt)
+        white, yellow = self._line_paint(rc, pose, a, b, inv_wt, paint * (1.0 / 255.0))
+        grey += (look.white_grey - grey) * np.minimum(white, 1.0)
+        yellow = np.minimum(yellow, 1.0)
+        paved = _box(a, b, inv_wt, *self.scene.layout.paved_m)
+        light = (look.ambient * rc.profiles[MAX_STREAKS + AMBIENT]
+                 + look.sun * (1.0 / 255.0) * rc.profiles[MAX_STREAKS + DIRECT] * sun) * (1.0 / (look.ambient + look.sun))
+        keep = (1.0 - self.haze) * light
+        channels = []
+        for c in range(3):
+            colour = look.grass_rgb[c] * tone
+            colour += (grey + (look.yellow_rgb[c] - grey) * yellow - colour) * paved
+            colour *= keep
+            colour += look.haze_rgb[c] * self.haze
+            channels.append(colour)
+        return cv2.merge(channels), heading
+
+    def _sky(self) -> np.ndarray:
+        """Return the plain sky (sky_rows x W x 3, float32): a gradient from the horizon up."""
+        look, g = self.scene.look, self.grid
+        f = np.clip(g.elevation_deg / 25.0, 0.0, 1.0)[..., None] ** 0.6
+        return (np.asarray(look.sky_horizon_rgb, np.float32) * (1 - f)
+                + np.asarray(look.sky_top_rgb, np.float32) * f).astype(np.float32)
+
+    def _skyline(self, sky: np.ndarray, heading_rad: float) -> None:
+        """Draw the distant hills and the tree line into ``sky`` (in place) for the car's heading."""
+        look, g = self.scene.look, self.grid
+        r0, r1 = g.skyline_rows
+        el = g.elevation_deg[r0:r1]
+        n = len(self.skyline) - 1
+        az = (g.azimuth_deg[r0:r1] + float(np.degrees(heading_rad))) * (1.0 / SKYLINE_STEP_DEG)
+        tops = _lookup(self.skyline, az - np.floor(az * (1.0 / n)) * n)
+        px_deg = float(np.degrees(1.0 / g.camera.K[1, 1]))
+        for k, (rgb, haze) in enumerate(((look.hills_rgb, 0.45), (look.trees_rgb, 0.2))):
+            cover = np.clip((tops[..., k] - el) * (1.0 / px_deg) + 0.5, 0.0, 1.0)[..., None]
+            colour = np.asarray(rgb, np.float32) * (1 - haze) + np.asarray(look.haze_rgb, np.float32) * haze
+            sky[r0:r1] += (colour - sky[r0:r1]) * cover
+
+    def _bridges(self, sky: np.ndarray, pose: CarPose, rc_heading: float) -> None:
+        """Draw the overpasses ahead of (or above) the car into ``sky`` in place."""
+        g, cam = self.grid, self.grid.camera
+        for bridge in self.scene.look.bridges:
+            z0 = bridge.s_m - pose.s_m
+            z1 = z0 + bridge.length_m
+            if z1 < 0 or z0 > Z_MAX_M:
+                continue
+            ry = g.rays[..., 1]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lam_deck = np.where(ry < 0, (cam.height_m - bridge.height_m) / ry, np.inf)
+                z_deck = lam_deck * g.rays[..., 2]
+                lam_face = np.where(g.rays[..., 2] > 0, z0 / g.rays[..., 2], np.inf)
+                face_h = cam.height_m - lam_face * ry
+            deck = (z_deck >= z0) & (z_deck <= z1)
+            face = (face_h >= bridge.height_m) & (face_h <= bridge.height_m + 1.6) & (z0 > 0)
+            sky[deck] = (60.0, 60.0, 62.0)
+            sky[face] = (150.0, 148.0, 142.0)
+
+    def _hood(self, frame: np.ndarray, gain: float) -> None:
+        """Draw the car hood over the bottom rows of ``frame`` (float32, in place)."""
+        g = self.grid
+        colour = np.asarray(self.scene.look.hood_rgb, np.float32) * g.hood_shade * gain
+        frame[g.hood_row0:] += (colour - frame[g.hood_row0:]) * g.hood_alpha
+
+    def render(self, pose: CarPose, exposure: float | None = None, noise_key: int = 0) -> np.ndarray:
+        """Return the raw (distorted) RGB uint8 frame for ``pose`` at ``exposure`` (default: the look's).
+
+        ``noise_key`` picks the camera-noise pattern (the frame number in a video).
+        """
+        g, look = self.grid, self.scene.look
+        gain = look.exposure if exposure is None else exposure
+        w, h = g.camera.size_px
+        ground, heading = self._ground(pose)
+        sky = self.sky.copy()
+        self._skyline(sky, heading)
+        self._bridges(sky, pose, heading)
+        frame = np.empty((h, w, 3), np.float32)
+        frame[:g.row0] = sky[:g.row0]
+        frame[g.row0:] = ground
+        overlap = slice(g.row0, g.sky_rows)
+        alpha = g.ground[: g.sky_rows - g.row0, :, None]
+        frame[overlap] = sky[g.row0:] + (frame[overlap] - sky[g.row0:]) * alpha
+        frame *= (g.vignette * gain)[..., None]
+        self._hood(frame, gain)
+        dy, dx = np.random.default_rng([self.scene.seed, noise_key]).integers(0, NOISE_MARGIN_PX, 2)
+        frame += self.noise[dy:dy + h, dx:dx + w] * look.sensor_noise
+        out = np.clip(frame, 0, 255).astype(np.uint8)
+        return cv2.GaussianBlur(out, (3, 3), 0.6)
