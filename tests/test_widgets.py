@@ -1,0 +1,351 @@
+"""The tuners driven without a browser: set a control's ``.value``, check the config and the preview.
+
+Setting ``.value`` in Python runs the same ``observe`` callback a slider drag in JupyterLab runs.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import io, thresholds, widgets
+from lanelib.config import PipelineConfig, load_config, to_dict
+from lanelib.errors import InputError
+from lanelib.lanes import SearchConfig
+from lanelib.perspective import PerspectiveConfig, implied_focal_px, road_length_m, trapezoid_src
+from lanelib.pipeline import LanePipeline
+
+from conftest import REPO, data_root
+
+STRAIGHT = "straight_lines1.jpg"
+CURVED = "test2.jpg"
+
+
+@pytest.fixture(scope="module")
+def road(udacity_advanced):
+    """Two 1280x720 road photos, a straight one first, as the picker's {label: path}."""
+    folder = udacity_advanced / "test_images"
+    return {STRAIGHT: folder / STRAIGHT, CURVED: folder / CURVED}
+
+
+def _decode(jpeg: bytes) -> np.ndarray:
+    return cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+
+
+def _tile(sheet: np.ndarray, index: int, columns: int, tile_w: int) -> np.ndarray:
+    th = round(tile_w * 720 / 1280)
+    r, c = divmod(index, columns)
+    return sheet[r * th:(r + 1) * th, c * tile_w:(c + 1) * tile_w]
+
+
+# --------------------------------------------------------------------------- thresholds
+
+def test_raising_the_white_low_bound_shrinks_the_white_mask_only(road):
+    t = widgets.ThresholdTuner(road)
+    names = thresholds.mask_names(t.config.thresholds)
+    before = {n: t.mask(n) for n in names}
+    sheet0, bytes0 = t.preview_sheet(), t.preview.value
+    white0 = cv2.countNonZero(before["white"])
+    assert white0 > 1000  # the right line is white
+
+    t.controls["white.range1"].value = (235, 255)  # the L channel of HLS
+
+    assert t.config.thresholds.white.low == (0, 235, 0)
+    assert t.config.thresholds.white.high == (179, 255, 255)
+    white1 = cv2.countNonZero(t.mask("white"))
+    assert 0 < white1 < white0
+    expected = thresholds.mask(t.birdseye, t.config.thresholds.white)
+    assert np.array_equal(t.mask("white"), expected)
+    # only the white mask was recomputed: the others are the very same arrays
+    for n in names:
+        if n != "white" and before[n] is not None:
+            assert t.mask(n) is before[n], n
+    assert t.config.thresholds.yellow == PipelineConfig().thresholds.yellow
+    # the preview changed where the white tile is, not where the yellow tile is
+    assert t.preview.value != bytes0
+    sheet1 = t.preview_sheet()
+    i_white, i_yellow = 1 + names.index("white"), 1 + names.index("yellow")
+    assert not np.array_equal(_tile(sheet1, i_white, 4, 320), _tile(sheet0, i_white, 4, 320))
+    assert np.array_equal(_tile(sheet1, i_yellow, 4, 320), _tile(sheet0, i_yellow, 4, 320))
+    assert _decode(t.preview.value).shape == sheet1.shape
+
+
+def test_disabling_a_mask_drops_it_from_the_combination(road):
+    t = widgets.ThresholdTuner(road, image=CURVED)
+    cfg = t.config.thresholds
+    assert cfg.rule.startswith("yellow | lab_b")
+    combined0 = t.combined()
+    yellow_only = cv2.bitwise_and(t.mask("yellow"), cv2.bitwise_not(t.mask("lab_b")))
+    t.controls["lab_b.enabled"].value = False
+    assert t.config.thresholds.lab_b.enabled is False
+    assert t.mask("lab_b") is None and t.render()["lab_b"] is None
+    combined1 = t.combined()
+    # lab_b's pixels that no other term of the rule holds are gone, nothing was added
+    assert cv2.countNonZero(cv2.bitwise_and(combined1, cv2.bitwise_not(combined0))) == 0
+    assert cv2.countNonZero(combined1) < cv2.countNonZero(combined0)
+    expected = thresholds.combine(t.birdseye, replace(cfg, lab_b=replace(cfg.lab_b, enabled=False)))
+    assert np.array_equal(combined1, expected)
+    # with yellow off as well, the left (yellow) line leaves the combination
+    t.controls["yellow.enabled"].value = False
+    combined2 = t.combined()
+    assert cv2.countNonZero(cv2.bitwise_and(combined2, yellow_only)) < cv2.countNonZero(
+        cv2.bitwise_and(combined1, yellow_only))
+    assert t.counts()["combined"] == cv2.countNonZero(combined2)
+    assert "yellow" not in t.counts()
+
+
+def test_changing_a_colour_space_updates_the_channel_choices_and_the_hue_range(road):
+    t = widgets.ThresholdTuner(road)
+    t.controls["s_channel.space"].value = "lab"
+    assert t.controls["s_channel.channel"].options == ("l", "a", "b")
+    assert t.config.thresholds.s_channel.space == "lab"
+    assert t.config.thresholds.s_channel.channel == "l"  # "s" is not a Lab channel
+    t.controls["s_channel.space"].value = "hsv"
+    t.controls["s_channel.channel"].value = "h"
+    assert t.controls["s_channel.range"].max == 179
+    assert t.config.thresholds.s_channel == thresholds.ChannelMask("hsv", "h", 170, 179)
+    assert np.array_equal(t.mask("s_channel"),
+                          thresholds.mask(t.birdseye, t.config.thresholds.s_channel))
+    t.controls["yellow.space"].value = "lab"
+    assert [t.controls[f"yellow.range{i}"].description for i in range(3)] == ["l", "a", "b"]
+    assert t.controls["yellow.range0"].max == 255
+
+
+def test_sobel_kernel_and_rule_controls(road):
+    t = widgets.ThresholdTuner(road)
+    t.controls["sobel_x.kernel_px"].value = 5
+    assert t.config.thresholds.sobel_x.kernel_px == 5
+    assert np.array_equal(t.mask("sobel_x"), thresholds.mask(t.birdseye, t.config.thresholds.sobel_x))
+    t.controls["rule"].value = "yellow | white"
+    assert t.config.thresholds.rule == "yellow | white"
+    assert np.array_equal(t.combined(), cv2.bitwise_or(t.mask("yellow"), t.mask("white")))
+
+
+def test_a_bad_rule_is_refused_and_said_why(road):
+    t = widgets.ThresholdTuner(road)
+    before, preview = t.config, t.preview.value
+    t.controls["rule"].value = "yellow | nope"
+    assert t.config == before
+    assert t.preview.value == preview
+    assert "unknown mask 'nope'" in t.error
+    assert "unknown mask" in t.message.value
+    t.controls["rule"].value = "yellow"
+    assert t.error == "" and t.config.thresholds.rule == "yellow"
+
+
+def test_save_and_load_round_trip(road, tmp_path):
+    t = widgets.ThresholdTuner(road)
+    t.controls["white.range1"].value = (215, 255)
+    t.controls["sobel_x.range"].value = (35.0, 200.0)
+    t.controls["lab_b.enabled"].value = False
+    t.controls["line_tophat.width_px"].value = 41
+    path = t.save(tmp_path / "tuned.json")
+    assert load_config(path) == t.config
+    assert json.loads(path.read_text())["thresholds"]["white"]["low"] == [0, 215, 0]
+
+    fresh = widgets.ThresholdTuner(road)
+    assert fresh.config == PipelineConfig()
+    assert fresh.load(path) == t.config
+    assert fresh.config == t.config
+    assert fresh.controls["white.range1"].value == (215, 255)
+    assert fresh.controls["lab_b.enabled"].value is False
+    assert fresh.controls["line_tophat.width_px"].value == 41
+    assert fresh.preview.value == t.preview.value
+    # the perspective and fit tuners read the same file
+    p = widgets.PerspectiveTuner(road)
+    p.load(path)
+    assert p.config == t.config
+
+
+def test_load_rebuilds_the_birdseye_view_when_the_perspective_changes(road, tmp_path):
+    t = widgets.ThresholdTuner(road)
+    bird0 = t.birdseye.copy()
+    pc = PerspectiveConfig(dst_px=((200.0, 0.0), (200.0, 720.0), (1080.0, 720.0), (1080.0, 0.0)))
+    path = tmp_path / "wide.json"
+    path.write_text(json.dumps({"perspective": to_dict(pc)}))
+    t.load(path)
+    assert t.config.perspective == pc
+    assert not np.array_equal(t.birdseye, bird0)
+    assert np.array_equal(t.birdseye, LanePipeline(t.config).birdseye(io.read_image(road[STRAIGHT])))
+
+
+# --------------------------------------------------------------------------- perspective
+
+def test_straight_line_check_with_default_points_on_a_straight_road(road, udacity_calibration):
+    t = widgets.PerspectiveTuner(road, calibration=udacity_calibration, image=STRAIGHT)
+    c = t.check
+    assert abs(c.left_slope) < 2.0 and abs(c.right_slope) < 2.0  # px per 100 px
+    assert c.lane_width_m == pytest.approx(3.7, abs=0.15)
+    assert "straight-line check: left" in t.readout()
+    # a trapezoid whose top is too narrow stretches the far road: the lines spread apart
+    # towards the top (x falls upwards on the left, rises on the right), and the check shows it
+    t.controls["top_width"].value = 130.0
+    assert t.check.left_slope > 3.0 and t.check.right_slope < -3.0
+    assert t.check.lane_width_m == pytest.approx(3.7, abs=0.3)  # the bottom row stays put
+
+
+def test_moving_the_trapezoid_changes_the_src_points_and_the_birdseye_preview(road):
+    t = widgets.PerspectiveTuner(road)
+    default = PerspectiveConfig()
+    focal = implied_focal_px(default)
+    bytes0, bird0 = t.preview.value, t.birdseye.copy()
+    t.controls["top_y"].value = 480.0
+    assert t.config.perspective.src_px == trapezoid_src(480.0, 720.0, 151.4, 894.0, 640.0)
+    assert t.config.perspective.dst_px == default.dst_px
+    assert t.preview.value != bytes0
+    assert not np.array_equal(t.birdseye, bird0)
+    # the visible road length follows the trapezoid's widths for the same camera
+    t.controls["top_width"].value = 140.0
+    src = t.config.perspective.src_px
+    assert src[0] == (570.0, 480.0) and src[3] == (710.0, 480.0)
+    assert t.config.perspective.visible_length_m == pytest.approx(
+        road_length_m(src, 3.7, focal), abs=1e-3)
+    assert t.config.perspective.visible_length_m > default.visible_length_m
+    assert t.config.perspective.lane_width_m == 3.7
+    t.controls["centre_x"].value = 650.0
+    assert t.config.perspective.src_px[1] == (203.0, 720.0)
+
+
+def test_the_dst_margin_changes_the_scale_not_the_lane_width(road, udacity_calibration):
+    t = widgets.PerspectiveTuner(road, calibration=udacity_calibration, image=STRAIGHT)
+    width0 = t.check.lane_width_m
+    t.controls["dst_margin"].value = 400.0
+    pc = t.config.perspective
+    assert pc.dst_px == ((400.0, 0.0), (400.0, 720.0), (880.0, 720.0), (880.0, 0.0))
+    assert pc.xm_per_px == pytest.approx(3.7 / 480)
+    assert t.check.lane_width_m == pytest.approx(width0, abs=0.05)
+
+
+def test_an_impossible_trapezoid_is_refused(road):
+    t = widgets.PerspectiveTuner(road)
+    before = t.config
+    t.controls["top_width"].value = 1000.0  # wider than the bottom
+    assert t.config == before
+    assert "narrower than the bottom" in t.error
+    t.controls["top_width"].value = 160.0
+    assert t.error == "" and t.config.perspective.src_px[3][0] == 720.0
+
+
+def test_straight_line_check_on_drawn_lines():
+    binary = np.zeros((720, 1280), np.uint8)
+    cv2.line(binary, (300, 0), (330, 719), 255, 12)   # 30 px over 719 px: 4.17 px per 100 px
+    cv2.line(binary, (960, 0), (960, 719), 255, 12)
+    c = widgets.straight_line_check(binary, 3.7 / 640)
+    assert c.left_slope == pytest.approx(100 * 30 / 719, abs=0.1)
+    assert c.right_slope == pytest.approx(0.0, abs=0.05)
+    assert c.lane_width_m == pytest.approx((960 - 330) * 3.7 / 640, abs=0.02)
+    empty = widgets.straight_line_check(np.zeros((720, 1280), np.uint8), 0.005)
+    assert np.isnan(empty.left_slope) and np.isnan(empty.lane_width_m) and empty.left_fit is None
+
+
+# --------------------------------------------------------------------------- fits
+
+def test_fit_controls_change_the_windows_and_the_preview(road):
+    t = widgets.FitTuner(road, image=CURVED)
+    assert len(t.windows.windows) == 2 * 9
+    bytes0 = t.preview.value
+    t.controls["n_windows"].value = 12
+    assert t.config.search.n_windows == 12
+    assert len(t.windows.windows) == 2 * 12
+    assert t.preview.value != bytes0
+    t.controls["margin_px"].value = 50
+    assert t.config.search.margin_px == 50
+    assert {w.x_high - w.x_low for w in t.windows.windows} == {100}
+    t.controls["minpix"].value = 5000  # more line pixels than any window holds on this image
+    # with minpix that high no window recentres: each side's windows stay over its base
+    for side, base in zip(("left", "right"), t.windows.bases_px):
+        assert {w.x_low for w in t.windows.windows if w.side == side} == {int(base - 50)}
+    t.controls["prior_margin_px"].value = 30
+    assert t.config.search == replace(SearchConfig(), n_windows=12, margin_px=50, minpix=5000,
+                                      prior_margin_px=30)
+
+
+def test_fit_tuner_fits_are_what_the_pipeline_finds(road):
+    t = widgets.FitTuner(road, image=CURVED)
+    t.controls["margin_px"].value = 100
+    result = LanePipeline(t.config).detect(io.read_image(road[CURVED]))
+    assert t.windows.left.coeffs_px == result.left.coeffs_px
+    assert t.windows.right.coeffs_px == result.right.coeffs_px
+    assert t.measurement == result.measurement
+    assert "radius" in t.readout()
+
+
+# --------------------------------------------------------------------------- shared machinery
+
+def test_picking_an_image_updates_the_preview(road):
+    t = widgets.FitTuner(road)
+    bytes0, binary0 = t.preview.value, t.binary.copy()
+    t.picker.value = CURVED
+    assert t.image == CURVED
+    assert t.preview.value != bytes0
+    assert not np.array_equal(t.binary, binary0)
+
+
+def test_the_text_output_is_short_and_stable(road):
+    t = widgets.PerspectiveTuner(road)
+    bundle = t._repr_mimebundle_()
+    assert bundle["text/plain"] == f"PerspectiveTuner(image='{STRAIGHT}')"
+    assert "model_id" in bundle["application/vnd.jupyter.widget-view+json"]
+    assert t.widget is t.widget
+    assert t.preview in t.widget.children
+    assert "lanelib-preview" in t.preview._dom_classes
+    assert "lanelib-slider-top_y" in t.controls["top_y"]._dom_classes
+
+
+def test_css_classes_mark_sliders_and_other_controls(road):
+    t = widgets.ThresholdTuner(road)
+    assert "lanelib-slider-white-range1" in t.controls["white.range1"]._dom_classes
+    assert "lanelib-slider-sobel_x-range" in t.controls["sobel_x.range"]._dom_classes
+    assert "lanelib-control-white-enabled" in t.controls["white.enabled"]._dom_classes
+    assert not any(c.startswith("lanelib-slider") for c in t.controls["white.space"]._dom_classes)
+
+
+def test_bad_images_raise_clear_errors(road, tmp_path):
+    with pytest.raises(InputError, match="not among the picker's images"):
+        widgets.ThresholdTuner(road, image="nope.jpg")
+    with pytest.raises(InputError, match="no images"):
+        widgets.ThresholdTuner({})
+    with pytest.raises(InputError, match="no folder holding test_images"):
+        widgets.repo_root(tmp_path)
+
+
+def test_sheet_and_shrink():
+    a = np.full((720, 1280, 3), 200, np.uint8)
+    m = np.zeros((720, 1280), np.uint8)
+    out = widgets.sheet({"a": a, "m": m, "off": None}, tile_width_px=320, columns=2)
+    assert out.shape == (2 * 180, 2 * 320, 3)
+    assert out[100, 100].tolist() == [200, 200, 200]       # view a, below its label
+    assert out[100, 420].tolist() == [0, 0, 0]             # mask m
+    assert out[270, 100].tolist() == [48, 48, 48]          # the "off" tile
+    assert out[270, 420].tolist() == [0, 0, 0]             # the empty slot
+    assert a[10, 10].tolist() == [200, 200, 200]           # the caller's view is not drawn on
+    assert widgets.shrink(a, (400, 225)).shape == (225, 400, 3)
+    assert widgets.shrink(m, (320, 180)).shape == (180, 320)
+
+
+def test_image_choices_lists_bundled_then_udacity(tmp_path):
+    root = tmp_path / "repo"
+    (root / "test_images").mkdir(parents=True)
+    (root / "notebooks").mkdir()
+    data = tmp_path / "data"
+    (data / "udacity-advanced" / "test_images").mkdir(parents=True)
+    img = np.zeros((8, 8, 3), np.uint8)
+    io.write_image(root / "test_images" / "b.jpg", img)
+    io.write_image(root / "test_images" / "a.jpg", img)
+    io.write_image(data / "udacity-advanced" / "test_images" / "u.jpg", img)
+    assert widgets.repo_root(root / "notebooks") == root
+    choices = widgets.image_choices(root, data)
+    assert list(choices) == ["a.jpg", "b.jpg", "udacity/u.jpg"]
+    assert choices["udacity/u.jpg"] == data / "udacity-advanced" / "test_images" / "u.jpg"
+    assert list(widgets.image_choices(root, tmp_path / "nothing")) == ["a.jpg", "b.jpg"]
+
+
+def test_data_root_follows_lanelib_data(monkeypatch, tmp_path):
+    monkeypatch.setenv("LANELIB_DATA", str(tmp_path))
+    assert widgets.data_root() == data_root() == tmp_path
+    monkeypatch.delenv("LANELIB_DATA")
+    assert widgets.data_root(REPO) == REPO.parent / "shared" / "data"
+    assert widgets.data_root(REPO) == data_root()  # where the tests look too
