@@ -1,0 +1,439 @@
+"""The basic lane-line pipeline: colour selection, Canny, region of interest, Hough, one line a side.
+
+One frame goes
+
+    RGB -> white/yellow mask (HLS) -> masked grayscale -> Gaussian blur -> Canny edges
+        -> edges inside the region of interest -> probabilistic Hough segments
+        -> split into left (negative slope) and right (positive slope) by the sign of dy/dx
+        -> each side reduced to one straight line by a length-weighted fit of x(y),
+           drawn from the bottom row up to the top of the region.
+
+Slopes are dy/dx in image coordinates (y grows down), so the left lane line, whose x falls as
+y grows, has a negative slope. The stage functions work on plain arrays, for notebooks and tests;
+``HoughLaneFinder`` runs them from one ``HoughConfig`` on single images, and ``HoughTracker``
+adds smoothing across video frames and holds a lost line for a few frames. Nothing in the
+per-frame path raises on the frame's content: a side without a line says why in ``reason``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .errors import ConfigError, InputError
+
+Triple = tuple[int, int, int]
+
+LEFT_COLOR_RGB: Triple = (255, 40, 40)
+RIGHT_COLOR_RGB: Triple = (40, 120, 255)
+
+
+@dataclass(frozen=True)
+class HoughConfig:
+    """Parameters of the basic Canny + region of interest + Hough pipeline.
+
+    Parameters
+    ----------
+    white_hls_lo, white_hls_hi : inclusive (H, L, S) bounds of white paint, OpenCV 8-bit units
+        (H in 0..179 = degrees / 2, L and S in 0..255).
+    yellow_hls_lo, yellow_hls_hi : the same for yellow paint.
+    blur_kernel_px : side of the Gaussian blur kernel (odd, >= 1; 1 means no blur).
+    canny_low, canny_high : Canny hysteresis thresholds on the gradient (grey levels per pixel).
+    roi_frac : the region of interest, a polygon of (x / width, y / height) vertices in 0..1;
+        (0, 0) is the top-left pixel and (1, 1) the bottom-right one.
+    rho_px : distance resolution of the Hough accumulator (px).
+    theta_deg : angle resolution of the Hough accumulator (degrees).
+    threshold_votes : accumulator votes a line needs.
+    min_line_length_px : shortest segment kept (px).
+    max_line_gap_px : largest gap between collinear points joined into one segment (px).
+    min_abs_slope : smallest |dy/dx| of a segment counted as a lane line (flatter ones are dropped).
+    smoothing_alpha : weight of the new frame in the exponential smoothing of line endpoints
+        across video frames, in (0, 1]; 1 means no smoothing.
+    hold_frames : frames a lost line is held at its last position in video before it is dropped.
+    """
+
+    white_hls_lo: Triple = (0, 200, 0)
+    white_hls_hi: Triple = (179, 255, 255)
+    yellow_hls_lo: Triple = (10, 0, 100)
+    yellow_hls_hi: Triple = (40, 255, 255)
+    blur_kernel_px: int = 5
+    canny_low: int = 50
+    canny_high: int = 150
+    roi_frac: tuple[tuple[float, float], ...] = ((0.06, 1.0), (0.44, 0.60), (0.56, 0.60), (0.97, 1.0))
+    rho_px: float = 1.0
+    theta_deg: float = 1.0
+    threshold_votes: int = 25
+    min_line_length_px: int = 20
+    max_line_gap_px: int = 150
+    min_abs_slope: float = 0.5
+    smoothing_alpha: float = 0.3
+    hold_frames: int = 10
+
+    def __post_init__(self):
+        # JSON gives lists; store tuples so the config stays hashable and comparable
+        for name in ("white_hls_lo", "white_hls_hi", "yellow_hls_lo", "yellow_hls_hi"):
+            value = tuple(getattr(self, name))
+            if len(value) != 3:
+                raise ConfigError(f"hough.{name}: needs three values (H, L, S), got {value!r}")
+            object.__setattr__(self, name, value)
+        roi = tuple(tuple(p) for p in self.roi_frac)
+        if len(roi) < 3 or any(len(p) != 2 or not all(0.0 <= v <= 1.0 for v in p) for p in roi):
+            raise ConfigError(f"hough.roi_frac: needs three or more (x, y) fractions in 0..1, got {roi!r}")
+        object.__setattr__(self, "roi_frac", roi)
+        if self.blur_kernel_px < 1 or self.blur_kernel_px % 2 == 0:
+            raise ConfigError(f"hough.blur_kernel_px: must be odd and >= 1, got {self.blur_kernel_px}")
+        if not 0 <= self.canny_low <= self.canny_high:
+            raise ConfigError(f"hough.canny_low, canny_high: need 0 <= low <= high, "
+                              f"got {self.canny_low}, {self.canny_high}")
+        if self.rho_px <= 0 or self.theta_deg <= 0 or self.threshold_votes < 1:
+            raise ConfigError("hough.rho_px and theta_deg must be positive and threshold_votes >= 1")
+        if self.min_line_length_px < 0 or self.max_line_gap_px < 0 or self.min_abs_slope < 0:
+            raise ConfigError("hough.min_line_length_px, max_line_gap_px and min_abs_slope "
+                              "must not be negative")
+        if not 0.0 < self.smoothing_alpha <= 1.0 or self.hold_frames < 0:
+            raise ConfigError(f"hough.smoothing_alpha must be in (0, 1] and hold_frames >= 0, "
+                              f"got {self.smoothing_alpha}, {self.hold_frames}")
+
+
+@dataclass(frozen=True)
+class LaneLine:
+    """One straight lane line in pixels, from the bottom row up to the top of the region."""
+
+    x_bottom_px: float
+    y_bottom_px: float
+    x_top_px: float
+    y_top_px: float
+
+    def points(self) -> tuple[tuple[int, int], tuple[int, int]]:
+        """Return the (bottom, top) endpoints rounded to pixel coordinates (x, y)."""
+        return ((round(self.x_bottom_px), round(self.y_bottom_px)),
+                (round(self.x_top_px), round(self.y_top_px)))
+
+
+@dataclass(frozen=True, eq=False)
+class HoughStages:
+    """The intermediate images and segments of one frame (uint8 masks are 0/255).
+
+    Segments are (N, 4) int32 arrays of (x1, y1, x2, y2) pixels.
+    """
+
+    color_mask: np.ndarray
+    gray: np.ndarray
+    blurred: np.ndarray
+    edges: np.ndarray
+    roi_edges: np.ndarray
+    segments: np.ndarray
+    left_segments: np.ndarray
+    right_segments: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class HoughResult:
+    """The lines found in one frame, how many segments fed each, and why a side is missing.
+
+    ``left`` and ``right`` are None when that side has no line. In video, a line can be held from
+    an earlier frame (``left_held`` / ``right_held``); ``reason`` then says so. ``reason`` is empty
+    when both lines were measured in this frame. ``stages`` is set when asked for.
+    """
+
+    left: LaneLine | None
+    right: LaneLine | None
+    n_left_segments: int
+    n_right_segments: int
+    reason: str = ""
+    left_held: bool = False
+    right_held: bool = False
+    stages: HoughStages | None = None
+
+    @property
+    def left_found(self) -> bool:
+        return self.left is not None
+
+    @property
+    def right_found(self) -> bool:
+        return self.right is not None
+
+    def row(self) -> dict:
+        """Return the result as a flat row: found flags, x at the bottom and top (px), reason."""
+        def x(line: LaneLine | None, end: str) -> float | None:
+            return None if line is None else round(float(getattr(line, f"x_{end}_px")), 1)
+
+        return {"left_found": self.left_found, "right_found": self.right_found,
+                "left_x_bottom": x(self.left, "bottom"), "left_x_top": x(self.left, "top"),
+                "right_x_bottom": x(self.right, "bottom"), "right_x_top": x(self.right, "top"),
+                "left_held": self.left_held, "right_held": self.right_held, "reason": self.reason}
+
+
+# --------------------------------------------------------------------------- stage functions
+
+def check_rgb(rgb) -> np.ndarray:
+    """Return ``rgb`` as a C-contiguous RGB uint8 array; anything else raises InputError."""
+    if not isinstance(rgb, np.ndarray) or rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
+        what = (f"shape {rgb.shape}, dtype {rgb.dtype}" if isinstance(rgb, np.ndarray)
+                else type(rgb).__name__)
+        raise InputError(f"expected an RGB uint8 image array (H x W x 3), got {what}; "
+                         "read frames with lanelib.io.read_image or VideoReader")
+    if rgb.shape[0] < 1 or rgb.shape[1] < 1:
+        raise InputError(f"expected a non-empty RGB image, got shape {rgb.shape}")
+    return np.ascontiguousarray(rgb)
+
+
+def select_white_yellow(rgb: np.ndarray, white_hls_lo: Triple, white_hls_hi: Triple,
+                        yellow_hls_lo: Triple, yellow_hls_hi: Triple) -> np.ndarray:
+    """Return the 0/255 mask of pixels inside the white or the yellow HLS range (OpenCV units)."""
+    hls = cv2.cvtColor(rgb, cv2.COLOR_RGB2HLS)
+    white = cv2.inRange(hls, np.array(white_hls_lo), np.array(white_hls_hi))
+    yellow = cv2.inRange(hls, np.array(yellow_hls_lo), np.array(yellow_hls_hi))
+    return cv2.bitwise_or(white, yellow)
+
+
+def grayscale(rgb: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Return the uint8 grayscale of ``rgb``, zero outside the 0/255 ``mask`` when one is given."""
+    gray = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+    return gray if mask is None else cv2.bitwise_and(gray, gray, mask=mask)
+
+
+def blur(gray: np.ndarray, kernel_px: int) -> np.ndarray:
+    """Return ``gray`` smoothed by a Gaussian of odd side ``kernel_px`` (sigma from the size)."""
+    return cv2.GaussianBlur(gray, (kernel_px, kernel_px), 0)
+
+
+def canny(gray: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Return the 0/255 Canny edge mask with hysteresis thresholds ``low`` and ``high``."""
+    return cv2.Canny(gray, low, high)
+
+
+def roi_mask(shape: tuple[int, ...], roi_frac) -> np.ndarray:
+    """Return the 0/255 mask (H x W) of the polygon ``roi_frac`` of (x, y) image fractions."""
+    h, w = shape[:2]
+    pts = np.rint(np.asarray(roi_frac, dtype=np.float64) * (w - 1, h - 1)).astype(np.int32)
+    mask = np.zeros((h, w), np.uint8)
+    cv2.fillPoly(mask, [pts], 255)
+    return mask
+
+
+def roi_top_px(height_px: int, roi_frac) -> float:
+    """Return the row (px) of the topmost vertex of the region of interest."""
+    return min(y for _, y in roi_frac) * (height_px - 1)
+
+
+def hough_segments(edges: np.ndarray, rho_px: float, theta_deg: float, threshold_votes: int,
+                   min_line_length_px: float, max_line_gap_px: float) -> np.ndarray:
+    """Return the probabilistic Hough segments of a 0/255 edge mask as an (N, 4) int32 array.
+
+    Each row is (x1, y1, x2, y2) in pixels; no segments gives a (0, 4) array.
+    """
+    lines = cv2.HoughLinesP(edges, rho_px, math.radians(theta_deg), threshold_votes,
+                            minLineLength=min_line_length_px, maxLineGap=max_line_gap_px)
+    return np.zeros((0, 4), np.int32) if lines is None else lines.reshape(-1, 4)
+
+
+def split_by_slope(segments: np.ndarray, min_abs_slope: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return (left, right) segments: slope dy/dx <= -min_abs_slope and >= +min_abs_slope.
+
+    Vertical segments (dx = 0) have no slope sign and belong to neither side.
+    """
+    s = segments.astype(np.float64)
+    dx, dy = s[:, 2] - s[:, 0], s[:, 3] - s[:, 1]
+    slope = np.divide(dy, dx, out=np.zeros_like(dy), where=dx != 0)
+    steep = (np.abs(slope) >= min_abs_slope) & (dx != 0)
+    return segments[steep & (slope < 0)], segments[steep & (slope > 0)]
+
+
+def fit_side(segments: np.ndarray, y_bottom_px: float, y_top_px: float) -> LaneLine | None:
+    """Return the length-weighted least-squares line x(y) through the segments' endpoints.
+
+    Each endpoint weighs half its segment's length (px), so long segments dominate short noise.
+    The line runs from ``y_bottom_px`` to ``y_top_px``; None when there are no segments or they
+    span no height (a straight x(y) fit needs two rows).
+    """
+    if len(segments) == 0:
+        return None
+    s = segments.astype(np.float64)
+    length = np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
+    x = np.concatenate([s[:, 0], s[:, 2]])
+    y = np.concatenate([s[:, 1], s[:, 3]])
+    w = np.concatenate([length, length])
+    y_mean = np.average(y, weights=w)
+    x_mean = np.average(x, weights=w)
+    var_y = np.sum(w * (y - y_mean) ** 2)
+    if var_y <= 1e-9 * w.sum():
+        return None
+    dxdy = np.sum(w * (y - y_mean) * (x - x_mean)) / var_y
+    return LaneLine(float(x_mean + dxdy * (y_bottom_px - y_mean)), float(y_bottom_px),
+                    float(x_mean + dxdy * (y_top_px - y_mean)), float(y_top_px))
+
+
+def draw_lines(rgb: np.ndarray, lines, color_rgb: Triple, thickness_px: int = 2) -> np.ndarray:
+    """Return a copy of ``rgb`` with ``lines`` drawn on it.
+
+    ``lines`` are LaneLine records or (x1, y1, x2, y2) rows (e.g. Hough segments), in pixels.
+    """
+    out = rgb.copy()
+    for line in lines:
+        p, q = line.points() if isinstance(line, LaneLine) else ((int(line[0]), int(line[1])),
+                                                                  (int(line[2]), int(line[3])))
+        cv2.line(out, p, q, color_rgb, thickness_px, cv2.LINE_AA)
+    return out
+
+
+def annotate(rgb: np.ndarray, result: HoughResult, opacity: float = 0.7,
+             thickness_px: int = 10) -> np.ndarray:
+    """Return ``rgb`` with the result's left and right lines blended over it.
+
+    Left is red, right is blue; ``opacity`` in 0..1 is the weight of the drawn lines.
+    """
+    rgb = check_rgb(rgb)
+    overlay = rgb.copy()
+    for line, color in ((result.left, LEFT_COLOR_RGB), (result.right, RIGHT_COLOR_RGB)):
+        if line is not None:
+            cv2.line(overlay, *line.points(), color, thickness_px, cv2.LINE_AA)
+    return cv2.addWeighted(overlay, opacity, rgb, 1.0 - opacity, 0.0)
+
+
+# --------------------------------------------------------------------------- one image
+
+@dataclass(frozen=True, eq=False)
+class _Region:
+    """The region of interest for one image size: its bounding box and its mask inside the box."""
+
+    rows: slice
+    cols: slice
+    mask: np.ndarray
+    top_px: float
+
+    @classmethod
+    def make(cls, shape: tuple[int, ...], roi_frac) -> "_Region":
+        full = roi_mask(shape, roi_frac)
+        x, y, w, h = cv2.boundingRect(full)
+        rows, cols = slice(y, y + max(h, 1)), slice(x, x + max(w, 1))
+        return cls(rows, cols, np.ascontiguousarray(full[rows, cols]), roi_top_px(shape[0], roi_frac))
+
+    def paste(self, box_image: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+        """Return a zero H x W image holding ``box_image`` at the box's place."""
+        full = np.zeros(shape[:2] + box_image.shape[2:], box_image.dtype)
+        full[self.rows, self.cols] = box_image
+        return full
+
+
+class HoughLaneFinder:
+    """Finds the left and right lane lines in single images with one ``HoughConfig``.
+
+    Only the bounding box of the region of interest is processed. The box and the region's mask
+    depend only on the configuration and the image size, so they are made once for each size met
+    and kept; ``process`` keeps no other state between frames.
+    """
+
+    def __init__(self, config: HoughConfig = HoughConfig()):
+        self.config = config
+        self._regions: dict[tuple[int, int], _Region] = {}
+
+    def _region(self, shape: tuple[int, ...]) -> _Region:
+        key = (int(shape[0]), int(shape[1]))
+        if key not in self._regions:
+            self._regions[key] = _Region.make(key, self.config.roi_frac)
+        return self._regions[key]
+
+    def process(self, rgb: np.ndarray, keep_stages: bool = False) -> HoughResult:
+        """Return the lines found in one RGB uint8 frame (and its stage images if asked).
+
+        The stage images are full-frame size and zero outside the region's bounding box.
+
+        Raises
+        ------
+        InputError
+            If ``rgb`` is not an H x W x 3 uint8 array. The frame's content never raises.
+        """
+        c = self.config
+        rgb = check_rgb(rgb)
+        region = self._region(rgb.shape)
+        box = rgb[region.rows, region.cols]
+        color = select_white_yellow(box, c.white_hls_lo, c.white_hls_hi, c.yellow_hls_lo, c.yellow_hls_hi)
+        gray = grayscale(box, color)
+        blurred = blur(gray, c.blur_kernel_px)
+        edges = canny(blurred, c.canny_low, c.canny_high)
+        roi_edges = cv2.bitwise_and(edges, region.mask)
+        segments = hough_segments(roi_edges, c.rho_px, c.theta_deg, c.threshold_votes,
+                                  c.min_line_length_px, c.max_line_gap_px)
+        segments += np.array([region.cols.start, region.rows.start] * 2, np.int32)
+        left_segs, right_segs = split_by_slope(segments, c.min_abs_slope)
+        y_bottom = rgb.shape[0] - 1
+        left = fit_side(left_segs, y_bottom, region.top_px)
+        right = fit_side(right_segs, y_bottom, region.top_px)
+        # a segment with a slope spans two rows, so a side without a line has no segments
+        reasons = [f"{side}: no segments with {sign} slope (|dy/dx| >= {c.min_abs_slope:g}) "
+                   "in the region" for side, sign, line in (("left", "negative", left),
+                                                           ("right", "positive", right))
+                   if line is None]
+        stages = None
+        if keep_stages:
+            color, gray, blurred, edges, roi_edges = (region.paste(im, rgb.shape) for im in
+                                                      (color, gray, blurred, edges, roi_edges))
+            stages = HoughStages(color, gray, blurred, edges, roi_edges, segments, left_segs, right_segs)
+        return HoughResult(left, right, len(left_segs), len(right_segs), "; ".join(reasons),
+                           stages=stages)
+
+
+# --------------------------------------------------------------------------- video
+
+class _SideTrack:
+    """Exponential smoothing of one side's line endpoints, with a hold of lost lines."""
+
+    def __init__(self, alpha: float, hold_frames: int):
+        self.alpha = alpha
+        self.hold_frames = hold_frames
+        self.line: LaneLine | None = None
+        self.missed = 0
+
+    def update(self, measured: LaneLine | None) -> tuple[LaneLine | None, bool]:
+        """Return (line to report, whether it is held from an earlier frame)."""
+        if measured is not None:
+            self.line = measured if self.line is None else self._blend(measured)
+            self.missed = 0
+            return self.line, False
+        self.missed += 1
+        if self.line is not None and self.missed > self.hold_frames:
+            self.line = None
+        return self.line, self.line is not None
+
+    def _blend(self, new: LaneLine) -> LaneLine:
+        a, old = self.alpha, self.line
+        return LaneLine(a * new.x_bottom_px + (1 - a) * old.x_bottom_px, new.y_bottom_px,
+                        a * new.x_top_px + (1 - a) * old.x_top_px, new.y_top_px)
+
+
+class HoughTracker:
+    """Finds lane lines frame after frame: smooths each line and holds a lost one for a while.
+
+    Each side's endpoints are smoothed exponentially with ``config.smoothing_alpha``; a side
+    with no line in a frame keeps its last line for up to ``config.hold_frames`` frames (reported
+    as held), then reports none until it is found again. A change of frame size starts afresh.
+    """
+
+    def __init__(self, config: HoughConfig = HoughConfig()):
+        self.finder = HoughLaneFinder(config)
+        self._shape: tuple[int, ...] | None = None
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all earlier frames."""
+        c = self.finder.config
+        self._left = _SideTrack(c.smoothing_alpha, c.hold_frames)
+        self._right = _SideTrack(c.smoothing_alpha, c.hold_frames)
+
+    def process(self, rgb: np.ndarray, keep_stages: bool = False) -> HoughResult:
+        """Return the smoothed (or held) lines for the next frame of a video."""
+        measured = self.finder.process(rgb, keep_stages)
+        if rgb.shape != self._shape:
+            self._shape = rgb.shape
+            self.reset()
+        left, left_held = self._left.update(measured.left)
+        right, right_held = self._right.update(measured.right)
+        reasons = [measured.reason] if measured.reason else []
+        reasons += [f"{side} line held from the last good frame ({track.missed} missed)"
+                    for side, is_held, track in (("left", left_held, self._left),
+                                                 ("right", right_held, self._right)) if is_held]
+        return HoughResult(left, right, measured.n_left_segments, measured.n_right_segments,
+                           "; ".join(reasons), left_held, right_held, measured.stages)
