@@ -1,0 +1,484 @@
+"""Scoring a lane pipeline against ground truth: measurement errors, TuSimple point accuracy, FP/FN.
+
+The ground truth comes from lanelib's synthetic data (``lanelib.synth.truth``): per image or video
+frame the signed curvature (1/m) and radius at the car, the lateral offset (m), the lane width, and
+each ego line's x in the RAW (distorted) image at fixed rows (TuSimple-style ``h_samples``).
+
+Measurements (offset, curvature, radius) are scored on the frames where the lane was found.
+The radius error is scored only on curves, frames whose true radius is at most
+``RADIUS_SCORED_MAX_M`` (the generator's curves are 150 m to 3 km): on a straighter road a 23 m
+view cannot tell 5 km from 50 km, the relative error of the radius means nothing there, and the
+curvature error covers those frames.
+
+Point accuracy and the false-positive and false-negative line rates follow the TuSimple lane
+benchmark (``evaluate/lane.py`` of TuSimple/tusimple-benchmark): each fitted bird's-eye line is
+mapped to the raw image (perspective ``Minv``, then the camera's distortion) and its x is compared
+with the truth's x at each truth row. A truth point is hit when the horizontal distance is below
+``POINT_THRESHOLD_PX / cos(angle)``, where ``angle`` is the truth line's slant from vertical
+(fitted straight through its points), i.e. within about 20 px measured across the line. A truth
+line's accuracy is its share of hit points, taken against the best-matching predicted line; a
+frame's accuracy is the mean over its truth lines and the report's the mean over frames. A truth
+line whose best accuracy is below ``MATCH_ACCURACY`` (0.85) is a false negative; a predicted line
+that matches no truth line is a false positive; the rates are FP / predicted lines and
+FN / truth lines per frame, averaged over the frames.
+
+One difference from TuSimple, made because the pipeline only ever looks at its bird's-eye view:
+only the truth points that fall inside that view are scored (TuSimple scores every annotated
+point, up to the horizon). A truth line with no point inside the view is not a truth line for
+that frame; a line found there is a false positive.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from .camera import distort_points, undistort_points
+from .errors import InputError
+from .lanes import LineFit
+
+POINT_THRESHOLD_PX = 20.0    # TuSimple ``pixel_thresh``
+MATCH_ACCURACY = 0.85        # TuSimple ``pt_thresh``: a truth line is matched at this accuracy
+RADIUS_SCORED_MAX_M = 3000.0  # radius error is scored on frames with a true radius up to this
+SUMMARY_KEYS = ("frames", "found_rate", "offset_err_cm_median", "offset_err_cm_p95",
+                "curvature_err_median", "radius_err_pct_median", "point_accuracy", "fp_rate",
+                "fn_rate")
+
+
+# --------------------------------------------------------------------------- point accuracy
+
+def line_threshold_px(gt_x: np.ndarray, rows: np.ndarray,
+                      threshold_px: float = POINT_THRESHOLD_PX) -> float:
+    """Return the horizontal hit distance (px) for a truth line: ``threshold_px / cos(slant)``.
+
+    Parameters
+    ----------
+    gt_x : truth x (px) at ``rows``; NaN where the line is not scored.
+    rows : image rows (px).
+    threshold_px : the hit distance across a vertical line (TuSimple: 20 px).
+    """
+    ok = np.isfinite(gt_x)
+    if ok.sum() < 2:
+        return float(threshold_px)
+    slope = np.polyfit(np.asarray(rows, float)[ok], np.asarray(gt_x, float)[ok], 1)[0]
+    return float(threshold_px / math.cos(math.atan(slope)))
+
+
+def line_accuracy(pred_x: np.ndarray, gt_x: np.ndarray, threshold_px: float) -> float:
+    """Return the share of a truth line's points hit by a predicted line (NaN if it has none).
+
+    Parameters
+    ----------
+    pred_x : predicted x (px) at the truth rows; NaN where the prediction does not reach.
+    gt_x : truth x (px) at the same rows; NaN where the line is not scored.
+    threshold_px : horizontal distance (px) below which a point is hit.
+    """
+    gt = np.asarray(gt_x, float)
+    pred = np.asarray(pred_x, float)
+    scored = np.isfinite(gt)
+    if not scored.any():
+        return float("nan")
+    with np.errstate(invalid="ignore"):
+        hit = np.abs(pred[scored] - gt[scored]) < threshold_px
+    return float(hit.sum() / scored.sum())
+
+
+@dataclass(frozen=True)
+class LineScores:
+    """How one frame's predicted lines match its truth lines (TuSimple rules).
+
+    ``accuracy`` holds one value per truth line (NaN where that line has no scored point);
+    ``pred_lines`` and ``gt_lines`` count the predicted lines and the truth lines with points;
+    ``fp_lines`` and ``fn_lines`` the unmatched ones.
+    """
+
+    accuracy: tuple[float, ...]
+    pred_lines: int
+    gt_lines: int
+    fp_lines: int
+    fn_lines: int
+
+
+def score_lines(pred_xs: Sequence[np.ndarray], gt_xs: Sequence[np.ndarray], rows: np.ndarray,
+                threshold_px: float = POINT_THRESHOLD_PX,
+                match_accuracy: float = MATCH_ACCURACY) -> LineScores:
+    """Return the TuSimple accuracy of each truth line and the frame's FP and FN line counts.
+
+    Parameters
+    ----------
+    pred_xs : one array per predicted line, its x (px) at ``rows`` (NaN where it does not reach).
+    gt_xs : one array per truth line, its x (px) at ``rows`` (NaN where not scored).
+    rows : the truth rows (px).
+    threshold_px : hit distance across the line (px).
+    match_accuracy : accuracy at which a predicted line matches a truth line.
+    """
+    accs = []
+    matched = 0
+    gt_lines = 0
+    for gt in gt_xs:
+        gt = np.asarray(gt, float)
+        if not np.isfinite(gt).any():
+            accs.append(float("nan"))
+            continue
+        gt_lines += 1
+        thr = line_threshold_px(gt, rows, threshold_px)
+        best = max((line_accuracy(p, gt, thr) for p in pred_xs), default=0.0)
+        accs.append(best)
+        matched += best >= match_accuracy
+    return LineScores(tuple(accs), len(pred_xs), gt_lines, len(pred_xs) - matched, gt_lines - matched)
+
+
+# --------------------------------------------------------------------------- raw-image mapping
+
+def fit_x_in_raw(coeffs_px, pipeline, rows: np.ndarray) -> np.ndarray:
+    """Return the x (px) in the RAW image of a bird's-eye fit at raw ``rows`` (NaN where it ends).
+
+    The fit ``x = a*y**2 + b*y + c`` is sampled over the bird's-eye rows, mapped to the
+    undistorted image by the perspective's ``Minv`` and to the raw image by the pipeline's camera
+    distortion (``camera.distort_points``; none without a calibration), then read at ``rows``.
+
+    Parameters
+    ----------
+    coeffs_px : (a, b, c) of the fit in bird's-eye pixels.
+    pipeline : the ``LanePipeline`` that made the fit.
+    rows : raw-image rows (px).
+    """
+    w, h = pipeline.size
+    # a little beyond the view: distortion moves rows near the view's edge by a pixel or two
+    yb = np.linspace(-0.05 * h, 1.05 * h, 2 * h)
+    xb = np.polyval(coeffs_px, yb)
+    und = pipeline.perspective.unwarp_points(np.column_stack([xb, yb]))
+    # The distortion polynomial folds back far outside the frame: use nothing from there.
+    keep = ((und[:, 0] > -0.25 * w) & (und[:, 0] < 1.25 * w)
+            & (und[:, 1] > -0.25 * h) & (und[:, 1] < 1.25 * h))
+    if keep.sum() < 2:
+        return np.full(len(rows), np.nan)
+    cal = pipeline.undistorter.calibration
+    raw = distort_points(cal, und[keep]) if cal is not None else und[keep]
+    order = np.argsort(raw[:, 1])
+    return np.interp(np.asarray(rows, float), raw[order, 1], raw[order, 0], left=np.nan, right=np.nan)
+
+
+def in_view(pipeline, xs: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Return which raw-image points (x, row in px; NaN x = none) fall inside the bird's-eye view."""
+    xs = np.asarray(xs, float)
+    rows = np.asarray(rows, float)
+    out = np.zeros(len(xs), bool)
+    ok = np.isfinite(xs)
+    if not ok.any():
+        return out
+    pts = np.column_stack([xs[ok], rows[ok]])
+    cal = pipeline.undistorter.calibration
+    und = undistort_points(cal, pts) if cal is not None else pts
+    bird = pipeline.perspective.warp_points(und)
+    w, h = pipeline.size
+    out[ok] = (bird[:, 0] >= 0) & (bird[:, 0] <= w - 1) & (bird[:, 1] >= 0) & (bird[:, 1] <= h - 1)
+    return out
+
+
+def truth_calibration(camera) -> "Calibration":
+    """Return the ``Calibration`` of the true camera recorded in a ground truth (``CameraTruth``)."""
+    from .camera import Calibration
+
+    return Calibration(np.asarray(camera.camera_matrix, np.float64),
+                       np.asarray(camera.dist_coeffs, np.float64),
+                       tuple(int(v) for v in camera.size_px), 0.0)
+
+
+def _truth_x(xs) -> np.ndarray:
+    """Return truth x positions (px) with the not-visible marker (negative, -2) as NaN."""
+    x = np.asarray(xs, np.float64)
+    return np.where(x >= 0, x, np.nan)
+
+
+def score_frame(pipeline, result, lane) -> LineScores:
+    """Return the TuSimple line scores of one pipeline result against one frame's ``LaneTruth``.
+
+    Only the truth points inside the pipeline's bird's-eye view are scored (see the module
+    docstring); the found lines of ``result`` are mapped to the raw image by ``fit_x_in_raw``.
+    """
+    rows = np.asarray(lane.h_samples_px, np.float64)
+    gts = []
+    for xs in (lane.left_x_px, lane.right_x_px):
+        gt = _truth_x(xs)
+        gt[~in_view(pipeline, gt, rows)] = np.nan
+        gts.append(gt)
+    preds = [fit_x_in_raw(fit.coeffs_px, pipeline, rows) for fit in (result.left, result.right) if fit.found]
+    return score_lines(preds, gts, rows)
+
+
+# --------------------------------------------------------------------------- the report
+
+def _nan_stat(values: np.ndarray, fn) -> float:
+    """Return ``fn`` of the finite values (NaN when there are none)."""
+    v = np.asarray(values, np.float64)
+    v = v[np.isfinite(v)]
+    return float(fn(v)) if v.size else float("nan")
+
+
+@dataclass(frozen=True)
+class EvalReport:
+    """Per-frame errors of a pipeline against ground truth, and their summary.
+
+    Arrays have one entry per frame (image or video frame, in order); measurement arrays are NaN
+    where the pipeline found no lane. ``line_accuracy`` is (frames, 2): the left and right truth
+    lines' TuSimple accuracy, NaN where that line had no point in view. ``truth`` keeps each
+    frame's ``LaneTruth`` (heading, lane width, line positions) for plots against the scene.
+
+    Parameters
+    ----------
+    source : what was evaluated (folder or video path).
+    detector : ``"frame"`` (each frame on its own) or ``"tracker"`` (``LaneTracker``).
+    names : the image file names, or the frame numbers as text.
+    """
+
+    source: str
+    detector: str
+    names: tuple[str, ...]
+    found: np.ndarray
+    offset_true_m: np.ndarray
+    offset_pred_m: np.ndarray
+    curvature_true_1pm: np.ndarray
+    curvature_pred_1pm: np.ndarray
+    radius_true_m: np.ndarray
+    radius_pred_m: np.ndarray
+    lane_width_true_m: np.ndarray
+    lane_width_pred_m: np.ndarray
+    line_accuracy: np.ndarray
+    pred_lines: np.ndarray
+    gt_lines: np.ndarray
+    fp_lines: np.ndarray
+    fn_lines: np.ndarray
+    truth: tuple = field(default=(), repr=False)
+
+    @property
+    def frames(self) -> int:
+        """Return the number of frames scored."""
+        return len(self.names)
+
+    @property
+    def offset_err_cm(self) -> np.ndarray:
+        """Return |offset error| per frame (cm; NaN where no lane was found)."""
+        return np.abs(self.offset_pred_m - self.offset_true_m) * 100.0
+
+    @property
+    def curvature_err_1pm(self) -> np.ndarray:
+        """Return |curvature error| per frame (1/m; NaN where no lane was found)."""
+        return np.abs(self.curvature_pred_1pm - self.curvature_true_1pm)
+
+    @property
+    def radius_err_pct(self) -> np.ndarray:
+        """Return |radius error| / true radius per frame (%; NaN off curves and where not found).
+
+        Scored where the true radius is at most ``RADIUS_SCORED_MAX_M`` (see the module docstring).
+        """
+        curve = self.radius_true_m <= RADIUS_SCORED_MAX_M
+        with np.errstate(invalid="ignore", divide="ignore"):
+            err = np.abs(self.radius_pred_m - self.radius_true_m) / self.radius_true_m * 100.0
+        return np.where(curve, err, np.nan)
+
+    @property
+    def frame_point_accuracy(self) -> np.ndarray:
+        """Return each frame's point accuracy: mean over its truth lines (NaN with none in view)."""
+        acc = self.line_accuracy
+        n = np.isfinite(acc).sum(axis=1)
+        total = np.where(np.isfinite(acc), acc, 0.0).sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(n > 0, total / np.maximum(n, 1), np.nan)
+
+    def summary(self) -> dict:
+        """Return the summary figures under ``SUMMARY_KEYS`` (NaN where nothing was scored)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fp = np.where(self.pred_lines > 0, self.fp_lines / np.maximum(self.pred_lines, 1), 0.0)
+            fn = np.where(self.gt_lines > 0, self.fn_lines / np.maximum(self.gt_lines, 1), 0.0)
+        n = self.frames
+        return {
+            "frames": n,
+            "found_rate": float(np.mean(self.found)) if n else float("nan"),
+            "offset_err_cm_median": _nan_stat(self.offset_err_cm, np.median),
+            "offset_err_cm_p95": _nan_stat(self.offset_err_cm, lambda v: np.percentile(v, 95)),
+            "curvature_err_median": _nan_stat(self.curvature_err_1pm, np.median),
+            "radius_err_pct_median": _nan_stat(self.radius_err_pct, np.median),
+            "point_accuracy": _nan_stat(self.frame_point_accuracy, np.mean),
+            "fp_rate": float(np.mean(fp)) if n else float("nan"),
+            "fn_rate": float(np.mean(fn)) if n else float("nan"),
+        }
+
+    def to_dict(self) -> dict:
+        """Return the summary as JSON-able values (NaN as None) under ``SUMMARY_KEYS``."""
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for k, v in self.summary().items()}
+
+    def table(self) -> str:
+        """Return the summary as a printable table (one column: this report)."""
+        return format_table([self])
+
+    @property
+    def radius_frames(self) -> int:
+        """Return the number of frames on which the radius error is scored."""
+        return int(np.isfinite(self.radius_err_pct).sum())
+
+
+_ROWS = (  # (label, summary key, format of a value)
+    ("frames", "frames", "{:d}"),
+    ("lane found (%)", "found_rate", "pct"),
+    ("|offset error| median (cm)", "offset_err_cm_median", "{:.1f}"),
+    ("|offset error| p95 (cm)", "offset_err_cm_p95", "{:.1f}"),
+    ("|curvature error| median (1/m)", "curvature_err_median", "{:.1e}"),
+    ("radius error median (%)", "radius_err_pct_median", "{:.1f}"),
+    ("point accuracy (%)", "point_accuracy", "pct"),
+    ("false-positive lines (%)", "fp_rate", "pct"),
+    ("false-negative lines (%)", "fn_rate", "pct"),
+)
+
+
+def _cell(value, fmt: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    if fmt == "pct":
+        return f"{100.0 * value:.1f}"
+    return fmt.format(value)
+
+
+def format_table(reports: Sequence[EvalReport], titles: Sequence[str] | None = None) -> str:
+    """Return the summaries of ``reports`` side by side as a plain-text table.
+
+    Parameters
+    ----------
+    reports : one column each.
+    titles : column titles; default the source's name and the detector.
+    """
+    titles = list(titles) if titles is not None else [
+        f"{Path(r.source).name} ({r.detector})" for r in reports]
+    sums = [r.summary() for r in reports]
+    cols = [[_cell(s[key], fmt) for _, key, fmt in _ROWS] for s in sums]
+    label_w = max(len(label) for label, _, _ in _ROWS)
+    widths = [max(len(t), *(len(c) for c in col)) for t, col in zip(titles, cols)]
+    lines = [" " * label_w + "".join(f"  {t:>{w}}" for t, w in zip(titles, widths))]
+    for i, (label, _, _) in enumerate(_ROWS):
+        lines.append(f"{label:<{label_w}}" + "".join(f"  {col[i]:>{w}}" for col, w in zip(cols, widths)))
+    notes = [f"radius error on {r.radius_frames} frame(s) with a true radius <= "
+             f"{RADIUS_SCORED_MAX_M:.0f} m" for r in reports]
+    if len(set(notes)) == 1:
+        lines.append(notes[0])
+    else:
+        lines += [f"{t}: {n}" for t, n in zip(titles, notes)]
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- runs
+
+class _Collector:
+    """Gathers per-frame values into an EvalReport."""
+
+    def __init__(self, pipeline, source: str, detector: str):
+        self.pipeline = pipeline
+        self.source = source
+        self.detector = detector
+        self.rows: list[tuple] = []
+
+    def add(self, name: str, result, lane) -> None:
+        s = score_frame(self.pipeline, result, lane)
+        m = result.measurement
+        self.rows.append((name, bool(result.found), lane.offset_m, m.offset_m, lane.curvature_per_m,
+                          m.curvature_1pm, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
+                          s.accuracy, s.pred_lines, s.gt_lines, s.fp_lines, s.fn_lines, lane))
+
+    def report(self) -> EvalReport:
+        cols = list(zip(*self.rows)) if self.rows else [()] * 16
+        f = lambda i: np.asarray(cols[i], np.float64)  # noqa: E731
+        i_ = lambda i: np.asarray(cols[i], np.int64)  # noqa: E731
+        acc = np.asarray(cols[10], np.float64).reshape(-1, 2)
+        return EvalReport(self.source, self.detector, tuple(cols[0]), np.asarray(cols[1], bool),
+                          f(2), f(3), f(4), f(5), f(6), f(7), f(8), f(9), acc,
+                          i_(11), i_(12), i_(13), i_(14), tuple(cols[15]))
+
+
+def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None = None) -> EvalReport:
+    """Return the per-image evaluation of ``pipeline`` on a folder of images with truth beside them.
+
+    Each image is detected on its own (``LanePipeline.detect``) and scored against the JSON truth
+    beside it (``lanelib.synth.truth.load_image_truth``).
+
+    Parameters
+    ----------
+    folder : folder of images, each ``NAME.jpg`` with ``NAME.json`` beside it.
+    pipeline : the ``LanePipeline`` to score (its calibration is used to map lines to the raw image).
+    max_frames : score only the first this many images (by name).
+
+    Raises
+    ------
+    InputError
+        If the folder holds no images, or an image is unreadable or has no truth beside it.
+    """
+    from .io import list_images, read_image
+    from .synth.truth import load_image_truth
+
+    files = list_images(folder)[:max_frames]
+    truths = [load_image_truth(f) for f in files]  # every truth file checked before any work
+    col = _Collector(pipeline, str(folder), "frame")
+    for f, t in zip(files, truths):
+        col.add(f.name, pipeline.detect(read_image(f)), t.lane)
+    return col.report()
+
+
+def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
+                   max_frames: int | None = None) -> EvalReport:
+    """Return the per-frame evaluation of ``pipeline`` on a video with its per-frame truth.
+
+    Parameters
+    ----------
+    path : the video; its truth ``NAME.csv`` and ``NAME.json`` lie beside it.
+    pipeline : the ``LanePipeline`` to score.
+    use_tracker : track the lane through the frames (``LaneTracker``); False detects every frame
+        on its own (``LanePipeline.detect``).
+    max_frames : score only the first this many frames.
+
+    Raises
+    ------
+    InputError
+        If the video or its truth is missing or unreadable, or the video holds more frames than
+        its truth.
+    """
+    from .io import VideoReader
+    from .synth.truth import load_video_truth
+    from .tracking import LaneTracker
+
+    truth = load_video_truth(path)
+    frames = truth.frames[:max_frames]
+    tracker = LaneTracker(pipeline) if use_tracker else None
+    col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
+    with VideoReader(path) as reader:
+        for i, raw in enumerate(reader):
+            if i >= len(frames):
+                if max_frames is None or i < max_frames:
+                    raise InputError(f"{path}: the video has more frames than its truth "
+                                     f"{Path(path).with_suffix('.csv')} ({len(truth.frames)}); "
+                                     "regenerate the truth with `python -m lanelib synth --all`")
+                break
+            result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+            col.add(str(i), result, frames[i])
+    if len(col.rows) < len(frames):
+        raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
+                         f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
+                         "regenerate both with `python -m lanelib synth --all`")
+    return col.report()
+
+
+def calibration_from_truth(path: str | os.PathLike) -> "Calibration":
+    """Return the true camera recorded in the ground truth of a folder of images or of a video.
+
+    For a folder, the truth beside its first image (by name) is read; for a video, its JSON.
+    """
+    from .io import list_images
+    from .synth.truth import load_image_truth, load_video_truth
+
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file or folder; check the path")
+    truth = load_image_truth(list_images(p)[0]) if p.is_dir() else load_video_truth(p)
+    return truth_calibration(truth.camera)
