@@ -82,16 +82,31 @@ class Camera:
         """Return (N, 3) car-frame points (m) in camera coordinates (m)."""
         return (np.asarray(points_car, dtype=np.float64) - self.centre()) @ self.rotation().T
 
-    def project(self, points_car: np.ndarray, distort: bool = True) -> np.ndarray:
-        """Return the (N, 2) pixel positions of (N, 3) car-frame points (m); NaN behind the camera.
+    def max_field_radius(self) -> float:
+        """Return the largest normalised (undistorted) radius seen by the image corners."""
+        w, h = self.size_px
+        corners = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
+        norm = cv2.undistortPoints(corners.reshape(-1, 1, 2), self.K, self.dist, None, None, None,
+                                   _UNDISTORT_CRITERIA).reshape(-1, 2)
+        return float(np.hypot(norm[:, 0], norm[:, 1]).max())
 
-        ``distort=False`` gives positions in the undistorted image (same camera matrix).
+    def project(self, points_car: np.ndarray, distort: bool = True) -> np.ndarray:
+        """Return the (N, 2) pixel positions of (N, 3) car-frame points (m).
+
+        Points behind the camera, and (with ``distort``) points well outside the field of view,
+        where the distortion polynomial folds back into the image, are NaN. ``distort=False`` gives
+        positions in the undistorted image (same camera matrix).
         """
         pc = self.to_camera(points_car).reshape(-1, 3)
         dist = self.dist if distort else np.zeros(5)
         uv, _ = cv2.projectPoints(pc.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), self.K, dist)
         uv = uv.reshape(-1, 2)
-        uv[pc[:, 2] <= 1e-6] = np.nan
+        ahead = pc[:, 2] > 1e-6
+        uv[~ahead] = np.nan
+        if distort:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                radius = np.hypot(pc[:, 0], pc[:, 1]) / pc[:, 2]
+            uv[ahead & (radius > 1.1 * self.max_field_radius())] = np.nan
         return uv
 
     def rays(self, uv: np.ndarray, distorted: bool = True) -> np.ndarray:

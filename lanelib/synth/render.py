@@ -64,6 +64,7 @@ class GroundGrid:
     azimuth_deg: np.ndarray    # (sky_rows, W), from the car's forward axis, positive right
     rays: np.ndarray           # (sky_rows, W, 3) car-frame ray directions
     skyline_rows: tuple[int, int]
+    hood_top: np.ndarray       # (W,) row of the hood's edge in every column
     hood_row0: int             # first row the hood reaches
     hood_alpha: np.ndarray     # (R, W, 1) hood coverage of the rows from hood_row0
     hood_shade: np.ndarray     # (R, 1, 1) hood brightness (darker towards the bottom)
@@ -127,7 +128,7 @@ def _hood(size_px: tuple[int, int]) -> dict:
     rows = np.arange(row0, size_px[1], dtype=np.float32)[:, None]
     alpha = np.clip(rows + 0.5 - top[None, :], 0.0, 1.0)[..., None]
     shade = (1.0 - 0.35 * (rows - row0) / max(size_px[1] - row0, 1))[..., None]
-    return dict(hood_row0=row0, hood_alpha=alpha.astype(np.float32), hood_shade=shade.astype(np.float32))
+    return dict(hood_top=top, hood_row0=row0, hood_alpha=alpha.astype(np.float32), hood_shade=shade.astype(np.float32))
 
 
 def _vignette(camera: Camera) -> np.ndarray:
