@@ -318,3 +318,42 @@ def load_video_truth(video_path: str | os.PathLike) -> VideoTruth:
     if not frames:
         raise InputError(f"{csv_path}: holds no frames; regenerate it")
     return VideoTruth(Path(video_path), seed, fps, frames, _camera_from_json(camera, meta_path))
+
+
+@dataclass(frozen=True)
+class BoardTruth:
+    """Ground truth of the chessboard photographs: the true camera and every board's inner corners.
+
+    ``corners_px`` maps an image name to its (54, 2) raw-image corners, row by row, x fastest;
+    ``fully_visible`` says whether all of them lie inside the image.
+    """
+
+    camera_matrix: np.ndarray
+    dist_coeffs: np.ndarray
+    size_px: tuple[int, int]
+    pattern_size: tuple[int, int]
+    corners_px: dict[str, np.ndarray]
+    fully_visible: dict[str, bool]
+
+
+def load_board_truth(cal_dir: str | os.PathLike) -> BoardTruth:
+    """Return the truth of a folder of synthetic chessboards, read from its ``camera_truth.json``.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, malformed, or lacks a field.
+    """
+    path = Path(cal_dir) / "camera_truth.json"
+    if not path.is_file():
+        raise InputError(f"{path}: no ground truth in {cal_dir}; the synthetic chessboards carry "
+                         "camera_truth.json (regenerate with `python -m lanelib synth --all`)")
+    obj = read_json(path, "ground-truth file")
+    try:
+        images = obj["images"]
+        return BoardTruth(np.asarray(obj["camera_matrix"], np.float64), np.asarray(obj["dist_coeffs"], np.float64),
+                          tuple(obj["image_size"]), tuple(obj["pattern_size"]),
+                          {k: np.asarray(v["corners_px"], np.float64) for k, v in images.items()},
+                          {k: bool(v["fully_visible"]) for k, v in images.items()})
+    except (KeyError, TypeError, ValueError) as e:
+        raise InputError(f"{path}: not a chessboard ground-truth file (missing or bad {e!r}); regenerate it") from None

@@ -1,0 +1,22 @@
+"""Synthetic camera, chessboards and road scenes with exact ground truth.
+
+``generate_all(out_root)`` writes the bundled data (``camera_cal/``, ``test_images/``,
+``videos/``), the same bytes from the same seeds; ``python -m lanelib synth --all`` calls it.
+The truth beside every file is read back with ``load_image_truth``, ``load_video_truth`` and
+``load_board_truth``. See ``truth`` for the file formats and sign conventions.
+"""
+from .camera import Camera
+from .render import GroundGrid, Renderer
+from .road import CarPose, CurvatureProfile
+from .scene import Bridge, Layout, Look, Scene, Streak
+from .sets import generate_all, test_images, video_sets, write_boards, write_test_images, write_video
+from .truth import (BoardTruth, CameraTruth, ImageTruth, LaneTruth, PerspectiveTruth, VideoTruth,
+                    lane_truth, load_board_truth, load_image_truth, load_video_truth, perspective_truth)
+
+__all__ = [
+    "Camera", "GroundGrid", "Renderer", "CarPose", "CurvatureProfile", "Bridge", "Layout", "Look",
+    "Scene", "Streak", "generate_all", "test_images", "video_sets", "write_boards",
+    "write_test_images", "write_video", "BoardTruth", "CameraTruth", "ImageTruth", "LaneTruth",
+    "PerspectiveTruth", "VideoTruth", "lane_truth", "load_board_truth", "load_image_truth",
+    "load_video_truth", "perspective_truth",
+]
