@@ -17,11 +17,14 @@ per-frame path raises on the frame's content: a side without a line says why in 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
 
+from . import io, runs
 from .errors import ConfigError, InputError
 
 Triple = tuple[int, int, int]
@@ -87,8 +90,10 @@ class HoughConfig:
         if not 0 <= self.canny_low <= self.canny_high:
             raise ConfigError(f"hough.canny_low, canny_high: need 0 <= low <= high, "
                               f"got {self.canny_low}, {self.canny_high}")
-        if self.rho_px <= 0 or self.theta_deg <= 0 or self.threshold_votes < 1:
-            raise ConfigError("hough.rho_px and theta_deg must be positive and threshold_votes >= 1")
+        # finer steps than these make the Hough accumulator huge for no gain
+        if not (self.rho_px >= 0.1 and 0.01 <= self.theta_deg <= 90 and self.threshold_votes >= 1):
+            raise ConfigError(f"hough.rho_px >= 0.1, theta_deg in 0.01..90 and threshold_votes >= 1 "
+                              f"are needed, got {self.rho_px}, {self.theta_deg}, {self.threshold_votes}")
         if self.min_line_length_px < 0 or self.max_line_gap_px < 0 or self.min_abs_slope < 0:
             raise ConfigError("hough.min_line_length_px, max_line_gap_px and min_abs_slope "
                               "must not be negative")
@@ -437,3 +442,57 @@ class HoughTracker:
                                                  ("right", right_held, self._right)) if is_held]
         return HoughResult(left, right, measured.n_left_segments, measured.n_right_segments,
                            "; ".join(reasons), left_held, right_held, measured.stages)
+
+
+# --------------------------------------------------------------------------- batch runs
+
+def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
+                   config: HoughConfig = HoughConfig()) -> list[dict]:
+    """Find the lines in each image; write annotated images and ``results.json``; return rows.
+
+    Each row holds ``file``, ``left_found``, ``right_found``, each line's x (px) at the bottom
+    row and at the top of the region (None when not found), and ``reason``.
+    """
+    finder = HoughLaneFinder(config)
+
+    def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
+        result = finder.process(rgb)
+        return annotate(rgb, result), result.row()
+
+    return runs.run_images(files, out_dir, process)
+
+
+@dataclass(frozen=True)
+class HoughVideoRun:
+    """What a video run did: frames, wall time (s), frames per second, frames with both lines."""
+
+    frames: int
+    seconds: float
+    fps: float
+    both_found_frames: int
+
+
+def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
+                  config: HoughConfig = HoughConfig(), log_path: str | os.PathLike | None = None,
+                  progress: bool = True, threads: int | None = None) -> HoughVideoRun:
+    """Track both lines through a video; write the annotated video (and CSV log); return a summary.
+
+    ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
+    CSV at ``log_path`` holds ``frame, time_s`` and the columns of ``HoughResult.row``. Outputs
+    are written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing behind.
+    """
+    if Path(out_path).suffix.lower() not in io.VIDEO_SUFFIXES:
+        raise InputError(f"{out_path}: the output video needs a video suffix "
+                         f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. out.mp4")
+    tracker = HoughTracker(config)
+    both = 0
+
+    def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict]:
+        nonlocal both
+        result = tracker.process(frame)
+        both += result.left_found and result.right_found
+        return annotate(frame, result), {"frame": index, "time_s": time_s, **result.row()}
+
+    summary = runs.run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                             desc=Path(in_path).name, threads=threads)
+    return HoughVideoRun(summary.frames, summary.seconds, summary.fps, both)
