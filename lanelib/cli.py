@@ -25,6 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
     # one line per subcommand, in the order of the pipeline
     _add_calibrate(sub)
     _add_images(sub)
+    _add_video(sub)
     _add_synth(sub)
     return parser
 
@@ -34,14 +35,15 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
                    help="camera calibration JSON from `calibrate` (default: none, frames are "
                         "taken as undistorted)")
     p.add_argument("--config", type=Path, metavar="FILE",
-                   help="PipelineConfig JSON (e.g. saved by a notebook tuner; default: built-in)")
+                   help="PipelineConfig JSON (e.g. saved by a notebook tuner) or the name of a "
+                        "bundled preset (p1: the 960x540 Udacity P1 camera); default: built-in")
 
 
 def _load_pipeline_inputs(args):
     from .camera import Calibration
-    from .config import PipelineConfig, load_config
+    from .config import PipelineConfig, load_config_or_preset
 
-    config = load_config(args.config) if args.config else PipelineConfig()
+    config = load_config_or_preset(args.config) if args.config else PipelineConfig()
     calibration = Calibration.load(args.calibration) if args.calibration else None
     return config, calibration
 
@@ -153,6 +155,37 @@ def _add_synth(sub) -> None:
         return 0
 
     p.set_defaults(func=run)
+
+
+def _add_video(sub) -> None:
+    p = sub.add_parser("video", help="track the lane through a video",
+                       description="Track the lane through IN (frame by frame, with sanity checks, "
+                                   "smoothing and fall back) and write the annotated video OUT "
+                                   "(H.264, same size and frame rate). A progress bar shows fps "
+                                   "and ETA; Ctrl-C leaves no half-written file.")
+    p.add_argument("input", type=Path, metavar="IN", help="input video (mp4)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="output video (mp4) to write")
+    _common_pipeline_args(p)
+    p.add_argument("--debug", action="store_true",
+                   help="write the 2x2 debug composite (undistorted, binary, search, result)")
+    p.add_argument("--log", type=Path, metavar="CSV",
+                   help="per-frame CSV: frame, time_s, found, left_conf, right_conf, radius_m, "
+                        "offset_m, lane_width_m, left_a..c, right_a..c (bird's-eye pixel fits)")
+    p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    p.set_defaults(func=_run_video)
+
+
+def _run_video(args) -> int:
+    from .pipeline import process_video
+
+    config, calibration = _load_pipeline_inputs(args)
+    run = process_video(args.input, args.output, config, calibration, debug=args.debug,
+                        log_path=args.log, progress=not args.no_progress)
+    print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
+          f"lane found in {run.found_frames} of {run.frames} frames"
+          + (f"; per-frame log in {args.log}" if args.log else ""))
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

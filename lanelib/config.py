@@ -131,3 +131,36 @@ def load_config(path: str | os.PathLike) -> PipelineConfig:
         return from_dict(PipelineConfig, data)
     except ConfigError as e:
         raise ConfigError(f"{path}: {e}") from None
+
+
+PRESETS_DIR = Path(__file__).with_name("presets")
+
+
+def preset_names() -> tuple[str, ...]:
+    """Return the names of the bundled config presets (``lanelib/presets/<name>.json``)."""
+    return tuple(sorted(p.stem for p in PRESETS_DIR.glob("*.json")))
+
+
+def preset(name: str) -> PipelineConfig:
+    """Return the bundled PipelineConfig preset ``name``, e.g. ``"p1"`` for the 960x540 Udacity P1 camera.
+
+    Presets are partial JSON files in ``lanelib/presets/``; the keys they leave out keep their
+    defaults. An unknown name raises ``ConfigError`` listing the presets.
+    """
+    if name not in preset_names():
+        raise ConfigError(f"no config preset {name!r}; bundled presets: {', '.join(preset_names())}")
+    return load_config(PRESETS_DIR / f"{name}.json")
+
+
+def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
+    """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec``.
+
+    A file that exists wins over a preset of the same name.
+    """
+    path = Path(spec)
+    if path.is_file():
+        return load_config(path)
+    if str(spec) in preset_names():
+        return preset(str(spec))
+    raise ConfigError(f"{spec}: no such config file and no bundled preset of that name; pass a "
+                      f"PipelineConfig JSON file or a preset ({', '.join(preset_names())})")

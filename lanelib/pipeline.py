@@ -220,3 +220,80 @@ def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
         return image, result.summary()
 
     return run_images([Path(f) for f in files], out_dir, process)
+
+
+# --------------------------------------------------------------------------- video
+
+VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
+                     "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c")
+
+
+def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
+    """Return one row of the per-frame video log (``VIDEO_LOG_COLUMNS``; NaN where not found).
+
+    The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c.
+    """
+    nan = float("nan")
+    row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),
+           "left_conf": result.left_conf, "right_conf": result.right_conf,
+           "radius_m": result.radius_m, "offset_m": result.offset_m,
+           "lane_width_m": result.lane_width_m}
+    for side, fit in (("left", result.left), ("right", result.right)):
+        coeffs = fit.coeffs_px if fit.found else (nan, nan, nan)
+        row.update({f"{side}_{k}": v for k, v in zip("abc", coeffs)})
+    return row
+
+
+@dataclass(frozen=True)
+class VideoRun:
+    """What a video run did: frames, wall time (s), frames per second, frames with a lane."""
+
+    frames: int
+    seconds: float
+    fps: float
+    found_frames: int
+
+
+def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
+                  config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                  debug: bool = False, log_path: str | os.PathLike | None = None,
+                  progress: bool = True, threads: int | None = None) -> VideoRun:
+    """Track the lane through a video; write the annotated (or debug composite) video; return a summary.
+
+    Parameters
+    ----------
+    in_path, out_path : input video and output mp4 (H.264, the input's size and frame rate).
+    config, calibration : as for ``LanePipeline``; the pipeline is made for the video's frame size.
+    debug : write the 2x2 debug composite (undistorted, binary, search, result) instead.
+    log_path : per-frame CSV with ``VIDEO_LOG_COLUMNS`` (optional).
+    progress : show a tqdm bar with fps and ETA.
+    threads : encoder threads (None: ffmpeg's choice).
+
+    Every output is written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing
+    under ``out_path`` or ``log_path``.
+    """
+    from .runs import run_video
+    from .tracking import LaneTracker
+
+    trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
+    found = [0]
+
+    def process(frame: np.ndarray, index: int, time_s: float):
+        if not trackers:
+            trackers.append(LaneTracker(pipeline_for(frame, config, calibration)))
+        tracker = trackers[0]
+        pipe = tracker.pipeline
+        result = tracker.update(frame, keep_images=debug)
+        found[0] += result.found
+        und = pipe.undistort(frame)
+        annotated = pipe.annotate(und, result)
+        if debug:
+            result.images.update(undistorted=und, result=annotated,
+                                 search=draw.search_view(result.images["binary"], result.search,
+                                                         config.draw, config.search.prior_margin_px))
+            annotated = pipe.debug_composite(result)
+        return annotated, video_log_row(index, time_s, result)
+
+    summary = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                        desc=Path(in_path).name, threads=threads)
+    return VideoRun(summary.frames, summary.seconds, summary.fps, found[0])

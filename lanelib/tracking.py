@@ -1,7 +1,55 @@
-"""Lane tracking across video frames: sanity checks, smoothing, fall back and reset."""
+"""Lane tracking across video frames: sanity checks, smoothing, fall back and reset.
+
+``LaneTracker.update(frame)`` runs one frame through a ``LanePipeline`` and returns a
+``FrameResult`` whose fits are the tracked (smoothed) lane, so ``LanePipeline.annotate`` and the
+debug composite work on it unchanged. Per frame:
+
+1. **Search.** Around the tracked lane when the previous frame was accepted (``method`` "prior");
+   sliding windows when the tracker is lost or reset ("windows"), started from the tracked lines'
+   positions when there is a track. A prior search that fails the checks is retried with sliding
+   windows on the same mask.
+2. **Checks.** Each line against the track: its position at the car may not move more than
+   ``max_jump_m`` and its shape may not bend away from the tracked line by more than
+   ``max_width_spread_m``. The pair: lane width at the car within ``min_width_m`` to
+   ``max_width_m``, the lines roughly parallel (the width varies by at most ``max_width_spread_m``
+   from the bottom to the top row) and their curvatures consistent (differ by at most
+   ``max_curvature_diff_1pm``). When the pair fails but a track exists, the line with the higher
+   confidence is kept.
+3. **One line lost.** The other line is inferred from the kept one and the tracked lane: it is
+   the kept line plus the tracked difference between the two lines, i.e. the tracked lane width
+   at every row. Its confidence is half the kept line's.
+4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
+   ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
+   Why a weighted average and not a Kalman filter on the coefficients: between frames the lane
+   moves with steering and road geometry that the tracker does not observe, so a Kalman filter's
+   motion model would be "constant coefficients plus tuned noise", which is an exponential filter
+   with a gain to tune; the averaging window does the same with two plain parameters, has a
+   bounded memory (nothing older than ``smooth_frames`` frames survives, so a reset is clean)
+   and a lag that is easy to state (about one frame at the defaults). Weighting by confidence
+   gives it the one thing a Kalman filter would add: a poor detection moves the lane less.
+   Averaging coefficients is averaging the curves row by row, since x(y) is linear in them.
+5. **Hold and reset.** With no acceptable line the last tracked lane is reported for up to
+   ``hold_frames`` frames with a confidence falling linearly to zero; then the tracker resets
+   and reports no lane until a pair passes the checks again.
+
+Confidence per line (0-1): ``pipeline.line_confidence`` of the accepted detection (span of rows
+covered times pixel support), half the other line's for an inferred line, the last value times
+the share of the hold that is left for a held line, 0 when no lane is reported.
+"""
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import lanes
+from .errors import ConfigError
+from .lanes import LaneSearch, LineFit
+
+if TYPE_CHECKING:  # pipeline imports config, which imports this module
+    from .pipeline import FrameResult, LanePipeline
 
 
 @dataclass(frozen=True)
@@ -12,11 +60,13 @@ class TrackerConfig:
     ----------
     min_width_m, max_width_m : a detection whose lane width at the car lies outside is rejected.
     max_width_spread_m : largest difference of the lane width between the bottom and top rows
-        (lines roughly parallel).
-    max_curvature_diff_1pm : largest difference of the two lines' curvature.
+        (lines roughly parallel); also the largest change of a line's shape against its track.
+    max_curvature_diff_1pm : largest difference of the two lines' curvature at the car (1/m).
     max_jump_m : largest change of a line's position at the car from one frame to the next.
     smooth_frames : good frames averaged (weighted towards the newest) for the reported fit.
+    recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
+    check_rows : rows (evenly spaced, top to bottom) on which widths and shapes are compared.
     """
 
     min_width_m: float = 3.0
@@ -25,4 +75,231 @@ class TrackerConfig:
     max_curvature_diff_1pm: float = 0.004
     max_jump_m: float = 0.5
     smooth_frames: int = 5
+    recency_decay: float = 0.6
     hold_frames: int = 12
+    check_rows: int = 8
+
+    def __post_init__(self):
+        if not 0 < self.min_width_m < self.max_width_m:
+            raise ConfigError("tracking: need 0 < min_width_m < max_width_m")
+        if self.smooth_frames < 1 or self.hold_frames < 0 or self.check_rows < 2:
+            raise ConfigError("tracking: smooth_frames >= 1, hold_frames >= 0 and check_rows >= 2")
+        if not 0 < self.recency_decay <= 1:
+            raise ConfigError("tracking: recency_decay must lie in (0, 1]")
+        if min(self.max_width_spread_m, self.max_curvature_diff_1pm, self.max_jump_m) <= 0:
+            raise ConfigError("tracking: max_width_spread_m, max_curvature_diff_1pm and max_jump_m "
+                              "must be positive")
+
+
+@dataclass(frozen=True)
+class _Accepted:
+    """One frame's accepted lane: pixel coefficients and confidence of each line."""
+
+    left: np.ndarray
+    right: np.ndarray
+    left_conf: float
+    right_conf: float
+
+
+class LaneTracker:
+    """Track the lane through consecutive frames of one video with one ``LanePipeline``.
+
+    Parameters
+    ----------
+    pipeline : the pipeline that searches each frame (its size, perspective and search config).
+    config : tracking parameters; defaults to ``pipeline.config.tracking``.
+
+    Call ``update`` once per frame, in order; ``reset`` before a new video.
+    """
+
+    def __init__(self, pipeline: "LanePipeline", config: TrackerConfig | None = None):
+        from .pipeline import FrameResult, line_confidence  # late: pipeline -> config -> tracking
+
+        self._FrameResult = FrameResult
+        self._line_confidence = line_confidence
+        self.pipeline = pipeline
+        self.config = config if config is not None else pipeline.config.tracking
+        h = pipeline.size[1]
+        self._bottom = float(h - 1)
+        self._rows = np.linspace(0.0, h - 1.0, self.config.check_rows)
+        self._xm = pipeline.perspective.xm_per_px
+        self._ym = pipeline.perspective.ym_per_px
+        self.reset()
+
+    # ---- state ----------------------------------------------------------------------------
+
+    def reset(self) -> None:
+        """Forget the track: the next frame is searched with sliding windows."""
+        self._history: deque[_Accepted] = deque(maxlen=self.config.smooth_frames)
+        self._lost = 0
+        self._conf = (0.0, 0.0)
+
+    @property
+    def lane(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Return the tracked (smoothed) pixel coefficients (left, right), or None when reset."""
+        if not self._history:
+            return None
+        weights = []
+        for age, acc in enumerate(reversed(self._history)):
+            decay = self.config.recency_decay ** age
+            weights.append((decay * max(acc.left_conf, 0.05), decay * max(acc.right_conf, 0.05)))
+        w = np.array(weights[::-1])
+        left = np.array([a.left for a in self._history])
+        right = np.array([a.right for a in self._history])
+        return (w[:, 0] @ left / w[:, 0].sum(), w[:, 1] @ right / w[:, 1].sum())
+
+    @property
+    def lost_frames(self) -> int:
+        """Return the number of frames since the last accepted detection."""
+        return self._lost
+
+    # ---- one frame ------------------------------------------------------------------------
+
+    def update(self, raw: np.ndarray, keep_images: bool = False) -> "FrameResult":
+        """Return the tracked lane in the next RAW frame of the video (see the module docstring)."""
+        pipe = self.pipeline
+        track = self.lane
+        prior = None
+        if track is not None and self._lost == 0:
+            prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
+        det = pipe.detect(raw, prior=prior, keep_images=True)
+        search = det.search
+        left, right, why = self.check(search.left, search.right, track)
+        if track is not None and (left is None or right is None):
+            # the search missed: look again with windows started from the tracked lines
+            retry = lanes.sliding_windows(det.images["binary"], pipe.config.search,
+                                          bases=self._bases(track), car_x=pipe.car_x_px)
+            l2, r2, why2 = self.check(retry.left, retry.right, track)
+            if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
+                search, left, right, why = retry, l2, r2, why2
+        images = det.images if keep_images else {}
+        return self._advance(search, left, right, why, track, images)
+
+    def check(self, left: LineFit, right: LineFit,
+              track: tuple[np.ndarray, np.ndarray] | None) -> tuple[LineFit | None, LineFit | None, list[str]]:
+        """Return the lines that pass the sanity checks (None where rejected) and why others failed.
+
+        Parameters
+        ----------
+        left, right : this frame's fits (bird's-eye pixels).
+        track : the tracked pixel coefficients (left, right), or None without a track.
+        """
+        cfg = self.config
+        why: list[str] = []
+        kept: dict[str, LineFit | None] = {"left": None, "right": None}
+        for i, (side, fit) in enumerate((("left", left), ("right", right))):
+            if not fit.found:
+                why.append(f"{side} line not found ({fit.reason})")
+                continue
+            if track is not None:
+                dx = (np.polyval(fit.coeffs_px, self._rows) - np.polyval(track[i], self._rows)) * self._xm
+                if abs(dx[-1]) > cfg.max_jump_m:
+                    why.append(f"{side} line jumped {abs(dx[-1]):.2f} m at the car "
+                               f"(limit {cfg.max_jump_m} m)")
+                    continue
+                if dx.max() - dx.min() > cfg.max_width_spread_m:
+                    why.append(f"{side} line bent {dx.max() - dx.min():.2f} m away from its track "
+                               f"(limit {cfg.max_width_spread_m} m)")
+                    continue
+            kept[side] = fit
+        if kept["left"] is not None and kept["right"] is not None:
+            problem = self._pair_problem(kept["left"], kept["right"])
+            if problem:
+                why.append(problem)
+                if track is None:
+                    return None, None, why
+                lc, rc = (self._conf_of(kept[s]) for s in ("left", "right"))
+                drop = "right" if lc >= rc else "left"
+                why.append(f"{drop} line dropped (lower confidence)")
+                kept[drop] = None
+        if track is None and (kept["left"] is None or kept["right"] is None):
+            if kept["left"] is not None or kept["right"] is not None:
+                why.append("one line alone cannot start a track")
+            return None, None, why
+        return kept["left"], kept["right"], why
+
+    def _pair_problem(self, left: LineFit, right: LineFit) -> str:
+        """Return why two lines are not a plausible lane ("" when they are)."""
+        cfg = self.config
+        width = (np.polyval(right.coeffs_px, self._rows) - np.polyval(left.coeffs_px, self._rows)) * self._xm
+        if not cfg.min_width_m <= width[-1] <= cfg.max_width_m:
+            return (f"lane width {width[-1]:.2f} m at the car outside {cfg.min_width_m}-"
+                    f"{cfg.max_width_m} m")
+        spread = float(width.max() - width.min())
+        if spread > cfg.max_width_spread_m:
+            return f"lines not parallel (width varies by {spread:.2f} m, limit {cfg.max_width_spread_m} m)"
+        y_m = self._bottom * self._ym
+        kl = lanes.curvature(lanes.fit_to_metres(left.coeffs_px, self._xm, self._ym), y_m)
+        kr = lanes.curvature(lanes.fit_to_metres(right.coeffs_px, self._xm, self._ym), y_m)
+        if abs(kl - kr) > cfg.max_curvature_diff_1pm:
+            return (f"curvatures differ by {abs(kl - kr):.4f} 1/m "
+                    f"(limit {cfg.max_curvature_diff_1pm} 1/m)")
+        return ""
+
+    def _conf_of(self, fit: LineFit) -> float:
+        """Return the 0-1 confidence of a detected line (``pipeline.line_confidence``)."""
+        return self._line_confidence(fit, self.pipeline.size[1], self.pipeline.config.search)
+
+    def _bases(self, track) -> tuple[float, float]:
+        """Return the tracked lines' x (px) on the bottom row, where windows start."""
+        return (float(np.polyval(track[0], self._bottom)), float(np.polyval(track[1], self._bottom)))
+
+    def _advance(self, search: LaneSearch, left: LineFit | None, right: LineFit | None,
+                 why: list[str], track, images: dict) -> "FrameResult":
+        """Update the state with this frame's accepted lines and return the frame's result."""
+        notes = list(why)
+        if left is not None or right is not None:
+            coeffs = {}
+            confs = {}
+            for side, fit in (("left", left), ("right", right)):
+                if fit is not None:
+                    coeffs[side] = np.array(fit.coeffs_px, float)
+                    confs[side] = self._conf_of(fit)
+            for side, other, i, j in (("left", "right", 0, 1), ("right", "left", 1, 0)):
+                if side not in coeffs:  # infer from the other line and the tracked lane width
+                    coeffs[side] = coeffs[other] + (track[i] - track[j])
+                    confs[side] = round(0.5 * confs[other], 3)
+                    notes.append(f"{side} line inferred from the {other} line and the tracked width")
+            self._history.append(_Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"]))
+            self._lost = 0
+            self._conf = (confs["left"], confs["right"])
+            method = search.method
+            sources = {"left": left, "right": right}
+        elif track is not None and self._lost < self.config.hold_frames:
+            self._lost += 1
+            share = 1.0 - self._lost / (self.config.hold_frames + 1)
+            lc, rc = (round(c * share, 3) for c in self._conf)
+            notes.append(f"holding the last good lane ({self._lost} of {self.config.hold_frames} frames)")
+            return self._result(track, (lc, rc), "hold", {}, search, notes, images)
+        else:
+            if track is not None:
+                notes.append(f"lane lost for more than {self.config.hold_frames} frames; tracker reset")
+                self.reset()
+            else:
+                self._lost += 1
+            return self._not_found(search, notes, images)
+        smoothed = self.lane
+        return self._result(smoothed, self._conf, method, sources, search, notes, images)
+
+    def _result(self, coeffs, confs, method: str, sources: dict, search: LaneSearch,
+                notes: list[str], images: dict) -> "FrameResult":
+        fits = []
+        for side, c in zip(("left", "right"), coeffs):
+            src = sources.get(side)
+            fits.append(LineFit(tuple(float(v) for v in c), src.n_pixels if src else 0,
+                                src.span_px if src else 0.0, "" if src else _note_for(side, notes)))
+        left, right = fits
+        return self._FrameResult(left, right, self.pipeline.measure(left, right), method,
+                                 float(confs[0]), float(confs[1]), "; ".join(notes), search, images)
+
+    def _not_found(self, search: LaneSearch, notes: list[str], images: dict) -> "FrameResult":
+        reason = "; ".join(notes) or "no lane"
+        left, right = LineFit(None, reason=reason), LineFit(None, reason=reason)
+        return self._FrameResult(left, right, self.pipeline.measure(left, right), search.method,
+                                 0.0, 0.0, reason, search, images)
+
+
+def _note_for(side: str, notes: list[str]) -> str:
+    """Return the notes about one line (why it was inferred or held)."""
+    mine = [n for n in notes if n.startswith(side) or n.startswith("holding")]
+    return "; ".join(mine) or "not detected in this frame"

@@ -1,0 +1,164 @@
+"""LaneTracker on drawn lanes with known geometry: checks, inference, smoothing, hold and reset."""
+from __future__ import annotations
+
+import math
+import re
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib.config import PipelineConfig
+from lanelib.perspective import PerspectiveConfig
+from lanelib.errors import ConfigError
+from lanelib.pipeline import LanePipeline
+from lanelib.tracking import LaneTracker, TrackerConfig
+
+H, W = 720, 1280
+LEFT_X, RIGHT_X = 320.0, 960.0  # the default dst lines: 3.7 m apart
+XM = PerspectiveConfig().xm_per_px
+
+
+def frame(pipe: LanePipeline, left_x: float | None = LEFT_X, right_x: float | None = RIGHT_X,
+          right_top_x: float | None = None) -> np.ndarray:
+    """Return an undistorted road frame whose bird's-eye view shows lines at the given x (px).
+
+    ``None`` leaves a line out; ``right_top_x`` slants the right line to that x at the top row.
+    """
+    bird = np.full((H, W, 3), 70, np.uint8)
+    if left_x is not None:
+        cv2.line(bird, (round(left_x), 0), (round(left_x), H - 1), (235, 235, 235), 24)
+    if right_x is not None:
+        top = right_x if right_top_x is None else right_top_x
+        cv2.line(bird, (round(top), 0), (round(right_x), H - 1), (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+@pytest.fixture(scope="module")
+def pipe() -> LanePipeline:
+    return LanePipeline(PipelineConfig())
+
+
+def number_after(text: str, prefix: str) -> float:
+    """Return the number that follows ``prefix`` in ``text``."""
+    return float(re.search(re.escape(prefix) + r"(-?[0-9.]+)", text).group(1))
+
+
+def bottom_x(result, side: str) -> float:
+    return float(np.polyval(getattr(result, side).coeffs_px, H - 1))
+
+
+def test_steady_lane_is_tracked_with_the_drawn_geometry(pipe):
+    tracker = LaneTracker(pipe)
+    results = [tracker.update(frame(pipe)) for _ in range(4)]
+    assert [r.method for r in results] == ["windows", "prior", "prior", "prior"]
+    for r in results:
+        assert r.found and r.reason == ""
+        assert r.lane_width_m == pytest.approx(3.7, abs=0.05)
+        assert abs(r.offset_m) < 0.03
+        assert r.left_conf == pytest.approx(1.0) and r.right_conf == pytest.approx(1.0)
+
+
+def test_a_lost_line_is_inferred_from_the_other_and_the_tracked_width(pipe):
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    r = tracker.update(frame(pipe, right_x=None))
+    assert r.found
+    assert "right line inferred from the left line and the tracked width" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
+    assert r.lane_width_m == pytest.approx(3.7, abs=0.05)
+    assert r.right_conf == pytest.approx(0.5 * r.left_conf)
+    assert "inferred" in r.right.reason and r.left.reason == ""
+
+
+def test_one_line_alone_cannot_start_a_track(pipe):
+    r = LaneTracker(pipe).update(frame(pipe, left_x=None))
+    assert not r.found and "one line alone cannot start a track" in r.reason
+    assert r.left_conf == 0 and r.right_conf == 0 and math.isnan(r.offset_m)
+
+
+def test_a_jumping_line_is_rejected_and_replaced(pipe):
+    tracker = LaneTracker(pipe, TrackerConfig(max_jump_m=0.2))
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    jump_px = 0.3 / pipe.perspective.xm_per_px  # inside the 60 px search band, over the limit
+    r = tracker.update(frame(pipe, right_x=RIGHT_X + jump_px))
+    assert r.found and "(limit 0.2 m)" in r.reason
+    assert number_after(r.reason, "right line jumped ") == pytest.approx(0.3, abs=0.015)
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)  # inferred, not the jump
+
+
+def test_a_line_far_from_the_track_is_not_followed(pipe):
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    jump_px = 1.0 / pipe.perspective.xm_per_px  # 1 m: outside the band and the windows' reach
+    r = tracker.update(frame(pipe, right_x=RIGHT_X + jump_px))
+    assert r.found and "no lane pixels near the previous right fit" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
+
+
+@pytest.mark.parametrize("kwargs, prefix, value", [
+    (dict(right_x=LEFT_X + 5.0 / XM), "lane width ", 5.0),
+    (dict(right_x=LEFT_X + 2.2 / XM), "lane width ", 2.2),
+    (dict(right_top_x=RIGHT_X + 1.4 / XM), "lines not parallel (width varies by ", 1.4),
+])
+def test_an_implausible_pair_does_not_start_a_track(pipe, kwargs, prefix, value):
+    r = LaneTracker(pipe).update(frame(pipe, **kwargs))
+    assert not r.found
+    assert number_after(r.reason, prefix) == pytest.approx(value, abs=0.05)
+
+
+def test_hold_then_reset_then_reacquire(pipe):
+    cfg = TrackerConfig(hold_frames=3)
+    tracker = LaneTracker(pipe, cfg)
+    good = tracker.update(frame(pipe))
+    blank = frame(pipe, left_x=None, right_x=None)
+    held = [tracker.update(blank) for _ in range(3)]
+    for k, r in enumerate(held, 1):
+        assert r.found and r.method == "hold"
+        assert f"holding the last good lane ({k} of 3 frames)" in r.reason
+        assert r.left_conf == pytest.approx(round(good.left_conf * (1 - k / 4), 3))
+        assert bottom_x(r, "left") == pytest.approx(bottom_x(good, "left"))
+    gone = tracker.update(blank)
+    assert not gone.found and "tracker reset" in gone.reason and tracker.lane is None
+    back = tracker.update(frame(pipe))
+    assert back.found and back.method == "windows"
+
+
+def test_smoothing_weights_recent_frames_and_settles_after_a_step(pipe):
+    cfg = TrackerConfig(smooth_frames=5, recency_decay=0.5)
+    tracker = LaneTracker(pipe, cfg)
+    for _ in range(5):
+        tracker.update(frame(pipe))
+    step = 0.3 / pipe.perspective.xm_per_px  # the car moves 0.3 m: both lines shift, under the jump limit
+    xs = [bottom_x(tracker.update(frame(pipe, LEFT_X + step, RIGHT_X + step)), "left") for _ in range(5)]
+    # weights 1, 1/2, 1/4, 1/8, 1/16 of equal-confidence frames: the share of the new position
+    shares = [sum(0.5 ** a for a in range(n)) / sum(0.5 ** a for a in range(5)) for n in range(1, 6)]
+    for x, share in zip(xs, shares):
+        assert x == pytest.approx(LEFT_X + share * step, abs=1.5)
+    assert xs[-1] == pytest.approx(LEFT_X + step, abs=1.5)
+
+
+def test_smoothing_reduces_frame_to_frame_noise(pipe):
+    rng = np.random.default_rng(3)
+    tracker = LaneTracker(pipe)
+    noise = rng.normal(0, 6, 30)  # px of jitter on both lines (about 3.5 cm)
+    raw, tracked = [], []
+    for n in noise:
+        r = tracker.update(frame(pipe, LEFT_X + n, RIGHT_X + n))
+        tracked.append(r.offset_m)
+        raw.append(pipe.detect(frame(pipe, LEFT_X + n, RIGHT_X + n)).offset_m)
+    assert np.std(np.diff(tracked[5:])) < 0.6 * np.std(np.diff(raw[5:]))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(min_width_m=5.0), "min_width_m < max_width_m"),
+    (dict(smooth_frames=0), "smooth_frames >= 1"),
+    (dict(recency_decay=0.0), "recency_decay"),
+    (dict(max_jump_m=-1.0), "must be positive"),
+])
+def test_tracker_config_is_validated(kwargs, message):
+    with pytest.raises(ConfigError, match=message):
+        TrackerConfig(**kwargs)
