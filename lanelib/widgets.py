@@ -12,6 +12,8 @@ colour conversions, the lane mask) is computed once per picked image.
 - ``PerspectiveTuner``: the src trapezoid (top y, top width, bottom width, centre x) and the dst
   margin; the trapezoid on the undistorted frame, the bird's-eye view and the straight-line check.
 - ``FitTuner``: sliding windows (number, margin, minimum pixels) and the search around a fit.
+- ``HoughTuner``: the basic pipeline's Canny thresholds, Hough parameters and region of interest
+  (``PipelineConfig.hough``), on the raw frame; its picker adds the 960x540 Udacity P1 images.
 
 Each tuner holds its ``PipelineConfig`` in ``tuner.config``; ``tuner.save(path)`` writes the JSON
 that ``python -m lanelib images|video --config`` reads and ``tuner.load(path)`` reads one back into
@@ -40,7 +42,7 @@ import cv2
 import ipywidgets as widgets
 import numpy as np
 
-from . import draw, io, lanes, thresholds
+from . import draw, hough, io, lanes, thresholds
 from .camera import Calibration, Undistorter, calibrate
 from .config import PipelineConfig, load_config, save_config
 from .errors import InputError, LaneLibError
@@ -800,3 +802,198 @@ class FitTuner(Tuner):
             lines.append(f"radius {rad}, offset {m.offset_m:+.2f} m, lane width {m.lane_width_m:.2f} m")
         return "\n".join(lines)
 
+
+# --------------------------------------------------------------------------- Hough (basic pipeline)
+
+UDACITY_P1_PREFIX = "udacity-p1/"
+UDACITY_P1 = "udacity-lanelines-p1"
+
+
+def hough_image_choices(root: str | os.PathLike | None = None,
+                        data: str | os.PathLike | None = None) -> dict[str, Path]:
+    """Return the Hough tuner's images: label -> path, bundled ``test_images/`` first.
+
+    The 960x540 images of ``udacity-lanelines-p1/test_images`` follow as ``"udacity-p1/<name>"``
+    and the Udacity highway images as ``"udacity/<name>"``, each when ``data`` (default
+    ``data_root()``) holds them.
+    """
+    root = repo_root(root)
+    out = {p.name: p for p in io.list_images(root / "test_images")}
+    data = Path(data if data is not None else data_root(root))
+    p1 = data / UDACITY_P1 / "test_images"
+    if p1.is_dir():
+        out.update({UDACITY_P1_PREFIX + p.name: p for p in io.list_images(p1)})
+    adv = data / UDACITY_ADVANCED / "test_images"
+    if adv.is_dir():
+        out.update({UDACITY_PREFIX + p.name: p for p in io.list_images(adv)})
+    return out
+
+
+class HoughTuner(Tuner):
+    """Tune the basic Canny + region of interest + Hough pipeline (``PipelineConfig.hough``).
+
+    Controls: ``blur_kernel_px``, ``canny`` (low, high), ``rho_px``, ``theta_deg``,
+    ``threshold_votes``, ``min_line_length_px``, ``max_line_gap_px``, ``min_abs_slope`` and the
+    region of interest as fractions of the image: ``roi.top_y``, ``roi.top_left``,
+    ``roi.top_right``, ``roi.bottom_left``, ``roi.bottom_right`` (the x of each corner; the bottom
+    row stays where the config has it). The preview shows the Canny edges, the edges inside the
+    region (outlined), the Hough segments coloured by side and the two lane lines on the frame.
+
+    The Hough pipeline works on raw frames (no undistortion), so no calibration is used. A change
+    reruns ``hough.HoughLaneFinder.process`` on the picked frame (only the region's bounding box
+    is processed, a few ms at 1280x720), so the preview is exactly what a ``python -m lanelib
+    hough`` run does. ``save`` writes the ``hough`` part into a PipelineConfig JSON, keeping the
+    other parts a file already holds; ``load`` takes the ``hough`` part of one.
+    """
+
+    columns = 2
+    default_tile_width_px = 480
+    ROI_KEYS = ("roi.top_y", "roi.top_left", "roi.top_right", "roi.bottom_left", "roi.bottom_right")
+
+    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+                 config: PipelineConfig = PipelineConfig(), image: str | None = None,
+                 tile_width_px: int | None = None, jpeg_quality: int = 80):
+        super().__init__(images if images is not None else hough_image_choices(), config, None,
+                         image, tile_width_px, jpeg_quality)
+
+    # ---- building -------------------------------------------------------------------------
+
+    def _build(self) -> list[widgets.Widget]:
+        hc = self.config.hough
+        roi = _roi_fractions(hc.roi_frac)
+        isl = lambda key, value, lo, hi, desc: self._control(key, widgets.IntSlider(  # noqa: E731
+            value=value, min=lo, max=hi, description=desc, **_sized(420, 150)))
+        fsl = lambda key, value, lo, hi, step, desc, fmt=".2f": self._control(  # noqa: E731
+            key, widgets.FloatSlider(value=value, min=lo, max=hi, step=step, description=desc,
+                                     readout_format=fmt, **_sized(420, 150)))
+        return [
+            _row(self._control("blur_kernel_px", widgets.Dropdown(
+                     options=sorted({1, 3, 5, 7, 9, 11, 13, 15, hc.blur_kernel_px}), value=hc.blur_kernel_px,
+                     description="blur kernel (px)", **_sized(260, 150))),
+                 self._control("canny", widgets.IntRangeSlider(
+                     value=(hc.canny_low, hc.canny_high), min=0, max=500,
+                     description="Canny low, high", **_sized(420, 150)))),
+            _row(fsl("rho_px", hc.rho_px, 0.5, 5.0, 0.5, "rho (px)", ".1f"),
+                 fsl("theta_deg", hc.theta_deg, 0.25, 5.0, 0.25, "theta (deg)")),
+            _row(isl("threshold_votes", hc.threshold_votes, 1, 200, "threshold (votes)"),
+                 isl("min_line_length_px", hc.min_line_length_px, 0, 300, "min length (px)")),
+            _row(isl("max_line_gap_px", hc.max_line_gap_px, 0, 300, "max gap (px)"),
+                 fsl("min_abs_slope", hc.min_abs_slope, 0.0, 3.0, 0.05, "min |slope|")),
+            _row(fsl("roi.top_y", roi["top_y"], 0.0, 1.0, 0.01, "ROI top y"),
+                 fsl("roi.top_left", roi["top_left"], 0.0, 1.0, 0.01, "ROI top left x")),
+            _row(fsl("roi.top_right", roi["top_right"], 0.0, 1.0, 0.01, "ROI top right x"),
+                 fsl("roi.bottom_left", roi["bottom_left"], 0.0, 1.0, 0.01, "ROI bottom left x")),
+            _row(fsl("roi.bottom_right", roi["bottom_right"], 0.0, 1.0, 0.01, "ROI bottom right x")),
+        ]
+
+    def _sync(self) -> None:
+        hc, c = self.config.hough, self.controls
+        for key in ("blur_kernel_px", "rho_px", "theta_deg", "threshold_votes",
+                    "min_line_length_px", "max_line_gap_px", "min_abs_slope"):
+            c[key].value = getattr(hc, key)
+        c["canny"].value = (hc.canny_low, hc.canny_high)
+        for key, value in _roi_fractions(hc.roi_frac).items():
+            c[f"roi.{key}"].value = value
+
+    def _calibration_for(self, label: str) -> Calibration | None:
+        return None  # the Hough pipeline works on raw frames
+
+    # ---- config <-> controls --------------------------------------------------------------
+
+    def _apply(self, key: str) -> PipelineConfig:
+        c, hc = self.controls, self.config.hough
+        low, high = c["canny"].value
+        bottom_y = max(y for _, y in hc.roi_frac) if len(hc.roi_frac) == 4 else 1.0
+        roi = hc.roi_frac
+        if key.startswith("roi."):
+            v = {k: round(float(c[k].value), 4) for k in self.ROI_KEYS}
+            roi = ((v["roi.bottom_left"], bottom_y), (v["roi.top_left"], v["roi.top_y"]),
+                   (v["roi.top_right"], v["roi.top_y"]), (v["roi.bottom_right"], bottom_y))
+        new = replace(hc, blur_kernel_px=int(c["blur_kernel_px"].value), canny_low=int(low),
+                      canny_high=int(high), roi_frac=roi, rho_px=float(c["rho_px"].value),
+                      theta_deg=float(c["theta_deg"].value),
+                      threshold_votes=int(c["threshold_votes"].value),
+                      min_line_length_px=int(c["min_line_length_px"].value),
+                      max_line_gap_px=int(c["max_line_gap_px"].value),
+                      min_abs_slope=round(float(c["min_abs_slope"].value), 4))
+        self._config = replace(self.config, hough=new)
+        self._run()
+        return self._config
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the tuned ``hough`` part into the PipelineConfig JSON at ``path``; return the path.
+
+        A file that already exists keeps its other parts (e.g. thresholds saved by another tuner);
+        otherwise the whole config is written.
+        """
+        p = Path(path)
+        base = load_config(p) if p.exists() else self.config
+        return save_config(replace(base, hough=self.config.hough), p)
+
+    def load(self, path: str | os.PathLike) -> PipelineConfig:
+        """Read the ``hough`` part of a PipelineConfig JSON into the controls and the preview."""
+        config = replace(self.config, hough=load_config(path).hough)
+        self.set_config(config)
+        return config
+
+    # ---- the pipeline ---------------------------------------------------------------------
+
+    def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
+        self.frame = hough.check_rgb(raw)
+        self._small = shrink(self.frame, self._tile_size())
+        self._run()
+
+    def _tile_size(self) -> tuple[int, int]:
+        h, w = self.frame.shape[:2]
+        return self.tile_width_px, max(1, round(self.tile_width_px * h / w))
+
+    def _run(self) -> None:
+        """Run the Hough pipeline on the picked frame with the current config, keeping the stages."""
+        if getattr(self, "_finder", None) is None or self._finder.config != self.config.hough:
+            self._finder = hough.HoughLaneFinder(self.config.hough)
+        self.result = self._finder.process(self.frame, keep_stages=True)
+        self.stages = self.result.stages
+
+    # ---- views ----------------------------------------------------------------------------
+
+    def render(self) -> dict[str, np.ndarray | None]:
+        """Return the Canny edges, the edges in the region, the Hough segments and the lines."""
+        tw, th = self._tile_size()
+        h, w = self.frame.shape[:2]
+        scale = np.array([tw / w, th / h, tw / w, th / h])
+        st = self.stages
+        roi_view = cv2.cvtColor(shrink(st.roi_edges, (tw, th)), cv2.COLOR_GRAY2RGB)
+        poly = np.asarray(self.config.hough.roi_frac) * (w - 1, h - 1) * scale[:2]
+        cv2.polylines(roi_view, [np.rint(poly).astype(np.int32).reshape(-1, 1, 2)], True,
+                      (0, 255, 0), 1, cv2.LINE_AA)
+        segs = self._small
+        for group, color in ((st.segments, (255, 255, 0)), (st.left_segments, hough.LEFT_COLOR_RGB),
+                             (st.right_segments, hough.RIGHT_COLOR_RGB)):
+            if len(group):  # every segment yellow, then the kept ones in their side's colour
+                segs = hough.draw_lines(segs, np.rint(group * scale).astype(np.int32), color, 2)
+        lines = shrink(hough.annotate(self.frame, self.result), (tw, th))
+        return {"Canny edges": st.edges, "edges in the region": roi_view,
+                "Hough segments (left red, right blue)": segs, "lane lines": lines}
+
+    def readout(self) -> str:
+        r = self.result
+        parts = []
+        for side, line, n in (("left", r.left, r.n_left_segments),
+                              ("right", r.right, r.n_right_segments)):
+            where = ("no line" if line is None else
+                     f"x {line.x_bottom_px:.0f} px at the bottom, {line.x_top_px:.0f} px at the top")
+            parts.append(f"{side}: {n} segments, {where}")
+        text = f"{len(self.stages.segments)} Hough segments; " + "; ".join(parts)
+        return text + (f"\n{r.reason}" if r.reason else "")
+
+
+def _roi_fractions(roi_frac) -> dict[str, float]:
+    """Return top_y and the four corner x fractions of a 4-vertex region (bl, tl, tr, br)."""
+    pts = list(roi_frac)
+    if len(pts) != 4:  # a polygon of another shape: its bounding trapezoid
+        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+        return {"top_y": min(ys), "top_left": min(xs), "top_right": max(xs),
+                "bottom_left": min(xs), "bottom_right": max(xs)}
+    (blx, _), (tlx, tly), (trx, try_), (brx, _) = pts
+    return {"top_y": (tly + try_) / 2, "top_left": tlx, "top_right": trx,
+            "bottom_left": blx, "bottom_right": brx}
