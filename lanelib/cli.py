@@ -27,6 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_images(sub)
     _add_video(sub)
     _add_synth(sub)
+    _add_hough(sub)
     return parser
 
 
@@ -184,6 +185,64 @@ def _run_video(args) -> int:
                         log_path=args.log, progress=not args.no_progress)
     print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
           f"lane found in {run.found_frames} of {run.frames} frames"
+          + (f"; per-frame log in {args.log}" if args.log else ""))
+    return 0
+
+
+def _add_hough(sub) -> None:
+    p = sub.add_parser("hough", help="basic straight lane lines (Canny + Hough) on images or a video",
+                       description="Find the left and right lane lines as straight lines (white and "
+                                   "yellow selection, Canny, region of interest, Hough) in IN, a "
+                                   "folder of images or a video. For images, write one annotated "
+                                   "image per input and OUT/results.json (file, left_found, "
+                                   "right_found, left_x_bottom, left_x_top, right_x_bottom, "
+                                   "right_x_top in px, reason); for a video, write the annotated "
+                                   "video OUT (lines smoothed across frames, a lost line held for "
+                                   "a few frames).")
+    p.add_argument("input", type=Path, metavar="IN", help="folder of road images, or a video (mp4)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="output folder (images) or output video (mp4)")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="PipelineConfig JSON (its `hough` part is used) or the name of a bundled "
+                        "preset; default: built-in")
+    p.add_argument("--log", type=Path, metavar="CSV",
+                   help="videos only: per-frame CSV: frame, time_s, left_found, right_found, "
+                        "left_x_bottom, left_x_top, right_x_bottom, right_x_top, left_held, "
+                        "right_held, reason")
+    p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    p.set_defaults(func=_run_hough)
+
+
+def _run_hough(args) -> int:
+    from . import hough
+    from .errors import InputError
+    from .io import VIDEO_SUFFIXES, list_images
+
+    config = hough.HoughConfig()
+    if args.config:
+        from .config import load_config_or_preset
+
+        config = load_config_or_preset(args.config).hough
+    if args.input.is_dir():
+        if args.log:
+            raise InputError("--log is for videos; for images the rows are in OUT/results.json")
+        rows = hough.process_images(list_images(args.input), args.output, config)
+        for r in rows:
+            print(f"{r['file']}: left x {r['left_x_bottom']} px, right x {r['right_x_bottom']} px "
+                  f"at the bottom row" + (f"; {r['reason']}" if r["reason"] else ""))
+        both = sum(r["left_found"] and r["right_found"] for r in rows)
+        print(f"{both} of {len(rows)} images: both lines found; results in "
+              f"{args.output / 'results.json'}")
+        return 0
+    if not args.input.exists():
+        raise InputError(f"{args.input}: no such file or folder; check the path")
+    if args.input.suffix.lower() not in VIDEO_SUFFIXES:
+        raise InputError(f"{args.input}: neither a folder of images nor a video "
+                         f"({', '.join(VIDEO_SUFFIXES)}); pass one of those")
+    run = hough.process_video(args.input, args.output, config, log_path=args.log,
+                              progress=not args.no_progress)
+    print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
+          f"both lines found in {run.both_found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
     return 0
 
