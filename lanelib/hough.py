@@ -154,20 +154,23 @@ class HoughResult:
 
     @property
     def left_found(self) -> bool:
+        """Whether a left line is reported (measured, or held in video)."""
         return self.left is not None
 
     @property
     def right_found(self) -> bool:
+        """Whether a right line is reported (measured, or held in video)."""
         return self.right is not None
 
     def row(self) -> dict:
         """Return the result as a flat row: found flags, x at the bottom and top (px), reason."""
-        def x(line: LaneLine | None, end: str) -> float | None:
-            return None if line is None else round(float(getattr(line, f"x_{end}_px")), 1)
+        def ends(line: LaneLine | None) -> tuple[float | None, float | None]:
+            return (None, None) if line is None else (round(line.x_bottom_px, 1), round(line.x_top_px, 1))
 
+        (left_bottom, left_top), (right_bottom, right_top) = ends(self.left), ends(self.right)
         return {"left_found": self.left_found, "right_found": self.right_found,
-                "left_x_bottom": x(self.left, "bottom"), "left_x_top": x(self.left, "top"),
-                "right_x_bottom": x(self.right, "bottom"), "right_x_top": x(self.right, "top"),
+                "left_x_bottom": left_bottom, "left_x_top": left_top,
+                "right_x_bottom": right_bottom, "right_x_top": right_top,
                 "left_held": self.left_held, "right_held": self.right_held, "reason": self.reason}
 
 
@@ -250,14 +253,14 @@ def split_by_slope(segments: np.ndarray, min_abs_slope: float) -> tuple[np.ndarr
 def fit_side(segments: np.ndarray, y_bottom_px: float, y_top_px: float) -> LaneLine | None:
     """Return the length-weighted least-squares line x(y) through the segments' endpoints.
 
-    Each endpoint weighs half its segment's length (px), so long segments dominate short noise.
-    The line runs from ``y_bottom_px`` to ``y_top_px``; None when there are no segments or they
-    span no height (a straight x(y) fit needs two rows).
+    Both endpoints of a segment weigh its length (px), so long segments dominate short noise.
+    The line runs from ``y_bottom_px`` to ``y_top_px``; None when there are no segments of
+    non-zero length or they span no height (a straight x(y) fit needs two rows).
     """
-    if len(segments) == 0:
-        return None
-    s = segments.astype(np.float64)
+    s = segments.astype(np.float64).reshape(-1, 4)
     length = np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
+    if not length.any():
+        return None
     x = np.concatenate([s[:, 0], s[:, 2]])
     y = np.concatenate([s[:, 1], s[:, 3]])
     w = np.concatenate([length, length])
@@ -278,8 +281,11 @@ def draw_lines(rgb: np.ndarray, lines, color_rgb: Triple, thickness_px: int = 2)
     """
     out = rgb.copy()
     for line in lines:
-        p, q = line.points() if isinstance(line, LaneLine) else ((int(line[0]), int(line[1])),
-                                                                  (int(line[2]), int(line[3])))
+        if isinstance(line, LaneLine):
+            p, q = line.points()
+        else:
+            x1, y1, x2, y2 = (int(v) for v in line)
+            p, q = (x1, y1), (x2, y2)
         cv2.line(out, p, q, color_rgb, thickness_px, cv2.LINE_AA)
     return out
 
@@ -296,7 +302,8 @@ def annotate(rgb: np.ndarray, result: HoughResult, opacity: float = 0.7,
                                                (result.right, RIGHT_COLOR_RGB)) if line is not None]
     if not lines:
         return out
-    top = max(0, min(min(p[1] for p in line.points()) for line, _ in lines) - thickness_px)
+    top_px = min(min(line.y_top_px, line.y_bottom_px) for line, _ in lines)
+    top = min(max(0, math.floor(top_px) - thickness_px), out.shape[0] - 1)
     band = out[top:]
     overlay = band.copy()
     for line, color in lines:
@@ -320,8 +327,8 @@ class _Region:
     @classmethod
     def make(cls, shape: tuple[int, ...], roi_frac) -> "_Region":
         full = roi_mask(shape, roi_frac)
-        x, y, w, h = cv2.boundingRect(full)
-        rows, cols = slice(y, y + max(h, 1)), slice(x, x + max(w, 1))
+        x, y, w, h = cv2.boundingRect(full)  # fillPoly paints a pixel even for a flat polygon
+        rows, cols = slice(y, y + h), slice(x, x + w)
         return cls(rows, cols, np.ascontiguousarray(full[rows, cols]), roi_top_px(shape[0], roi_frac))
 
     def paste(self, box_image: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:

@@ -108,6 +108,7 @@ def test_fit_side_is_exact_on_collinear_segments_and_length_weighted():
     assert line.x_bottom_px == line.x_top_px == pytest.approx(300 + 40 * 20 / 220)
     assert hough.fit_side(np.zeros((0, 4), np.int32), 539, 300) is None
     assert hough.fit_side(np.array([[10, 400, 90, 400]], np.int32), 539, 300) is None
+    assert hough.fit_side(np.array([[10, 400, 10, 400]], np.int32), 539, 300) is None
 
 
 def test_roi_mask_covers_the_polygon_in_image_fractions():
