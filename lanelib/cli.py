@@ -28,6 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_video(sub)
     _add_synth(sub)
     _add_hough(sub)
+    _add_evaluate(sub)
     return parser
 
 
@@ -244,6 +245,70 @@ def _run_hough(args) -> int:
     print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
           f"both lines found in {run.both_found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
+    return 0
+
+
+def _add_evaluate(sub) -> None:
+    p = sub.add_parser(
+        "evaluate", help="score the pipeline against ground truth",
+        description="Run the lane pipeline on synthetic data with ground truth and print one table: "
+                    "frames, lane found (%), median and 95th-percentile |offset error| (cm), median "
+                    "|curvature error| (1/m), median radius error (%, on curves of radius <= 3 km), "
+                    "point accuracy (TuSimple: share of truth line points within 20 px across the "
+                    "line, in the raw image, inside the bird's-eye view), and the false-positive and "
+                    "false-negative line rates. See lanelib/evaluate.py for the exact rules.")
+    p.add_argument("kind", choices=("images", "video"),
+                   help="images: PATH is a folder of images, each NAME.jpg with NAME.json beside it; "
+                        "video: PATH is a video with NAME.csv and NAME.json beside it")
+    p.add_argument("path", type=Path, metavar="PATH", help="folder of images, or video file")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="PipelineConfig, as for `images` (default: built-in)")
+    p.add_argument("--calibration", type=Path, metavar="FILE",
+                   help="camera calibration JSON from `calibrate` (e.g. of camera_cal/); default: "
+                        "the true camera recorded in the ground truth, so the score is the lane "
+                        "finding's alone; pass your calibration to score calibration and lane "
+                        "finding together")
+    p.add_argument("--detector", choices=("frame", "tracker"),
+                   help="frame: detect every frame on its own; tracker: LaneTracker through the "
+                        "frames in order (video only). Default: frame for images, tracker for video")
+    p.add_argument("--max-frames", type=int, metavar="N",
+                   help="score only the first N images (by name) or video frames")
+    p.add_argument("--json", type=Path, metavar="OUT",
+                   help="also write the figures as JSON (frames, found_rate, offset_err_cm_median, "
+                        "offset_err_cm_p95, curvature_err_median, radius_err_pct_median, "
+                        "point_accuracy, fp_rate, fn_rate; rates as fractions, null where nothing "
+                        "was scored)")
+    p.set_defaults(func=_run_evaluate)
+
+
+def _run_evaluate(args) -> int:
+    from . import evaluate
+    from .errors import InputError
+    from .io import list_images, write_json
+    from .pipeline import LanePipeline
+
+    if args.max_frames is not None and args.max_frames < 1:
+        raise InputError(f"--max-frames {args.max_frames}: give a number of frames of 1 or more")
+    detector = args.detector or ("tracker" if args.kind == "video" else "frame")
+    if args.kind == "images" and detector == "tracker":
+        raise InputError(f"{args.path}: the tracker follows consecutive video frames; evaluate "
+                         "images with --detector frame, or a video with --detector tracker")
+    config, calibration = _load_pipeline_inputs(args)
+    if calibration is None:
+        calibration = evaluate.calibration_from_truth(args.path)
+    pipe = LanePipeline(config, calibration, size=calibration.image_size)
+    if args.kind == "images":
+        files = list_images(args.path)
+        inputs = files + [f.with_suffix(".json") for f in files]
+        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames)
+    else:
+        inputs = [args.path] + [args.path.with_suffix(s) for s in (".csv", ".json")]
+        report = evaluate.evaluate_video(args.path, pipe, use_tracker=detector == "tracker",
+                                         max_frames=args.max_frames)
+    print(report.table())
+    if args.json:
+        write_json(args.json, report.to_dict(), inputs=inputs)
+        print(f"figures written to {args.json}")
     return 0
 
 
