@@ -284,7 +284,7 @@ def _add_evaluate(sub) -> None:
 def _run_evaluate(args) -> int:
     from . import evaluate
     from .errors import InputError
-    from .io import list_images, write_json
+    from .io import check_not_input, list_images, write_json
     from .pipeline import LanePipeline
 
     if args.max_frames is not None and args.max_frames < 1:
@@ -294,15 +294,18 @@ def _run_evaluate(args) -> int:
         raise InputError(f"{args.path}: the tracker follows consecutive video frames; evaluate "
                          "images with --detector frame, or a video with --detector tracker")
     config, calibration = _load_pipeline_inputs(args)
-    if calibration is None:
-        calibration = evaluate.calibration_from_truth(args.path)
-    pipe = LanePipeline(config, calibration, size=calibration.image_size)
+    true_camera = evaluate.calibration_from_truth(args.path)  # also gives the frame size
+    pipe = LanePipeline(config, calibration or true_camera, size=true_camera.image_size)
     if args.kind == "images":
         files = list_images(args.path)
         inputs = files + [f.with_suffix(".json") for f in files]
-        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames)
     else:
         inputs = [args.path] + [args.path.with_suffix(s) for s in (".csv", ".json")]
+    if args.json:
+        check_not_input(args.json, inputs)  # before the run, not after it
+    if args.kind == "images":
+        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames)
+    else:
         report = evaluate.evaluate_video(args.path, pipe, use_tracker=detector == "tracker",
                                          max_frames=args.max_frames)
     print(report.table())
