@@ -5,6 +5,7 @@ Setting ``.value`` in Python runs the same ``observe`` callback a slider drag in
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import replace
 
 import cv2
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from lanelib import io, thresholds, widgets
+from lanelib.camera import calibrate
 from lanelib.config import PipelineConfig, load_config, to_dict
 from lanelib.errors import InputError
 from lanelib.lanes import SearchConfig
@@ -20,15 +22,23 @@ from lanelib.pipeline import LanePipeline
 
 from conftest import REPO, data_root
 
-STRAIGHT = "straight_lines1.jpg"
-CURVED = "test2.jpg"
+STRAIGHT = "straight_1.jpg"
+CURVED = "curve_left_600m.jpg"
 
 
 @pytest.fixture(scope="module")
-def road(udacity_advanced):
-    """Two 1280x720 road photos, a straight one first, as the picker's {label: path}."""
-    folder = udacity_advanced / "test_images"
+def road():
+    """Two bundled 1280x720 road images, a straight one first, as the picker's {label: path}."""
+    folder = REPO / "test_images"
     return {STRAIGHT: folder / STRAIGHT, CURVED: folder / CURVED}
+
+
+@pytest.fixture(scope="module")
+def camera():
+    """The calibration of the bundled (synthetic) camera."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return calibrate(REPO / "camera_cal")
 
 
 def _decode(jpeg: bytes) -> np.ndarray:
@@ -51,9 +61,9 @@ def test_raising_the_white_low_bound_shrinks_the_white_mask_only(road):
     white0 = cv2.countNonZero(before["white"])
     assert white0 > 1000  # the right line is white
 
-    t.controls["white.range1"].value = (235, 255)  # the L channel of HLS
+    t.controls["white.range1"].value = (215, 255)  # the L channel of HLS
 
-    assert t.config.thresholds.white.low == (0, 235, 0)
+    assert t.config.thresholds.white.low == (0, 215, 0)
     assert t.config.thresholds.white.high == (179, 255, 255)
     white1 = cv2.countNonZero(t.mask("white"))
     assert 0 < white1 < white0
@@ -174,8 +184,8 @@ def test_load_rebuilds_the_birdseye_view_when_the_perspective_changes(road, tmp_
 
 # --------------------------------------------------------------------------- perspective
 
-def test_straight_line_check_with_default_points_on_a_straight_road(road, udacity_calibration):
-    t = widgets.PerspectiveTuner(road, calibration=udacity_calibration, image=STRAIGHT)
+def test_straight_line_check_with_default_points_on_a_straight_road(road, camera):
+    t = widgets.PerspectiveTuner(road, calibration=camera, image=STRAIGHT)
     c = t.check
     assert abs(c.left_slope) < 2.0 and abs(c.right_slope) < 2.0  # px per 100 px
     assert c.lane_width_m == pytest.approx(3.7, abs=0.15)
@@ -209,8 +219,19 @@ def test_moving_the_trapezoid_changes_the_src_points_and_the_birdseye_preview(ro
     assert t.config.perspective.src_px[1] == (203.0, 720.0)
 
 
-def test_the_dst_margin_changes_the_scale_not_the_lane_width(road, udacity_calibration):
-    t = widgets.PerspectiveTuner(road, calibration=udacity_calibration, image=STRAIGHT)
+def test_the_perspective_tuner_sees_what_the_pipeline_sees(road, camera):
+    t = widgets.PerspectiveTuner(road, calibration=camera, image=CURVED)
+    raw = io.read_image(road[CURVED])
+    for top_y in (470.0, 490.0):
+        t.controls["top_y"].value = top_y
+        expected = LanePipeline(t.config, camera).birdseye(raw)
+        diff = cv2.absdiff(t.birdseye, expected)
+        assert diff.max() <= 3, top_y
+        assert diff.mean() < 0.1, top_y
+
+
+def test_the_dst_margin_changes_the_scale_not_the_lane_width(road, camera):
+    t = widgets.PerspectiveTuner(road, calibration=camera, image=STRAIGHT)
     width0 = t.check.lane_width_m
     t.controls["dst_margin"].value = 400.0
     pc = t.config.perspective
@@ -282,6 +303,17 @@ def test_picking_an_image_updates_the_preview(road):
     assert t.image == CURVED
     assert t.preview.value != bytes0
     assert not np.array_equal(t.binary, binary0)
+
+
+def test_udacity_images_use_the_udacity_camera(road, udacity_advanced):
+    images = dict(road)
+    images["udacity/straight_lines1.jpg"] = udacity_advanced / "test_images" / "straight_lines1.jpg"
+    t = widgets.PerspectiveTuner(images, image="udacity/straight_lines1.jpg")
+    cal = t._calibration_for("udacity/straight_lines1.jpg")
+    assert "calibration2.jpg" in cal.used  # the Udacity boards, calibrated on first pick
+    assert t._calibration_for(STRAIGHT) is None  # no calibration was given for the bundled images
+    assert abs(t.check.left_slope) < 2.0 and abs(t.check.right_slope) < 2.0
+    assert t.check.lane_width_m == pytest.approx(3.7, abs=0.15)
 
 
 def test_the_text_output_is_short_and_stable(road):
