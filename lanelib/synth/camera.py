@@ -4,12 +4,13 @@ The matrix and distortion are those of the Udacity ``camera_cal`` boards, calibr
 plain OpenCV (``findChessboardCorners`` 9x6 + ``cornerSubPix`` + ``calibrateCamera`` on the 17
 boards that are found, RMS 1.003 px) and kept here so that the generator needs no outside data.
 
-The mounting is chosen so that lanelib's default bird's-eye points fit this camera: in the
-undistorted image the car's forward direction vanishes at (640, 418), and a straight 3.7 m lane
-centred on the car crosses the bottom row (720) at x = 192.8 and x = 1086.8 (the default src
-corners are 193 and 1087; with three mounting angles for four pixel targets the last 0.2 px cannot
-be met). The camera sits 1.2556 m above the road, pitched 1.432 deg up and turned 1.551 deg to the
-right (the principal point is at x = 671, right of the image centre).
+The mounting is chosen so that lanelib's default bird's-eye points (``perspective.DEFAULT_SRC_1280x720``)
+fit this camera: in the undistorted image the car's forward direction vanishes at the apex of the
+default trapezoid, (640, 419.03), and a straight 3.7 m lane centred on the car crosses the bottom
+row (720) at x = 192.79 and x = 1086.79 (the default corners are 193 and 1087; three mounting
+angles cannot meet four pixel targets, and 0.2 px is what remains). The camera sits 1.2513 m above
+the road, pitched 1.483 deg up and turned 1.551 deg to the right (the principal point is at
+x = 671, right of the image centre).
 
 Frames: the car frame has its origin on the road surface below the camera, x to the right,
 y down and z forward, in metres. The road is the plane y = 0.
@@ -29,9 +30,9 @@ UDACITY_DIST_COEFFS = (-0.24667049, -0.025444482, -0.00067022409, 0.00013403439,
 IMAGE_SIZE_PX = (1280, 720)
 
 # Mounting that makes the default perspective points fit (see the module docstring).
-MOUNT_HEIGHT_M = 1.2555908
-MOUNT_PITCH_DEG = -1.4321755
-MOUNT_YAW_DEG = 1.5508444
+MOUNT_HEIGHT_M = 1.2512781
+MOUNT_PITCH_DEG = -1.4834256
+MOUNT_YAW_DEG = 1.5508110
 
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io import read_json, write_json, write_text
-from ..perspective import DEFAULT_DST_1280x720, DEFAULT_LANE_WIDTH_M, PerspectiveConfig
+from ..perspective import DEFAULT_DST_1280x720, DEFAULT_LANE_WIDTH_M, DEFAULT_SRC_1280x720, PerspectiveConfig
 from .camera import Camera
 from .render import MAX_ROAD_ANGLE_RAD, Renderer
 from .road import CarPose, car_frame, world_to_car
@@ -30,7 +30,8 @@ from .road import CarPose, car_frame, world_to_car
 H_SAMPLES_PX = tuple(range(420, 720, 10))
 NOT_VISIBLE = -2.0
 TRUTH_RANGE_M = 100.0
-BIRD_EYE_ROWS_PX = (460.0, 720.0)   # undistorted rows of the perspective trapezoid (top, bottom)
+# undistorted rows of the default perspective trapezoid (top, bottom)
+BIRD_EYE_ROWS_PX = (DEFAULT_SRC_1280x720[0][1], DEFAULT_SRC_1280x720[1][1])
 IMAGE_FORMAT = "lanelib-synth-image-truth/1"
 VIDEO_FORMAT = "lanelib-synth-video-truth/1"
 FRAME_COLUMNS = ("frame", "time_s", "curvature_per_m", "radius_m", "offset_m", "heading_rad", "lane_width_m")
