@@ -133,7 +133,9 @@ def _add_synth(sub) -> None:
                    help="project: clean highway in sun; challenge: tar seams, an underpass, low "
                         "contrast; harder: tight curves, strong light changes (default: project)")
     k.add_argument("-o", "--output", type=Path, required=True, metavar="FILE", help="video (mp4) to write")
-    k.add_argument("--seconds", type=float, default=10.0, help="length in seconds (default: 10)")
+    k.add_argument("--seconds", type=float, default=10.0,
+                   help="length in seconds, up to 20 (default: 10); a shorter clip is the start of "
+                        "a longer one")
     k.add_argument("--seed", type=int, help="random seed of the scene (default: the set's)")
 
     def run(args) -> int:
