@@ -26,6 +26,13 @@ One difference from TuSimple, made because the pipeline only ever looks at its b
 only the truth points that fall inside that view are scored (TuSimple scores every annotated
 point, up to the horizon). A truth line with no point inside the view is not a truth line for
 that frame; a line found there is a false positive.
+
+What the errors include: the truth gives the offset and the curvature AT THE CAR, while the
+pipeline (``lanes.measure``) takes the offset on the bird's-eye view's bottom row, about 4.8 m
+ahead of the camera, and the curvature of a parabola fitted over the whole view (4.8 m to 28 m
+ahead). A heading of 0.01 rad therefore adds about 4.8 cm to the offset error, and in a clothoid
+transition the fit reports the mean curvature of the road ahead rather than that at the car.
+These are errors of the pipeline's reading of the lane and are scored as such.
 """
 from __future__ import annotations
 
@@ -33,13 +40,12 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import numpy as np
 
-from .camera import distort_points, undistort_points
+from .camera import Calibration, distort_points, undistort_points
 from .errors import InputError
-from .lanes import LineFit
 
 POINT_THRESHOLD_PX = 20.0    # TuSimple ``pixel_thresh``
 MATCH_ACCURACY = 0.85        # TuSimple ``pt_thresh``: a truth line is matched at this accuracy
@@ -180,10 +186,8 @@ def in_view(pipeline, xs: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def truth_calibration(camera) -> "Calibration":
+def truth_calibration(camera) -> Calibration:
     """Return the ``Calibration`` of the true camera recorded in a ground truth (``CameraTruth``)."""
-    from .camera import Calibration
-
     return Calibration(np.asarray(camera.camera_matrix, np.float64),
                        np.asarray(camera.dist_coeffs, np.float64),
                        tuple(int(v) for v in camera.size_px), 0.0)
@@ -469,7 +473,7 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
     return col.report()
 
 
-def calibration_from_truth(path: str | os.PathLike) -> "Calibration":
+def calibration_from_truth(path: str | os.PathLike) -> Calibration:
     """Return the true camera recorded in the ground truth of a folder of images or of a video.
 
     For a folder, the truth beside its first image (by name) is read; for a video, its JSON.

@@ -12,7 +12,7 @@ from lanelib import cli
 from lanelib.evaluate import (MATCH_ACCURACY, SUMMARY_KEYS, EvalReport, fit_x_in_raw, in_view,
                               line_accuracy, line_threshold_px, score_frame, score_lines,
                               truth_calibration)
-from lanelib.lanes import LaneMeasurement, LineFit
+from lanelib.lanes import LineFit
 from lanelib.pipeline import FrameResult, LanePipeline
 from lanelib.synth.camera import Camera
 from lanelib.synth.truth import LaneTruth, camera_truth
