@@ -605,7 +605,7 @@ def straight_line_check(binary: np.ndarray, xm_per_px: float,
 
 
 class _UndistortCanvas:
-    """Bird's-eye views of raw frames for any perspective, fast enough for a slider, as the pipeline makes them.
+    """Bird's-eye views of raw frames for any perspective as the pipeline makes them, quickly.
 
     ``LanePipeline`` composes undistortion and warp into one remap exactly
     (``Undistorter.maps_through``), which takes about a second: too slow for a slider. Here the
