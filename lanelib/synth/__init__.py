@@ -9,13 +9,13 @@ from .camera import Camera
 from .render import GroundGrid, Renderer
 from .road import CarPose, CurvatureProfile
 from .scene import Bridge, Layout, Look, Scene, Streak
-from .sets import generate_all, test_images, video_sets, write_boards, write_test_images, write_video
+from .sets import generate_all, image_scenes, video_sets, write_boards, write_test_images, write_video
 from .truth import (BoardTruth, CameraTruth, ImageTruth, LaneTruth, PerspectiveTruth, VideoTruth,
                     lane_truth, load_board_truth, load_image_truth, load_video_truth, perspective_truth)
 
 __all__ = [
     "Camera", "GroundGrid", "Renderer", "CarPose", "CurvatureProfile", "Bridge", "Layout", "Look",
-    "Scene", "Streak", "generate_all", "test_images", "video_sets", "write_boards",
+    "Scene", "Streak", "generate_all", "image_scenes", "video_sets", "write_boards",
     "write_test_images", "write_video", "BoardTruth", "CameraTruth", "ImageTruth", "LaneTruth",
     "PerspectiveTruth", "VideoTruth", "lane_truth", "load_board_truth", "load_image_truth",
     "load_video_truth", "perspective_truth",

@@ -70,7 +70,8 @@ class Road:
     def at(self, s_m: float) -> tuple[np.ndarray, float, float]:
         """Return (position (2,), heading rad, curvature 1/m) at arc length ``s_m``."""
         xy = np.array([np.interp(s_m, self.s_m, self.xy_m[:, 0]), np.interp(s_m, self.s_m, self.xy_m[:, 1])])
-        return xy, float(np.interp(s_m, self.s_m, self.heading_rad)), float(np.interp(s_m, self.s_m, self.curvature_per_m))
+        heading = float(np.interp(s_m, self.s_m, self.heading_rad))
+        return xy, heading, float(np.interp(s_m, self.s_m, self.curvature_per_m))
 
     def offset_points(self, t_m: float, s_from_m: float, s_to_m: float) -> np.ndarray:
         """Return (N, 2) world points of the curve at lateral offset ``t_m`` between two arc lengths."""

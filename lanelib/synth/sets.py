@@ -17,7 +17,8 @@ import numpy as np
 from ..errors import InputError
 from ..io import VideoWriter, write_image, write_json
 from .camera import Camera
-from .chessboard import PATTERN_SIZE, board_corners_px, board_poses, camera_normals, fully_visible, render_board
+from .chessboard import (PATTERN_SIZE, board_corners_px, board_poses, camera_normals, fully_visible,
+                         render_board)
 from .render import LOOK_AHEAD_M, GroundGrid, Renderer
 from .road import CarPose, CurvatureProfile
 from .scene import Bridge, Layout, Look, Scene, Streak
@@ -62,7 +63,8 @@ def image_scenes() -> tuple[ImageScene, ...]:
                   CarPose(10.0, -0.25, 0.004)),
         ImageScene("curve_left_600m", Scene(_arc(-600), Layout(3.7), SUNNY, seed=103), CarPose(10.0, 0.15)),
         ImageScene("curve_right_1000m", Scene(_arc(1000), Layout(3.8), SUNNY, seed=104), CarPose(10.0, -0.1)),
-        ImageScene("curve_left_250m", Scene(_arc(-250), Layout(3.5), SUNNY, seed=105), CarPose(10.0, 0.1, -0.01)),
+        ImageScene("curve_left_250m", Scene(_arc(-250), Layout(3.5), SUNNY, seed=105),
+                   CarPose(10.0, 0.1, -0.01)),
         ImageScene("curve_right_400m_shadows",
                   Scene(_arc(400), Layout(3.7), replace(SUNNY, tree_shadows_per_100m=9.0), seed=106),
                   CarPose(10.0, 0.05)),
@@ -110,8 +112,9 @@ class VideoSet:
 
     def pose(self, time_s: float) -> CarPose:
         """Return the car's pose at ``time_s``."""
-        offset = sum(a * math.sin(2 * math.pi * time_s / p + k) for k, (a, p) in enumerate(self.drift))
-        rate = sum(a * 2 * math.pi / p * math.cos(2 * math.pi * time_s / p + k) for k, (a, p) in enumerate(self.drift))
+        phases = [(a, 2 * math.pi / p, 2 * math.pi * time_s / p + k) for k, (a, p) in enumerate(self.drift)]
+        offset = sum(a * math.sin(x) for a, _, x in phases)
+        rate = sum(a * w * math.cos(x) for a, w, x in phases)
         return CarPose(self.start_m + self.speed_mps * time_s, offset, math.atan2(rate, self.speed_mps))
 
 
@@ -186,11 +189,6 @@ def write_video(path: str | os.PathLike, video_set: VideoSet, seconds: float = V
 
 # --------------------------------------------------------------------------- images and boards
 
-def render_test_image(item: ImageScene, grid: GroundGrid) -> np.ndarray:
-    """Return the RGB uint8 image of one test scene."""
-    return Renderer(item.scene, grid).render(item.pose)
-
-
 def write_test_images(out_dir: str | os.PathLike, grid: GroundGrid | None = None) -> list[Path]:
     """Write the eight test images (JPEG) with their JSON truth into ``out_dir``; return the image paths."""
     grid = grid or GroundGrid.build()
@@ -234,7 +232,7 @@ def generate_all(out_root: str | os.PathLike, progress: Callable[[str], None] | 
     say("camera_cal: 20 chessboards")
     files = write_boards(root / "camera_cal", camera=grid.camera)
     say("test_images: 8 scenes")
-    files += write_test_images(root / "image_scenes", grid)
+    files += write_test_images(root / "test_images", grid)
     for name, video_set in video_sets().items():
         say(f"videos/{name}.mp4: {VIDEO_SECONDS:.0f} s")
         files.append(write_video(root / "videos" / f"{name}.mp4", video_set, grid=grid))

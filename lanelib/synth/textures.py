@@ -79,41 +79,46 @@ def _draw_patches(tone: np.ndarray, rng: np.random.Generator, scene: Scene, s_ro
     """Multiply repair patches and resurfaced strips into the ``tone`` map in place."""
     look, (left, right) = scene.look, scene.layout.paved_m
     n = rng.poisson(look.patches_per_100m * (scene.s_to_m - scene.s_from_m) / 100.0)
+    starts = zip(rng.uniform(scene.s_from_m, scene.s_to_m, n), rng.uniform(left, right - 1.0, n))
     patches = [(s, s + rng.uniform(1.5, 12.0), t, t + rng.uniform(0.8, 3.5), rng.uniform(0.72, 1.22))
-               for s, t in zip(rng.uniform(scene.s_from_m, scene.s_to_m, n), rng.uniform(left, right - 1.0, n))]
+               for s, t in starts]
     for s0, s1, t0, t1, factor in list(look.resurfaced) + patches:
         rows = slice(*np.searchsorted(s_rows, (s0, s1)))
         cols = slice(*np.searchsorted(t_cols, (t0, t1)))
         tone[rows, cols] *= factor
 
 
-def _draw_tree_shadows(light: np.ndarray, rng: np.random.Generator, scene: Scene) -> None:
-    """Draw the shadows of roadside trees (sun from the left) into the ``light`` map in place."""
+def _draw_tree_shadows(light: np.ndarray, rng: np.random.Generator, scene: Scene, s0_m: float,
+                       t0_m: float) -> None:
+    """Draw the shadows of roadside trees (sun from the left) into the ``light`` map in place.
+
+    Each tree's crown shadow is a cluster of leafy ellipses with gaps, joined to the tree's foot
+    beside the road by its trunk's shadow; ``s0_m``, ``t0_m`` locate the map's first texel.
+    """
     look, (left, right) = scene.look, scene.layout.paved_m
     n = rng.poisson(look.tree_shadows_per_100m * (scene.s_to_m - scene.s_from_m) / 100.0)
     occl = np.zeros(light.shape, np.float32)
     px = 1.0 / MAP_TEXEL_M
+
+    def texel(s_m: float, t_m: float) -> tuple[int, int]:
+        return int((t_m - t0_m) * px), int((s_m - s0_m) * px)
+
     for s in rng.uniform(scene.s_from_m, scene.s_to_m, n):
-        side_left = rng.random() < 0.7
-        base_t = left - rng.uniform(1.0, 5.0) if side_left else right + rng.uniform(0.5, 3.0)
-        centre_t = base_t + rng.uniform(3.0, 8.0)
+        foot_t = left - rng.uniform(1.0, 5.0) if rng.random() < 0.7 else right + rng.uniform(0.5, 3.0)
+        crown_t = foot_t + rng.uniform(3.0, 8.0)
         size_t, size_s = rng.uniform(2.5, 5.0), rng.uniform(1.8, 3.5)
-        row0, col0 = (s - scene.s_from_m) * px, (centre_t - scene.layout.paved_m[0] + MAP_MARGIN_M) * px
-        base_col = (base_t - scene.layout.paved_m[0] + MAP_MARGIN_M) * px
-        cv2.line(occl, (int(base_col), int(row0)), (int(col0), int(row0 + rng.uniform(-1, 1) * px)),
-                 1.0, max(1, int(0.35 * px)))
+        cv2.line(occl, texel(s, foot_t), texel(s + rng.uniform(-1, 1), crown_t), 1.0, max(1, int(0.35 * px)))
         for _ in range(40):
             dt, ds = rng.normal(0, 0.45, 2)
-            axes = (int(rng.uniform(0.3, 1.2) * size_t * px / 2), int(rng.uniform(0.3, 1.2) * size_s * px / 2))
-            centre = (int(col0 + dt * size_t * px), int(row0 + ds * size_s * px))
-            cv2.ellipse(occl, centre, axes, rng.uniform(0, 180), 0, 360, 1.0, -1)
-        for _ in range(25):  # gaps between leaves
+            axes = (int(rng.uniform(0.3, 1.2) * size_t * px / 2),
+                    int(rng.uniform(0.3, 1.2) * size_s * px / 2))
+            cv2.ellipse(occl, texel(s + ds * size_s, crown_t + dt * size_t), axes, rng.uniform(0, 180),
+                        0, 360, 1.0, -1)
+        for _ in range(25):  # gaps between the leaves
             dt, ds = rng.normal(0, 0.4, 2)
-            centre = (int(col0 + dt * size_t * px), int(row0 + ds * size_s * px))
-            r = int(rng.uniform(0.1, 0.35) * px)
-            cv2.circle(occl, centre, r, 0.0, -1)
-    occl = cv2.GaussianBlur(occl, (0, 0), 1.5)
-    light *= 1.0 - occl
+            radius = int(rng.uniform(0.1, 0.35) * px)
+            cv2.circle(occl, texel(s + ds * size_s, crown_t + dt * size_t), radius, 0.0, -1)
+    light *= 1.0 - cv2.GaussianBlur(occl, (0, 0), 1.5)
 
 
 def surface_map(scene: Scene, rng: np.random.Generator) -> SurfaceMap:
@@ -130,7 +135,7 @@ def surface_map(scene: Scene, rng: np.random.Generator) -> SurfaceMap:
         tone *= 1.0 - 0.06 * np.exp(-((t_cols - c) / 0.35) ** 2)[None, :]
     _draw_patches(tone, rng, scene, s_rows, t_cols)
     light = np.ones(shape, np.float32)
-    _draw_tree_shadows(light, rng, scene)
+    _draw_tree_shadows(light, rng, scene, float(s_rows[0]), float(t_cols[0]))
     wear = _smooth_noise(rng, shape, 2.5) + 0.8 * _smooth_noise(rng, shape, 25.0)
     paint = np.clip(1.0 - look.paint_wear * (1.0 + 0.9 * wear), 0.0, 1.0)
     maps = np.stack([np.clip(tone * 128.0, 0, 255), light * 255.0, paint * 255.0], axis=-1)

@@ -60,7 +60,8 @@ class PerspectiveTruth:
 
     def config(self) -> PerspectiveConfig:
         """Return the PerspectiveConfig with these points and scale."""
-        return PerspectiveConfig(self.src_px, self.dst_px, self.size_px, self.lane_width_m, self.visible_length_m)
+        return PerspectiveConfig(self.src_px, self.dst_px, self.size_px, self.lane_width_m,
+                                 self.visible_length_m)
 
 
 @dataclass(frozen=True)
@@ -161,7 +162,8 @@ def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
     pts = world_to_car(road.offset_points(t_m, pose.s_m, pose.s_m + TRUTH_RANGE_M + 20.0), origin, heading)
     i0 = int(np.floor(road.index(pose.s_m)))
     angle = road.heading_rad[i0:i0 + len(pts)] - heading
-    ok = (np.abs(angle) < MAX_ROAD_ANGLE_RAD) & (np.diff(pts[:, 1], prepend=-np.inf) > 0) & (pts[:, 1] <= TRUTH_RANGE_M)
+    ok = ((np.abs(angle) < MAX_ROAD_ANGLE_RAD) & (np.diff(pts[:, 1], prepend=-np.inf) > 0)
+          & (pts[:, 1] <= TRUTH_RANGE_M))
     pts = pts[:len(ok) if ok.all() else int(np.argmin(ok))]
     pts = pts[pts[:, 1] > 0.5]
     uv = camera.project(np.column_stack([pts[:, 0], np.zeros(len(pts)), pts[:, 1]]))
@@ -291,7 +293,8 @@ def load_image_truth(image_path: str | os.PathLike) -> ImageTruth:
         seed = int(obj["seed"])
         camera = obj["camera"]
     except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f"{path}: not an image ground-truth file (missing or bad {e!r}); regenerate it") from None
+        raise InputError(f"{path}: not an image ground-truth file (missing or bad {e!r}); "
+                         "regenerate it") from None
     return ImageTruth(Path(image_path), seed, lane, _camera_from_json(camera, path))
 
 
@@ -315,7 +318,8 @@ def load_video_truth(video_path: str | os.PathLike) -> VideoTruth:
                                  tuple(float(r[f"left_x_{y}"]) for y in h),
                                  tuple(float(r[f"right_x_{y}"]) for y in h)) for r in rows)
     except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f"{csv_path}: not a video ground-truth file (missing or bad {e!r}); regenerate it") from None
+        raise InputError(f"{csv_path}: not a video ground-truth file (missing or bad {e!r}); "
+                         "regenerate it") from None
     if not frames:
         raise InputError(f"{csv_path}: holds no frames; regenerate it")
     return VideoTruth(Path(video_path), seed, fps, frames, _camera_from_json(camera, meta_path))
@@ -352,9 +356,11 @@ def load_board_truth(cal_dir: str | os.PathLike) -> BoardTruth:
     obj = read_json(path, "ground-truth file")
     try:
         images = obj["images"]
-        return BoardTruth(np.asarray(obj["camera_matrix"], np.float64), np.asarray(obj["dist_coeffs"], np.float64),
+        return BoardTruth(np.asarray(obj["camera_matrix"], np.float64),
+                          np.asarray(obj["dist_coeffs"], np.float64),
                           tuple(obj["image_size"]), tuple(obj["pattern_size"]),
                           {k: np.asarray(v["corners_px"], np.float64) for k, v in images.items()},
                           {k: bool(v["fully_visible"]) for k, v in images.items()})
     except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f"{path}: not a chessboard ground-truth file (missing or bad {e!r}); regenerate it") from None
+        raise InputError(f"{path}: not a chessboard ground-truth file (missing or bad {e!r}); "
+                         "regenerate it") from None
