@@ -164,10 +164,19 @@ def test_save_and_load_round_trip(road, tmp_path):
     assert fresh.controls["lab_b.enabled"].value is False
     assert fresh.controls["line_tophat.width_px"].value == 41
     assert fresh.preview.value == t.preview.value
-    # the perspective and fit tuners read the same file
+    # the perspective and fit tuners read the same file, and the fit tuner's search part
     p = widgets.PerspectiveTuner(road)
     p.load(path)
     assert p.config == t.config
+    f = widgets.FitTuner(road)
+    f.load(path)
+    f.controls["n_windows"].value = 7
+    f.save(path)
+    g = widgets.FitTuner(road)
+    g.load(path)
+    assert g.config == f.config and g.config.thresholds == t.config.thresholds
+    assert g.controls["n_windows"].value == 7 and len(g.windows.windows) == 2 * 7
+    assert np.array_equal(g.binary, f.binary)
 
 
 def test_load_rebuilds_the_birdseye_view_when_the_perspective_changes(road, tmp_path):
