@@ -391,7 +391,7 @@ class ThresholdTuner(Tuner):
                     top = _channel_max(spec.space, letter)
                     parts.append(self._control(f"{name}.range{i}", widgets.IntRangeSlider(
                         value=(spec.low[i], spec.high[i]), min=0, max=top, description=letter,
-                        **_sized(300, 30))))
+                        **_sized(250, 20))))
             else:
                 parts.append(self._control(f"{name}.channel", widgets.Dropdown(
                     options=tuple(thresholds.SPACES[spec.space][1]), value=spec.channel,
@@ -408,7 +408,7 @@ class ThresholdTuner(Tuner):
                 else:
                     parts.append(self._control(f"{name}.range", widgets.IntRangeSlider(
                         value=(spec.low, spec.high), min=0, max=_channel_max(spec.space, spec.channel),
-                        description="range", **_sized(300, 30))))
+                        description=spec.channel, **_sized(300, 30))))
                     if isinstance(spec, thresholds.TopHatMask):
                         parts.append(self._control(f"{name}.width_px", widgets.IntSlider(
                             value=spec.width_px, min=3, max=201, step=2, description="width px",
@@ -461,13 +461,13 @@ class ThresholdTuner(Tuner):
         if key in ("rule", "open_px", "close_px"):
             tc = replace(tc, **{key: self.controls[key].value})
         else:
-            if part == "space":
-                self._space_changed(name)
+            if part in ("space", "channel"):
+                self._fit_controls(name)
             tc = replace(tc, **{name: self._spec(name)})
         return replace(self.config, thresholds=tc)
 
-    def _space_changed(self, name: str) -> None:
-        """Fit the channel choices and slider ranges of mask ``name`` to its new colour space."""
+    def _fit_controls(self, name: str) -> None:
+        """Fit the channel choices, slider ranges and labels of mask ``name`` to its colour space."""
         c = self.controls
         space = c[f"{name}.space"].value
         letters = thresholds.SPACES[space][1]
@@ -476,9 +476,10 @@ class ThresholdTuner(Tuner):
             if f"{name}.channel" in c:
                 channel = c[f"{name}.channel"].value
                 c[f"{name}.channel"].options = tuple(letters)
-                c[f"{name}.channel"].value = channel if channel in letters else letters[0]
+                c[f"{name}.channel"].value = channel = channel if channel in letters else letters[0]
                 if isinstance(c[f"{name}.range"], widgets.IntRangeSlider):
-                    c[f"{name}.range"].max = _channel_max(space, c[f"{name}.channel"].value)
+                    c[f"{name}.range"].max = _channel_max(space, channel)
+                    c[f"{name}.range"].description = channel
             else:
                 for i, letter in enumerate(letters):
                     c[f"{name}.range{i}"].max = _channel_max(space, letter)
@@ -506,6 +507,7 @@ class ThresholdTuner(Tuner):
                 c[f"{name}.kernel_px"].value = spec.kernel_px
             else:
                 c[f"{name}.range"].max = _channel_max(spec.space, spec.channel)
+                c[f"{name}.range"].description = spec.channel
                 if isinstance(spec, thresholds.TopHatMask):
                     c[f"{name}.width_px"].value = spec.width_px
             c[f"{name}.range"].value = (spec.low, spec.high)

@@ -119,6 +119,11 @@ def test_changing_a_colour_space_updates_the_channel_choices_and_the_hue_range(r
     assert t.config.thresholds.s_channel == thresholds.ChannelMask("hsv", "h", 170, 179)
     assert np.array_equal(t.mask("s_channel"),
                           thresholds.mask(t.birdseye, t.config.thresholds.s_channel))
+    t.controls["s_channel.channel"].value = "v"  # same space, another channel: back to 0-255
+    assert t.controls["s_channel.range"].max == 255
+    assert t.controls["s_channel.range"].description == "v"
+    t.controls["s_channel.range"].value = (200, 255)
+    assert t.config.thresholds.s_channel == thresholds.ChannelMask("hsv", "v", 200, 255)
     t.controls["yellow.space"].value = "lab"
     assert [t.controls[f"yellow.range{i}"].description for i in range(3)] == ["l", "a", "b"]
     assert t.controls["yellow.range0"].max == 255
