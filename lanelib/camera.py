@@ -206,9 +206,21 @@ def distort_points(calibration: Calibration, pts: np.ndarray) -> np.ndarray:
     """Map (N, 2) undistorted pixel positions to where they lie in the raw (distorted) image."""
     K = calibration.camera_matrix
     p = np.asarray(pts, np.float64).reshape(-1, 2)
-    norm = np.column_stack([(p[:, 0] - K[0, 2]) / K[0, 0], (p[:, 1] - K[1, 2]) / K[1, 1],
-                            np.ones(len(p))])
-    out, _ = cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, calibration.dist_coeffs)
+    x = (p[:, 0] - K[0, 2]) / K[0, 0]
+    y = (p[:, 1] - K[1, 2]) / K[1, 1]
+    d = np.asarray(calibration.dist_coeffs, np.float64).ravel()
+    if d.size in (4, 5) and K[0, 1] == 0:
+        # OpenCV's model (k1, k2, p1, p2[, k3]) in numpy: projectPoints gives the same to
+        # rounding but is ~30x slower on the million points of a remap grid
+        k1, k2, p1, p2 = d[:4]
+        k3 = d[4] if d.size == 5 else 0.0
+        r2 = x * x + y * y
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        return np.column_stack([K[0, 0] * xd + K[0, 2], K[1, 1] * yd + K[1, 2]])
+    norm = np.column_stack([x, y, np.ones(len(p))])
+    out, _ = cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, d)
     return out.reshape(-1, 2)
 
 

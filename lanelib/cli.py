@@ -26,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_calibrate(sub)
     _add_images(sub)
     _add_video(sub)
+    _add_bench(sub)
     _add_synth(sub)
     _add_hough(sub)
     _add_evaluate(sub)
@@ -314,6 +315,36 @@ def _run_evaluate(args) -> int:
     if args.json:
         write_json(args.json, report.to_dict(), inputs=inputs)
         print(f"figures written to {args.json}")
+    return 0
+
+
+def _add_bench(sub) -> None:
+    p = sub.add_parser("bench", help="speed of the detection path and of the video command",
+                       description="Time the per-frame detection path against one full-frame remap "
+                                   "(one thread) and the video command against decode + encode of "
+                                   "the same clip; print the figures and the per-stage times. The "
+                                   "clip is the Udacity project video when the Udacity data is "
+                                   "present, else the bundled videos/project.mp4.")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--video", type=Path, metavar="FILE",
+                   help="1280x720 clip to time (default: see above); pass --calibration with it")
+    _common_pipeline_args(p)
+    p.add_argument("--frames", type=int, default=250, metavar="N",
+                   help="frames of the clip for video_fps and codec_fps (default: 250)")
+    p.set_defaults(func=_run_bench)
+
+
+def _run_bench(args) -> int:
+    import json
+
+    from . import bench
+    from .errors import InputError
+
+    if args.frames < 10:
+        raise InputError(f"--frames {args.frames}: give 10 frames or more")
+    config, calibration = _load_pipeline_inputs(args)
+    figures = bench.run(args.video, calibration, config, clip_frames=args.frames)
+    print(json.dumps(figures, indent=2) if args.json else bench.format_report(figures))
     return 0
 
 

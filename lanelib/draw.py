@@ -55,10 +55,16 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs, Minv: np.ndarray 
         mapped[side] = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2) \
             if Minv is not None else pts
     if len(mapped) == 2:
-        fill = image.copy()
-        poly = np.vstack([mapped["left"], mapped["right"][::-1]])
-        cv2.fillPoly(fill, [_to_int(poly)], config.lane_color, lineType=cv2.LINE_AA)
-        out = cv2.addWeighted(fill, config.lane_alpha, image, 1 - config.lane_alpha, 0)
+        poly = _to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))
+        # blend only inside the polygon's bounding box: outside it the blend gives the image back
+        x, y, bw, bh = cv2.boundingRect(poly)
+        x0, y0 = max(0, x - 1), max(0, y - 1)
+        x1, y1 = min(out.shape[1], x + bw + 1), min(out.shape[0], y + bh + 1)
+        if x0 < x1 and y0 < y1:
+            box = out[y0:y1, x0:x1]
+            fill = box.copy()
+            cv2.fillPoly(fill, [poly], config.lane_color, lineType=cv2.LINE_AA, offset=(-x0, -y0))
+            cv2.addWeighted(fill, config.lane_alpha, box, 1 - config.lane_alpha, 0, dst=box)
     for side, pts in mapped.items():
         color = config.left_color if side == "left" else config.right_color
         cv2.polylines(out, [_to_int(pts)], False, color, config.line_thickness_px, cv2.LINE_AA)

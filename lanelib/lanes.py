@@ -195,13 +195,34 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
         return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})")
     if span < config.min_found_span_fraction * height_px:
         return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height")
+    degree = 1 if span < config.min_span_fraction * height_px else 2
+    a, b, c = least_squares_poly(ys, xs, degree, float(height_px))
+    return LineFit((a, b, c), n, span)
+
+
+def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
+    """Return (a, b, c) of the least-squares x = a*y**2 + b*y + c (a = 0 for degree 1).
+
+    The same fit as ``np.polyfit`` (to rounding), from the normal equations in y centred on its
+    mean and divided by ``scale`` (e.g. the image height), which keeps them well conditioned; it
+    costs a few sums instead of an SVD of an n x 3 matrix (the video hot path).
+    """
     y = ys.astype(np.float64)
     x = xs.astype(np.float64)
-    if span < config.min_span_fraction * height_px:
-        b, c = np.polyfit(y, x, 1)
-        return LineFit((0.0, float(b), float(c)), n, span)
-    a, b, c = np.polyfit(y, x, 2)
-    return LineFit((float(a), float(b), float(c)), n, span)
+    m = float(y.mean())
+    t = (y - m) / scale
+    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
+    t2 = t * t
+    st = [float(len(t)), float(t.sum()), float(t2.sum()), float((t2 * t).sum()), float((t2 * t2).sum())]
+    sx = [float(x.sum()), float((x * t).sum()), float((x * t2).sum())]
+    k = degree + 1
+    gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
+    p = np.linalg.solve(gram, np.array(sx[:k]))  # x = p0 + p1*t (+ p2*t**2)
+    p2 = p[2] if degree == 2 else 0.0
+    a = p2 / scale ** 2
+    b = p[1] / scale - 2 * p2 * m / scale ** 2
+    c = p[0] - p[1] * m / scale + p2 * m * m / scale ** 2
+    return float(a), float(b), float(c)
 
 
 def fit_to_metres(coeffs_px, xm_per_px: float, ym_per_px: float) -> tuple[float, float, float]:

@@ -162,12 +162,13 @@ class LaneTracker:
         prior = None
         if track is not None and self._lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
-        det = pipe.detect(raw, prior=prior, keep_images=True)
+        det = pipe.detect(raw, prior=prior, keep_images=keep_images or prior is None)
         search = det.search
         left, right, why = self.check(search.left, search.right, track)
         if track is not None and (left is None or right is None):
             # the search missed: look again with windows started from the tracked lines
-            retry = lanes.sliding_windows(det.images["binary"], pipe.config.search,
+            binary = det.images["binary"] if "binary" in det.images else pipe.binary(pipe.birdseye(raw))
+            retry = lanes.sliding_windows(binary, pipe.config.search,
                                           bases=self._bases(track), car_x=pipe.car_x_px)
             l2, r2, why2 = self.check(retry.left, retry.right, track)
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):

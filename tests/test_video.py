@@ -231,3 +231,147 @@ def test_p1_clips_with_the_p1_preset(udacity_p1, tmp_path, name):
     assert len(rows) == {"solidWhiteRight": 221, "solidYellowLeft": 681}[name]
     width = column(rows, "lane_width_m")
     assert np.mean((width >= 3.0) & (width <= 4.5)) >= 0.95
+
+
+# --------------------------------------------------------------------------- the band hot path
+
+def textured_frame(seed: int) -> np.ndarray:
+    """Return a 1280x720 frame of noisy road with bright and yellow strokes (many mask hits)."""
+    rng = np.random.default_rng(seed)
+    img = np.clip(rng.normal(95, 30, (720, 1280, 3)), 0, 255).astype(np.uint8)
+    img = cv2.GaussianBlur(img, (5, 5), 0)
+    for _ in range(40):
+        x, y = int(rng.integers(0, 1280)), int(rng.integers(0, 720))
+        color = [(240, 240, 240), (230, 190, 40), (200, 150, 60)][int(rng.integers(0, 3))]
+        cv2.line(img, (x, y), (x + int(rng.integers(-40, 40)), y + int(rng.integers(20, 200))),
+                 color, int(rng.integers(3, 30)))
+    return img
+
+
+BAND_CONFIGS = {
+    "default": {},
+    "open and close": {"thresholds": {"open_px": 3, "close_px": 5}},
+    "wide kernels": {"thresholds": {"rule": "sobel_dir & (sobel_mag | sobel_y) | line_tophat & ~white",
+                                    "sobel_dir": {"enabled": True, "kernel_px": 7},
+                                    "sobel_mag": {"enabled": True, "kernel_px": 5},
+                                    "sobel_y": {"enabled": True, "kernel_px": 1},
+                                    "line_tophat": {"width_px": 40}}},
+}
+PRIORS = {  # (left, right) bird's-eye fits: ordinary, curved, at the image's edges, one line only
+    "ordinary": ((0.0, 0.0, 320.0), (0.0, 0.0, 960.0)),
+    "curved": ((4e-4, -0.5, 420.0), (4e-4, -0.5, 1060.0)),
+    "edges": ((0.0, 0.02, 10.0), (0.0, -0.02, 1275.0)),
+    "close together": ((0.0, 0.0, 560.0), (0.0, 0.0, 700.0)),
+    "right only": (None, (1e-4, 0.1, 900.0)),
+}
+
+
+@pytest.mark.parametrize("config_name", BAND_CONFIGS)
+def test_band_detection_sees_the_same_pixels_as_the_full_view(config_name):
+    from lanelib.config import from_dict
+    from lanelib.lanes import LineFit
+
+    cfg = from_dict(PipelineConfig, BAND_CONFIGS[config_name])
+    pipe = LanePipeline(cfg)
+    raw = textured_frame(len(config_name))
+    for name, (left, right) in PRIORS.items():
+        prior = (LineFit(left, 500, 700.0), LineFit(right, 500, 700.0))
+        band = pipe.detect(raw, prior=prior)                      # bands only
+        full = pipe.detect(raw, prior=prior, keep_images=True)    # whole view
+        for side in ("left", "right"):
+            for a, b in zip(getattr(band.search, f"{side}_pixels"), getattr(full.search, f"{side}_pixels")):
+                assert np.array_equal(a, b), (config_name, name, side)
+            assert getattr(band, side).coeffs_px == getattr(full, side).coeffs_px
+        mask = pipe.band_binary(raw, prior)
+        assert np.all(full.images["binary"][mask > 0] == 255)  # nothing outside the full mask
+
+
+@pytest.mark.parametrize("config_name", BAND_CONFIGS)
+def test_a_crop_grown_by_context_px_thresholds_exactly(config_name):
+    from lanelib import thresholds
+    from lanelib.config import from_dict
+
+    tconf = from_dict(PipelineConfig, BAND_CONFIGS[config_name]).thresholds
+    cx, cy = thresholds.context_px(tconf)
+    img = textured_frame(7)
+    full = thresholds.combine(img, tconf)
+    for x0, y0, x1, y1 in [(300, 200, 420, 380), (0, 0, 150, 90), (1100, 600, 1280, 720)]:
+        a0, b0, a1, b1 = max(0, x0 - cx), max(0, y0 - cy), min(1280, x1 + cx), min(720, y1 + cy)
+        crop = thresholds.combine(img[b0:b1, a0:a1], tconf)
+        assert np.array_equal(crop[y0 - b0:y1 - b0, x0 - a0:x1 - a0], full[y0:y1, x0:x1])
+    if config_name == "default":  # the top-hat's border is tight: one pixel short is not enough
+        spec = tconf.line_tophat
+        r = thresholds.mask_context_px(spec)[0]
+        kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (spec.width_px, 1))
+        light = thresholds.channel(img, spec.space, spec.channel)
+        tophat = lambda a: cv2.morphologyEx(a, cv2.MORPH_TOPHAT, kernel)  # noqa: E731
+        whole = tophat(light)[:, 300:420]
+        assert np.array_equal(tophat(light[:, 300 - r:420 + r])[:, r:-r], whole)
+        assert not np.array_equal(tophat(light[:, 301 - r:419 + r])[:, r - 1:-(r - 1)], whole)
+
+
+@pytest.mark.udacity
+def test_band_detection_on_real_frames(udacity_advanced, udacity_calibration):
+    pipe = LanePipeline(PipelineConfig(), udacity_calibration)
+    prior = None
+    checked = 0
+    with io.VideoReader(udacity_advanced / "videos" / "project_video.mp4") as reader:
+        for i, raw in enumerate(reader):
+            if i >= 120:
+                break
+            if i % 8:
+                continue
+            if prior is not None:
+                band, full = pipe.detect(raw, prior=prior), pipe.detect(raw, prior=prior, keep_images=True)
+                assert band.left.coeffs_px == full.left.coeffs_px
+                assert band.right.coeffs_px == full.right.coeffs_px
+                checked += 1
+            r = pipe.detect(raw)
+            prior = (r.left, r.right)
+    assert checked == 14
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_the_moment_fit_is_numpys_least_squares_fit(degree):
+    from lanelib.lanes import least_squares_poly
+
+    rng = np.random.default_rng(degree)
+    for n, lo, hi in [(20000, 0, 720), (300, 500, 720), (5, 10, 600)]:
+        ys = rng.integers(lo, hi, n).astype(np.int32)
+        xs = (2e-4 * ys ** 2 - 0.3 * ys + 500 + rng.normal(0, 8, n)).astype(np.int32)
+        ours = np.array(least_squares_poly(ys, xs, degree, 720.0))[2 - degree:]
+        numpy = np.polyfit(ys.astype(float), xs.astype(float), degree)
+        assert ours == pytest.approx(numpy, rel=1e-8, abs=1e-12)
+
+
+def test_the_overlay_blended_in_its_box_equals_the_whole_frame_blend():
+    from lanelib import draw
+    from lanelib.perspective import Perspective
+
+    image = textured_frame(11)
+    minv = Perspective().Minv
+    cfg = draw.DrawConfig()
+    for left, right in [((0, 0, 320), (0, 0, 960)), ((4e-4, -0.5, 420), (4e-4, -0.5, 1060)),
+                        ((0, 0, -3000), (0, 0, 5000)), ((1e-3, 0, 100), (1e-3, 0, 1200))]:
+        fill = image.copy()
+        pts = [cv2.perspectiveTransform(draw.line_points(c, 720, cfg.samples).reshape(-1, 1, 2), minv)
+               .reshape(-1, 2) for c in (left, right)]
+        cv2.fillPoly(fill, [draw._to_int(np.vstack([pts[0], pts[1][::-1]]))], cfg.lane_color,
+                     lineType=cv2.LINE_AA)
+        expected = cv2.addWeighted(fill, cfg.lane_alpha, image, 1 - cfg.lane_alpha, 0)
+        for p, color in zip(pts, (cfg.left_color, cfg.right_color)):
+            cv2.polylines(expected, [draw._to_int(p)], False, color, cfg.line_thickness_px, cv2.LINE_AA)
+        assert np.array_equal(draw.lane_overlay(image, left, right, minv, cfg), expected)
+
+
+def test_distort_points_is_opencvs_projection():
+    from lanelib.camera import Calibration, distort_points
+
+    K = np.array([[1150.0, 0, 660.0], [0, 1148.0, 380.0], [0, 0, 1]])
+    rng = np.random.default_rng(5)
+    pts = np.column_stack([rng.uniform(-300, 1600, 5000), rng.uniform(-200, 900, 5000)])
+    norm = np.column_stack([(pts[:, 0] - 660.0) / 1150.0, (pts[:, 1] - 380.0) / 1148.0, np.ones(5000)])
+    for dist in ([-0.24, -0.05, -0.001, 0.0002, 0.02], [0.1, -0.3, 0.002, -0.001], [-0.2, 0.1, 0, 0, 0.05, 0.01, 0, 0]):
+        cal = Calibration(K, np.array(dist), (1280, 720))
+        expected, _ = cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, np.array(dist))
+        assert np.abs(distort_points(cal, pts) - expected.reshape(-1, 2)).max() < 1e-6

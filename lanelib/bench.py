@@ -1,0 +1,246 @@
+"""Speed figures: the per-frame detection path against one remap, the video command against the codec.
+
+``python -m lanelib bench [--json]`` prints, from one run:
+
+- ``detect_ms``: the per-frame detection path of a video run, ``LanePipeline.detect`` with the
+  previous frame's fits as prior (undistort and warp in one remap, thresholds, search, fits,
+  measurements) on consecutive 1280x720 frames, one OpenCV thread; ``remap_ms``: one full-frame
+  ``cv2.remap`` of the same colour frames with the pipeline's precomputed bird's-eye maps, one
+  thread, interleaved with it; ``detect_to_remap`` = their ratio (goal <= 2.5).
+- ``video_fps``: the whole ``video`` command (``pipeline.process_video``: decode, track, draw,
+  encode) on a 1280x720 clip; ``codec_fps``: decode plus encode of the same clip with the same
+  encoder settings (``io.H264_PARAMS`` through ``io.VideoWriter``) and nothing else;
+  ``video_to_codec`` = their ratio (goal >= 0.7). The two runs alternate and the faster of each
+  counts, so a burst of load on the machine does not decide the ratio. Beside them, the CPU
+  time per frame of each run (this process and its ffmpeg children): their ratio is what the
+  fps ratio tends to when CPU is the limit, and it does not depend on other load.
+- ``stages_ms``: each stage alone on the same frames (one thread): the remap, the thresholds and
+  each mask the rule uses, the searches, the measurements, the tracker's update, and the video
+  path's undistort and overlay.
+
+Single-thread timings are CPU time of the timing thread (``time.thread_time``), which a busy
+machine does not inflate; the wall-clock medians are printed beside them. The clip is the
+Udacity project video when the Udacity data is present (``LANELIB_DATA``, default
+``../shared/data``), else the bundled synthetic ``videos/project.mp4``; ``--video`` chooses another.
+"""
+from __future__ import annotations
+
+import os
+import resource
+import statistics
+import tempfile
+import time
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable
+
+import cv2
+import numpy as np
+
+from . import io, thresholds
+from .camera import Calibration
+from .config import PipelineConfig
+from .errors import InputError
+from .lanes import LineFit
+
+REPO = Path(__file__).resolve().parents[1]
+GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7)}
+
+
+def default_video() -> tuple[Path, Calibration | None]:
+    """Return the clip to benchmark and its calibration (Udacity data first, then the bundled video)."""
+    data = Path(os.environ.get("LANELIB_DATA", REPO.parent / "shared" / "data"))
+    udacity = data / "udacity-advanced"
+    if (udacity / "videos" / "project_video.mp4").is_file():
+        from .camera import calibrate
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return udacity / "videos" / "project_video.mp4", calibrate(udacity / "camera_cal")
+    synth = REPO / "videos" / "project.mp4"
+    if synth.is_file():
+        from .evaluate import calibration_from_truth
+
+        return synth, calibration_from_truth(synth)
+    raise InputError(f"no video to benchmark: neither {udacity / 'videos' / 'project_video.mp4'} nor "
+                     f"{synth} exists; pass --video, set LANELIB_DATA, or run "
+                     "`python -m lanelib synth --all`")
+
+
+@contextmanager
+def one_thread():
+    """Run the block with OpenCV on one thread (restored afterwards)."""
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
+
+
+def _timed(fn: Callable[[], object]) -> tuple[float, float]:
+    """Return (thread CPU ms, wall ms) of one call."""
+    c0, w0 = time.thread_time(), time.perf_counter()
+    fn()
+    return (time.thread_time() - c0) * 1e3, (time.perf_counter() - w0) * 1e3
+
+
+def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, dict[str, float]]:
+    """Return {stage: {"cpu_ms", "wall_ms"}} medians over ``frames`` x ``repeats``, one thread.
+
+    ``detect`` and ``remap`` are timed in alternation on every frame; the other stages after.
+    """
+    from .tracking import LaneTracker
+
+    samples: dict[str, list[tuple[float, float]]] = {}
+
+    def add(name, fn):
+        samples.setdefault(name, []).append(_timed(fn))
+
+    with one_thread():
+        for _ in range(repeats):
+            prior = None
+            for raw in frames:
+                out = {}
+                add("remap", lambda: pipe.birdseye(raw))
+                add("detect", lambda: out.setdefault("r", pipe.detect(raw, prior=prior)))
+                r = out["r"]
+                prior = (r.left, r.right) if r.found else None
+        birds = [pipe.birdseye(f) for f in frames]
+        masks = [pipe.binary(b) for b in birds]
+        first = pipe.search(masks[0])
+        prior = (first.left, first.right)
+        rule_names = thresholds.rule_masks(pipe.config.thresholds)
+        for _ in range(repeats):
+            for raw, bird, mask in zip(frames, birds, masks):
+                add("detect, no prior (windows)", lambda: pipe.detect(raw))
+                add("band_binary (prior bands)", lambda: pipe.band_binary(raw, prior))
+                add("thresholds (full view)", lambda: pipe.binary(bird))
+                for name in rule_names:
+                    spec = getattr(pipe.config.thresholds, name)
+                    add(f"  mask {name}", lambda: thresholds.mask(thresholds.Channels(bird), spec))
+                add("search, prior", lambda: pipe.search(mask, prior))
+                add("search, windows", lambda: pipe.search(mask))
+                add("measure", lambda: pipe.measure(prior[0], prior[1]))
+                add("undistort (video path)", lambda: pipe.undistort(raw))
+        und = pipe.undistort(frames[0])
+        result = pipe.detect(frames[0])
+        for _ in range(repeats * len(frames)):
+            add("annotate (video path)", lambda: pipe.annotate(und, result))
+        for _ in range(repeats):
+            tracker = LaneTracker(pipe)
+            for raw in frames:
+                add("tracker update", lambda: tracker.update(raw))
+    return {k: {"cpu_ms": statistics.median(c for c, _ in v), "wall_ms": statistics.median(w for _, w in v)}
+            for k, v in samples.items()}
+
+
+def _clock() -> tuple[float, float]:
+    """Return (wall s, CPU s of this process and its finished children, ffmpeg included)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.perf_counter(), me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _rates(start: tuple[float, float], frames: int) -> tuple[float, float]:
+    """Return (frames per wall second, CPU ms per frame) since ``start``."""
+    wall, cpu = _clock()
+    return frames / (wall - start[0]), (cpu - start[1]) * 1e3 / frames
+
+
+def codec_run(clip: Path, out: Path) -> tuple[float, float]:
+    """Return (fps, CPU ms per frame) of decoding ``clip`` and encoding it again, nothing else."""
+    start = _clock()
+    n = 0
+    with io.VideoReader(clip) as reader, io.VideoWriter(out, reader.info.fps, inputs=[clip]) as writer:
+        for frame in reader:
+            writer.write(frame)
+            n += 1
+    return _rates(start, n)
+
+
+def video_run(clip: Path, out: Path, config: PipelineConfig,
+              calibration: Calibration | None) -> tuple[float, float]:
+    """Return (fps, CPU ms per frame) of the ``video`` command's work (``process_video``) on ``clip``."""
+    from .pipeline import process_video
+
+    start = _clock()
+    run = process_video(clip, out, config, calibration, progress=False)
+    return _rates(start, run.frames)
+
+
+def run(video: Path | None = None, calibration: Calibration | None = None,
+        config: PipelineConfig = PipelineConfig(), clip_frames: int = 250, stage_frames: int = 60,
+        repeats: int = 3, video_rounds: int = 2) -> dict:
+    """Return the benchmark figures (see the module docstring) as a JSON-able dict."""
+    from .pipeline import LanePipeline
+
+    if video is None:
+        video, cal = default_video()
+        calibration = calibration or cal
+    with tempfile.TemporaryDirectory(prefix="lanelib-bench-") as tmp:
+        clip = Path(tmp) / "clip.mp4"
+        frames = []
+        with io.VideoReader(video) as reader, io.VideoWriter(clip, reader.info.fps, inputs=[video]) as w:
+            size = reader.info.size
+            for i, frame in enumerate(reader):
+                if i >= clip_frames:
+                    break
+                w.write(frame)
+                if i < stage_frames:
+                    frames.append(frame.copy())
+        pipe = LanePipeline(config, calibration, size=size)
+        stages = stage_times(pipe, frames, repeats)
+        codec, vid = [], []
+        for _ in range(video_rounds):
+            codec.append(codec_run(clip, Path(tmp) / "codec.mp4"))
+            vid.append(video_run(clip, Path(tmp) / "video.mp4", config, calibration))
+    detect, remap = stages["detect"]["cpu_ms"], stages["remap"]["cpu_ms"]
+    video_fps, codec_fps = max(v[0] for v in vid), max(c[0] for c in codec)
+    video_cpu, codec_cpu = min(v[1] for v in vid), min(c[1] for c in codec)
+    figures = {
+        "source": str(video), "size": list(size), "calibrated": calibration is not None,
+        "detect_ms": round(detect, 2), "remap_ms": round(remap, 2),
+        "detect_to_remap": round(detect / remap, 2),
+        "video_fps": round(video_fps, 1), "codec_fps": round(codec_fps, 1),
+        "video_to_codec": round(video_fps / codec_fps, 2),
+        "video_cpu_ms_per_frame": round(video_cpu, 1), "codec_cpu_ms_per_frame": round(codec_cpu, 1),
+        "cpu_codec_to_video": round(codec_cpu / video_cpu, 2),
+        "stages_ms": {k: {kk: round(vv, 2) for kk, vv in v.items()} for k, v in stages.items()},
+        "video_fps_runs": [round(v[0], 1) for v in vid], "codec_fps_runs": [round(c[0], 1) for c in codec],
+        "load_average": [round(v, 2) for v in os.getloadavg()],
+        "clip_frames": clip_frames, "stage_frames": len(frames), "cpu_count": os.cpu_count(),
+    }
+    figures["goals_met"] = {k: _meets(figures[k], *GOALS[k]) for k in GOALS}
+    return figures
+
+
+def _meets(value: float, op: str, goal: float) -> bool:
+    return value <= goal if op == "<=" else value >= goal
+
+
+def format_report(f: dict) -> str:
+    """Return the figures as a readable report: headline ratios, then the per-stage table."""
+    def goal(key):
+        op, g = GOALS[key]
+        return f"(goal {op} {g}: {'met' if f['goals_met'][key] else 'MISSED'})"
+
+    lines = [f"source: {f['source']} ({f['size'][0]}x{f['size'][1]}, "
+             f"{'calibrated' if f['calibrated'] else 'no calibration'}); {f['cpu_count']} CPUs",
+             f"detect_ms       {f['detect_ms']:8.2f}   per frame, prior search, one thread (CPU time)",
+             f"remap_ms        {f['remap_ms']:8.2f}   one full-frame colour cv2.remap, same frames",
+             f"detect_to_remap {f['detect_to_remap']:8.2f}   {goal('detect_to_remap')}",
+             f"video_fps       {f['video_fps']:8.1f}   `video` on {f['clip_frames']} frames "
+             f"(runs: {', '.join(map(str, f['video_fps_runs']))})",
+             f"codec_fps       {f['codec_fps']:8.1f}   decode + encode only "
+             f"(runs: {', '.join(map(str, f['codec_fps_runs']))})",
+             f"video_to_codec  {f['video_to_codec']:8.2f}   {goal('video_to_codec')}",
+             f"CPU per frame: video {f['video_cpu_ms_per_frame']:.1f} ms, codec "
+             f"{f['codec_cpu_ms_per_frame']:.1f} ms (ffmpeg included), codec/video "
+             f"{f['cpu_codec_to_video']:.2f} (the fps ratio when CPU is the limit); "
+             f"load average {', '.join(map(str, f['load_average']))}",
+             "",
+             f"{'stage (one thread)':28s} {'cpu ms':>8s} {'wall ms':>8s}  x remap"]
+    for name, v in f["stages_ms"].items():
+        lines.append(f"{name:28s} {v['cpu_ms']:8.2f} {v['wall_ms']:8.2f}  {v['cpu_ms'] / f['remap_ms']:6.2f}")
+    return "\n".join(lines)
