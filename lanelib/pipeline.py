@@ -267,11 +267,22 @@ class LanePipeline:
                                                           result.lane_width_m, result.found,
                                                           result.reason), self.config.draw)
 
-    def debug_composite(self, result: FrameResult) -> np.ndarray:
-        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result."""
+    def debug_composite(self, result: FrameResult, raw: np.ndarray | None = None) -> np.ndarray:
+        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result.
+
+        ``result`` comes from ``process(frame, keep_images=True)``; or from ``detect`` or
+        ``LaneTracker.update`` with ``keep_images=True``, passed with its RAW frame ``raw``, from
+        which the missing views (undistorted, search, result) are drawn here.
+        """
         im = result.images
+        if "search" not in im and raw is not None and "binary" in im and result.search is not None:
+            und = im.setdefault("undistorted", self.undistort(raw))
+            im.setdefault("result", self.annotate(und, result))
+            im["search"] = draw.search_view(im["binary"], result.search, self.config.draw,
+                                            self.config.search.prior_margin_px)
         if "search" not in im:
-            raise InputError("debug_composite needs a result from process(frame, keep_images=True)")
+            raise InputError("debug_composite needs a result from process(frame, keep_images=True), "
+                             "or a kept-images result (detect, LaneTracker.update) and its raw frame")
         return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
 
