@@ -67,6 +67,9 @@ class TrackerConfig:
     recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
     check_rows : rows (evenly spaced, top to bottom) on which widths and shapes are compared.
+    max_band_fill : largest share of its search band (window or prior band, over the rows it
+        spans) a line's pixels may fill; a wider patch is a bright area (grass, sky, concrete)
+        whose edge would pass for a line. Real lines fill at most about 0.4.
     """
 
     min_width_m: float = 3.0
@@ -78,6 +81,7 @@ class TrackerConfig:
     recency_decay: float = 0.6
     hold_frames: int = 12
     check_rows: int = 8
+    max_band_fill: float = 0.6
 
     def __post_init__(self):
         if not 0 < self.min_width_m < self.max_width_m:
@@ -86,9 +90,10 @@ class TrackerConfig:
             raise ConfigError("tracking: smooth_frames >= 1, hold_frames >= 0 and check_rows >= 2")
         if not 0 < self.recency_decay <= 1:
             raise ConfigError("tracking: recency_decay must lie in (0, 1]")
-        if min(self.max_width_spread_m, self.max_curvature_diff_1pm, self.max_jump_m) <= 0:
+        if min(self.max_width_spread_m, self.max_curvature_diff_1pm, self.max_jump_m,
+               self.max_band_fill) <= 0:
             raise ConfigError("tracking: max_width_spread_m, max_curvature_diff_1pm and max_jump_m "
-                              "must be positive")
+                              "and max_band_fill must be positive")
 
 
 @dataclass(frozen=True)
@@ -164,26 +169,27 @@ class LaneTracker:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
         det = pipe.detect(raw, prior=prior, keep_images=keep_images or prior is None)
         search = det.search
-        left, right, why = self.check(search.left, search.right, track)
+        left, right, why = self.check(search.left, search.right, track, self._band_px(search))
         if track is not None and (left is None or right is None):
             # the search missed: look again with windows started from the tracked lines
             binary = det.images["binary"] if "binary" in det.images else pipe.binary(pipe.birdseye(raw))
             retry = lanes.sliding_windows(binary, pipe.config.search,
                                           bases=self._bases(track), car_x=pipe.car_x_px)
-            l2, r2, why2 = self.check(retry.left, retry.right, track)
+            l2, r2, why2 = self.check(retry.left, retry.right, track, self._band_px(retry))
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
                 search, left, right, why = retry, l2, r2, why2
         images = det.images if keep_images else {}
         return self._advance(search, left, right, why, track, images)
 
-    def check(self, left: LineFit, right: LineFit,
-              track: tuple[np.ndarray, np.ndarray] | None) -> tuple[LineFit | None, LineFit | None, list[str]]:
+    def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
+              band_px: float | None = None) -> tuple[LineFit | None, LineFit | None, list[str]]:
         """Return the lines that pass the sanity checks (None where rejected) and why others failed.
 
         Parameters
         ----------
         left, right : this frame's fits (bird's-eye pixels).
         track : the tracked pixel coefficients (left, right), or None without a track.
+        band_px : width of the band the lines' pixels were searched in (None: not checked).
         """
         cfg = self.config
         why: list[str] = []
@@ -192,6 +198,12 @@ class LaneTracker:
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
                 continue
+            if band_px:
+                fill = fit.n_pixels / ((fit.span_px + 1) * band_px)
+                if fill > cfg.max_band_fill:
+                    why.append(f"{side} line is a bright patch, not a line (fills {fill:.0%} of its "
+                               f"search band, limit {cfg.max_band_fill:.0%})")
+                    continue
             if track is not None:
                 dx = (np.polyval(fit.coeffs_px, self._rows) - np.polyval(track[i], self._rows)) * self._xm
                 if abs(dx[-1]) > cfg.max_jump_m:
@@ -236,6 +248,11 @@ class LaneTracker:
             return (f"curvatures differ by {abs(kl - kr):.4f} 1/m "
                     f"(limit {cfg.max_curvature_diff_1pm} 1/m)")
         return ""
+
+    def _band_px(self, search: LaneSearch) -> float:
+        """Return the width (px) of the band a search looked in: prior band or sliding window."""
+        sconf = self.pipeline.config.search
+        return 2.0 * (sconf.prior_margin_px if search.method == "prior" else sconf.margin_px)
 
     def _conf_of(self, fit: LineFit) -> float:
         """Return the 0-1 confidence of a detected line (``pipeline.line_confidence``)."""

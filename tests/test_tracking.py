@@ -110,6 +110,20 @@ def test_an_implausible_pair_does_not_start_a_track(pipe, kwargs, prefix, value)
     assert number_after(r.reason, prefix) == pytest.approx(value, abs=0.05)
 
 
+def test_a_bright_patch_is_not_taken_for_a_line(pipe):
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    bird = np.full((H, W, 3), 70, np.uint8)
+    cv2.rectangle(bird, (0, 0), (round(LEFT_X) + 40, H - 1), (150, 200, 60), -1)  # yellow-green verge
+    cv2.line(bird, (round(RIGHT_X), 0), (round(RIGHT_X), H - 1), (235, 235, 235), 24)
+    r = tracker.update(pipe.perspective.unwarp(bird))
+    assert r.found and "left line is a bright patch, not a line" in r.reason
+    assert number_after(r.reason, "fills ") > 60
+    assert "left line inferred from the right line" in r.reason
+    assert bottom_x(r, "left") == pytest.approx(LEFT_X, abs=3)
+
+
 def test_hold_then_reset_then_reacquire(pipe):
     cfg = TrackerConfig(hold_frames=3)
     tracker = LaneTracker(pipe, cfg)
@@ -158,6 +172,7 @@ def test_smoothing_reduces_frame_to_frame_noise(pipe):
     (dict(smooth_frames=0), "smooth_frames >= 1"),
     (dict(recency_decay=0.0), "recency_decay"),
     (dict(max_jump_m=-1.0), "must be positive"),
+    (dict(max_band_fill=0.0), "max_band_fill must be positive"),
 ])
 def test_tracker_config_is_validated(kwargs, message):
     with pytest.raises(ConfigError, match=message):

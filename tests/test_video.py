@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -375,3 +376,33 @@ def test_distort_points_is_opencvs_projection():
         cal = Calibration(K, np.array(dist), (1280, 720))
         expected, _ = cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, np.array(dist))
         assert np.abs(distort_points(cal, pts) - expected.reshape(-1, 2)).max() < 1e-6
+
+
+# --------------------------------------------------------------------------- synthetic ground truth
+
+SYNTH = Path(__file__).resolve().parents[1] / "videos"
+
+
+def synthetic_report(name: str, use_tracker: bool = True):
+    from lanelib import evaluate
+
+    path = SYNTH / f"{name}.mp4"
+    if not path.is_file():
+        pytest.skip(f"{path} not found: generate it with `python -m lanelib synth --all`")
+    cal = evaluate.calibration_from_truth(path)
+    return evaluate.evaluate_video(path, LanePipeline(PipelineConfig(), cal, size=cal.image_size),
+                                   use_tracker=use_tracker)
+
+
+def test_synthetic_project_tracked_against_truth():
+    report = synthetic_report("project")
+    err = report.offset_err_cm
+    assert report.found.all()
+    assert np.median(err) <= 5.0 and err.max() <= 30.0
+    assert report.summary()["point_accuracy"] >= 0.95
+
+
+def test_synthetic_challenge_tracked_against_truth():
+    report = synthetic_report("challenge")
+    assert report.found.mean() >= 0.95
+    assert np.nanmedian(report.offset_err_cm) <= 5.0
