@@ -406,3 +406,32 @@ def test_synthetic_challenge_tracked_against_truth():
     report = synthetic_report("challenge")
     assert report.found.mean() >= 0.95
     assert np.nanmedian(report.offset_err_cm) <= 5.0
+
+
+# --------------------------------------------------------------------------- bench
+
+def test_bench_reports_every_figure_consistently(capsys):
+    from lanelib import bench
+    from lanelib.evaluate import calibration_from_truth
+
+    clip = SYNTH / "project.mp4"
+    if not clip.is_file():
+        pytest.skip(f"{clip} not found: generate it with `python -m lanelib synth --all`")
+    f = bench.run(clip, calibration_from_truth(clip), clip_frames=12, stage_frames=4, repeats=1,
+                  video_rounds=1)
+    assert {"detect_ms", "remap_ms", "detect_to_remap", "video_fps", "codec_fps",
+            "video_to_codec"} <= set(f)
+    assert f["detect_to_remap"] == pytest.approx(f["detect_ms"] / f["remap_ms"], abs=0.01)
+    assert f["video_to_codec"] == pytest.approx(f["video_fps"] / f["codec_fps"], abs=0.01)
+    assert f["size"] == [1280, 720] and f["calibrated"]
+    stages = f["stages_ms"]
+    assert {"remap", "detect", "band_binary (prior bands)", "undistort (video path)",
+            "annotate (video path)", "tracker update"} <= set(stages)
+    assert {f"  mask {n}" for n in ("yellow", "lab_b", "white", "line_tophat", "sobel_x")} <= set(stages)
+    report = bench.format_report(f)
+    assert "detect_to_remap" in report and "video_to_codec" in report and "mask lab_b" in report
+
+
+def test_bench_refuses_a_tiny_clip():
+    p = run("bench", "--frames", "5")
+    assert p.returncode == 2 and "--frames 5: give 10 frames or more" in p.stderr
