@@ -8,7 +8,9 @@ debug composite work on it unchanged. Per frame:
    sliding windows when the tracker is lost or reset ("windows"), started from the tracked lines'
    positions when there is a track. A prior search that fails the checks is retried with sliding
    windows on the same mask.
-2. **Checks.** Each line against the track: its position at the car may not move more than
+2. **Checks.** Each line alone: its pixels may not fill more than ``max_band_fill`` of the band
+   they were searched in (a bright verge is not a line). Each line against the track: its
+   position at the car may not move more than
    ``max_jump_m`` and its shape may not bend away from the tracked line by more than
    ``max_width_spread_m``. The pair: lane width at the car within ``min_width_m`` to
    ``max_width_m``, the lines roughly parallel (the width varies by at most ``max_width_spread_m``
