@@ -8,8 +8,13 @@ coefficients (no refit): with ``x_m = xm*x`` and ``y_m = ym*y``,
 Sign conventions (the synthetic ground truth uses the same):
 - curvature (1/m) is positive when the road bends to the RIGHT as the car drives ahead;
   the radius is ``1/|curvature|``, capped at ``RADIUS_MAX_M`` (a straight road);
-- the vehicle offset (m) is positive when the car is RIGHT of the lane centre. The car is
-  where the bottom-centre pixel of the undistorted frame lands in the bird's-eye view.
+- the vehicle offset (m) is positive when the car is RIGHT of the lane centre.
+  The car is where the bottom-centre pixel of the undistorted frame lands in the bird's-eye view.
+Curvature, offset and width are read on the bird's-eye view's bottom row, the nearest road the
+camera sees (4.8 m ahead with the default points), as the Udacity convention has it; the fits are
+not extrapolated to the car itself. Where the car is not parallel to the lane, the offset there
+differs from the offset below the camera by heading x 4.8 m (about 5 cm per 0.01 rad); the
+synthetic ground truth is given at the car, so ``evaluate`` counts that term as error.
 """
 from __future__ import annotations
 
@@ -244,12 +249,18 @@ def radius(curv: float) -> float:
     return float(min(RADIUS_MAX_M, 1.0 / abs(curv))) if curv != 0 else RADIUS_MAX_M
 
 
+def support(fit: LineFit) -> float:
+    """Return how much evidence a fit rests on: its pixel count times the rows it spans."""
+    return float(fit.n_pixels) * max(fit.span_px, 1.0) if fit.found else 0.0
+
+
 def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
             xm_per_px: float, ym_per_px: float) -> LaneMeasurement:
-    """Return curvature, radius, offset and lane width at the car (the bottom row) in metres.
+    """Return curvature, radius, offset and lane width in metres on the view's bottom row.
 
-    The lane's curvature is that of its centre line (the mean of the two fits); the offset and
-    width are taken on the bottom row. Anything needing a line that was not found is NaN.
+    The lane's centre line has the mean position of the two lines and their shape (a, b)
+    weighted by each line's ``support``, so a line resting on one dash does not bend the lane.
+    Anything needing a line that was not found is NaN.
     """
     y_px = height_px - 1
     y_m = y_px * ym_per_px
@@ -258,7 +269,12 @@ def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
     kr = curvature(fit_to_metres(right.coeffs_px, xm_per_px, ym_per_px), y_m) if right.found else nan
     if not (left.found and right.found):
         return LaneMeasurement(nan, nan, nan, nan, kl, kr)
-    centre = tuple((np.array(left.coeffs_px) + np.array(right.coeffs_px)) / 2)
+    wl, wr = support(left), support(right)
+    if wl + wr == 0:  # lines carried by a tracker with no pixels of their own: equal weight
+        wl = wr = 1.0
+    cl, cr = np.array(left.coeffs_px), np.array(right.coeffs_px)
+    centre = (cl * wl + cr * wr) / (wl + wr)
+    centre[2] = (cl[2] + cr[2]) / 2
     k = curvature(fit_to_metres(centre, xm_per_px, ym_per_px), y_m)
     xl, xr = float(left.x_at(y_px)), float(right.x_at(y_px))
     offset = (car_x_px - (xl + xr) / 2) * xm_per_px

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import math
 import shutil
 
@@ -17,7 +18,7 @@ from lanelib.pipeline import FrameResult, LanePipeline
 from lanelib.synth.camera import Camera
 from lanelib.synth.truth import LaneTruth, camera_truth
 
-from conftest import REPO
+REPO = Path(__file__).resolve().parents[1]
 
 ROWS = np.arange(420.0, 720.0, 10.0)  # 30 rows, as the synthetic truth's h_samples
 

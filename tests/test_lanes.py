@@ -72,7 +72,7 @@ def test_radius_of_a_circle_is_returned_in_metres(radius_m, direction):
 def test_offset_width_and_sign_conventions():
     xm, ym = 3.7 / 640, 23.5 / 720
     # lane from x=300 to x=940: centre 620; the car at 640 is 20 px right of centre
-    left, right = LineFit((0.0, 0.0, 300.0)), LineFit((0.0, 0.0, 940.0))
+    left, right = LineFit((0.0, 0.0, 300.0), 1000, 700.0), LineFit((0.0, 0.0, 940.0), 1000, 700.0)
     m = lanes.measure(left, right, H, 640.0, xm, ym)
     assert m.offset_m == pytest.approx(20 * xm) and m.offset_m > 0
     assert m.lane_width_m == pytest.approx(3.7)
@@ -117,3 +117,21 @@ def test_histogram_and_bases():
     hist = lanes.histogram(m, 0.5)
     assert hist[300] == H // 2 and hist[1000] == H // 2
     assert lanes.find_bases(hist, 640) == (300.0, 1000.0)
+
+
+def test_offset_is_read_on_the_bottom_row():
+    xm, ym = 3.7 / 640, 23.5 / 720
+    # a lane centred on the car's column at the bottom row, seen at a heading (0.05 px/px)
+    b = 0.05
+    left = LineFit((0.0, b, 320.0 - b * (H - 1)), 1000, 700.0)
+    right = LineFit((0.0, b, 960.0 - b * (H - 1)), 1000, 700.0)
+    assert lanes.measure(left, right, H, 640.0, xm, ym).offset_m == pytest.approx(0.0, abs=1e-9)
+
+
+def test_lane_curvature_follows_the_better_supported_line():
+    xm, ym = 3.7 / 640, 23.5 / 720
+    strong = LineFit((2e-4, -0.3, 300.0), 20000, 719.0)
+    weak = LineFit((-6e-4, 0.5, 700.0), 200, 90.0)  # one dash, fitted with the wrong bend
+    m = lanes.measure(strong, weak, H, 640.0, xm, ym)
+    assert m.curvature_1pm == pytest.approx(m.left_curvature_1pm, rel=0.02)
+    assert np.sign(m.curvature_1pm) == np.sign(m.left_curvature_1pm) != np.sign(m.right_curvature_1pm)

@@ -3,6 +3,7 @@ ground-truth geometry, rendering against truth, determinism against the bundled 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import math
 
 import cv2
@@ -19,7 +20,7 @@ from lanelib.synth.chessboard import board_poses, camera_normals, render_board
 from lanelib.synth.sets import BOARD_JPEG_QUALITY, BOARD_SEED, IMAGE_JPEG_QUALITY
 from lanelib.synth.truth import NOT_VISIBLE, write_image_truth, camera_truth, lane_truth
 
-from conftest import REPO
+REPO = Path(__file__).resolve().parents[1]
 
 CAL_DIR, IMAGE_DIR, VIDEO_DIR = REPO / "camera_cal", REPO / "test_images", REPO / "videos"
 

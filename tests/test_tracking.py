@@ -115,7 +115,7 @@ def test_a_bright_patch_is_not_taken_for_a_line(pipe):
     for _ in range(3):
         tracker.update(frame(pipe))
     bird = np.full((H, W, 3), 70, np.uint8)
-    cv2.rectangle(bird, (0, 0), (round(LEFT_X) + 40, H - 1), (150, 200, 60), -1)  # yellow-green verge
+    cv2.rectangle(bird, (0, 0), (round(LEFT_X) + 40, H - 1), (210, 190, 50), -1)  # dry yellow verge
     cv2.line(bird, (round(RIGHT_X), 0), (round(RIGHT_X), H - 1), (235, 235, 235), 24)
     r = tracker.update(pipe.perspective.unwarp(bird))
     assert r.found and "left line is a bright patch, not a line" in r.reason
