@@ -27,9 +27,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_images(sub)
     _add_video(sub)
     _add_bench(sub)
-    _add_synth(sub)
     _add_hough(sub)
     _add_evaluate(sub)
+    _add_synth(sub)
     return parser
 
 
@@ -109,57 +109,6 @@ def _run_images(args) -> int:
     print(f"{sum(r['found'] for r in rows)} of {len(rows)} images: lane found; "
           f"results in {args.output / 'results.json'}")
     return 0
-
-
-def _add_synth(sub) -> None:
-    p = sub.add_parser(
-        "synth", help="render synthetic chessboards, road images and videos with ground truth",
-        description="Render lanelib's synthetic data with exact ground truth, the same bytes from the "
-                    "same seeds. --all rewrites the bundled camera_cal/ (20 chessboards and "
-                    "camera_truth.json), test_images/ (8 scenes, NAME.json beside each) and videos/ "
-                    "(project, challenge, harder: 10 s each, NAME.csv per frame and NAME.json beside "
-                    "each). The subcommands render one part.")
-    p.add_argument("--all", action="store_true", help="render all the bundled data")
-    p.add_argument("--out", type=Path, metavar="DIR",
-                   help="with --all: folder to write camera_cal/, test_images/ and videos/ into "
-                        "(default: the repository root)")
-    kinds = p.add_subparsers(dest="synth_kind", metavar="KIND")
-    k = kinds.add_parser("images", help="the 8 test scenes, each with its JSON truth")
-    k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
-    k = kinds.add_parser("boards", help="the 20 chessboard photographs and camera_truth.json")
-    k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
-    k.add_argument("--seed", type=int, help="random seed (default: the bundled one)")
-    k = kinds.add_parser("video", help="one video with its per-frame CSV and JSON truth")
-    k.add_argument("--set", dest="video_set", choices=("project", "challenge", "harder"), default="project",
-                   help="project: clean highway in sun; challenge: tar seams, an underpass, low "
-                        "contrast; harder: tight curves, strong light changes (default: project)")
-    k.add_argument("-o", "--output", type=Path, required=True, metavar="FILE", help="video (mp4) to write")
-    k.add_argument("--seconds", type=float, default=10.0,
-                   help="length in seconds, up to 20 (default: 10); a shorter clip is the start of "
-                        "a longer one")
-    k.add_argument("--seed", type=int, help="random seed of the scene (default: the set's)")
-
-    def run(args) -> int:
-        from . import synth
-
-        if args.all == bool(args.synth_kind):
-            p.error("give either --all or one of the kinds: images, boards, video")
-        if args.all:
-            root = args.out or Path(synth.__file__).resolve().parents[2]
-            files = synth.generate_all(root, progress=print)
-            print(f"{len(files)} files (and their truth) written under {root}")
-        elif args.synth_kind == "images":
-            print(f"{len(synth.write_test_images(args.output))} images written to {args.output}")
-        elif args.synth_kind == "boards":
-            kw = {} if args.seed is None else {"seed": args.seed}
-            print(f"{len(synth.write_boards(args.output, **kw))} chessboards written to {args.output}")
-        else:
-            synth.write_video(args.output, synth.video_sets()[args.video_set], args.seconds, args.seed)
-            print(f"{args.output}: {args.seconds:g} s of {args.video_set}, truth in "
-                  f"{args.output.with_suffix('.csv')} and {args.output.with_suffix('.json')}")
-        return 0
-
-    p.set_defaults(func=run)
 
 
 def _add_video(sub) -> None:
@@ -316,6 +265,57 @@ def _run_evaluate(args) -> int:
         write_json(args.json, report.to_dict(), inputs=inputs)
         print(f"figures written to {args.json}")
     return 0
+
+
+def _add_synth(sub) -> None:
+    p = sub.add_parser(
+        "synth", help="render synthetic chessboards, road images and videos with ground truth",
+        description="Render lanelib's synthetic data with exact ground truth, the same bytes from the "
+                    "same seeds. --all rewrites the bundled camera_cal/ (20 chessboards and "
+                    "camera_truth.json), test_images/ (8 scenes, NAME.json beside each) and videos/ "
+                    "(project, challenge, harder: 10 s each, NAME.csv per frame and NAME.json beside "
+                    "each). The subcommands render one part.")
+    p.add_argument("--all", action="store_true", help="render all the bundled data")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="with --all: folder to write camera_cal/, test_images/ and videos/ into "
+                        "(default: the repository root)")
+    kinds = p.add_subparsers(dest="synth_kind", metavar="KIND")
+    k = kinds.add_parser("images", help="the 8 test scenes, each with its JSON truth")
+    k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
+    k = kinds.add_parser("boards", help="the 20 chessboard photographs and camera_truth.json")
+    k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
+    k.add_argument("--seed", type=int, help="random seed (default: the bundled one)")
+    k = kinds.add_parser("video", help="one video with its per-frame CSV and JSON truth")
+    k.add_argument("--set", dest="video_set", choices=("project", "challenge", "harder"), default="project",
+                   help="project: clean highway in sun; challenge: tar seams, an underpass, low "
+                        "contrast; harder: tight curves, strong light changes (default: project)")
+    k.add_argument("-o", "--output", type=Path, required=True, metavar="FILE", help="video (mp4) to write")
+    k.add_argument("--seconds", type=float, default=10.0,
+                   help="length in seconds, up to 20 (default: 10); a shorter clip is the start of "
+                        "a longer one")
+    k.add_argument("--seed", type=int, help="random seed of the scene (default: the set's)")
+
+    def run(args) -> int:
+        from . import synth
+
+        if args.all == bool(args.synth_kind):
+            p.error("give either --all or one of the kinds: images, boards, video")
+        if args.all:
+            root = args.out or Path(synth.__file__).resolve().parents[2]
+            files = synth.generate_all(root, progress=print)
+            print(f"{len(files)} files (and their truth) written under {root}")
+        elif args.synth_kind == "images":
+            print(f"{len(synth.write_test_images(args.output))} images written to {args.output}")
+        elif args.synth_kind == "boards":
+            kw = {} if args.seed is None else {"seed": args.seed}
+            print(f"{len(synth.write_boards(args.output, **kw))} chessboards written to {args.output}")
+        else:
+            synth.write_video(args.output, synth.video_sets()[args.video_set], args.seconds, args.seed)
+            print(f"{args.output}: {args.seconds:g} s of {args.video_set}, truth in "
+                  f"{args.output.with_suffix('.csv')} and {args.output.with_suffix('.json')}")
+        return 0
+
+    p.set_defaults(func=run)
 
 
 def _add_bench(sub) -> None:
