@@ -9,7 +9,7 @@ OUT    ?= out
 # Udacity data for the real-data tests and benchmarks (skipped when absent)
 export LANELIB_DATA ?= $(abspath ../shared/data)
 
-.PHONY: demo test bench lab venv clean
+.PHONY: demo test bench lab venv clean e2e-deps
 
 venv: $(STAMP)
 
@@ -23,10 +23,28 @@ $(STAMP): requirements.txt pyproject.toml
 demo: $(STAMP)
 	$(PY) -m lanelib calibrate camera_cal -o $(OUT)/calibration.json
 	$(PY) -m lanelib images test_images -o $(OUT)/images --calibration $(OUT)/calibration.json
-	@echo "annotated images and results.json are in $(OUT)/"
+	$(PY) -m lanelib video videos/project.mp4 -o $(OUT)/project.mp4 --calibration $(OUT)/calibration.json \
+		--log $(OUT)/project_frames.csv
+	$(PY) -m lanelib evaluate video videos/project.mp4
+	@echo "annotated images, results.json, the tracked video and its per-frame log are in $(OUT)/"
 
-test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadfile tests
+test: $(STAMP) e2e-deps
+	$(PY) -m pytest -q -n 2 --dist loadfile --nbval --nbval-current-env --nbval-cell-timeout=300 \
+		tests notebooks
+
+# The browser test of the sliders (tests/e2e) drives Debian's chromium through Playwright (never
+# Playwright's own browser download). Installed here when missing and we are root with apt-get
+# (as on CI); otherwise a note says what to install and the test skips. Silent when present.
+CHROMIUM ?= /usr/bin/chromium
+e2e-deps:
+	@if [ -x "$(CHROMIUM)" ]; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "e2e-deps: installing Debian chromium for tests/e2e (apt-get)"; \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } \
+	    || { echo "e2e-deps: apt-get install chromium failed"; [ "$$CI" != true ] || exit 1; }; \
+	else \
+	  echo "e2e-deps: $(CHROMIUM) not found; tests/e2e will skip. Install it with: sudo apt-get install chromium"; \
+	fi
 
 bench: $(STAMP)
 	$(PY) -m lanelib bench
