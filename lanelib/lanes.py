@@ -143,6 +143,9 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
     ys, xs = lane_pixels(binary)
     if bases is None:
         bases = find_bases(histogram(binary, config.histogram_fraction), car_x)
+        if None in bases:  # a dashed line may have no dash in the lower part: look at all rows
+            whole = find_bases(histogram(binary, 1.0), car_x)
+            bases = tuple(b if b is not None else w for b, w in zip(bases, whole))
     win_h = h / config.n_windows
     windows: list[Window] = []
     picked = {}

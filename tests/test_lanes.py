@@ -135,3 +135,12 @@ def test_lane_curvature_follows_the_better_supported_line():
     m = lanes.measure(strong, weak, H, 640.0, xm, ym)
     assert m.curvature_1pm == pytest.approx(m.left_curvature_1pm, rel=0.02)
     assert np.sign(m.curvature_1pm) == np.sign(m.left_curvature_1pm) != np.sign(m.right_curvature_1pm)
+
+
+def test_a_line_with_no_pixels_in_the_lower_half_is_searched_from_the_whole_histogram():
+    m = np.zeros((H, W), np.uint8)
+    draw_curve(m, (0.0, 0.0, 320.0))
+    cv2.line(m, (960, 100), (960, 300), 255, 24)  # one far dash, nothing below row 300
+    search = lanes.sliding_windows(m)
+    assert search.bases_px[1] == pytest.approx(960, abs=12)
+    assert search.right.found and search.right.x_at(200) == pytest.approx(960, abs=2)
