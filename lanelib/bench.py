@@ -15,8 +15,8 @@
   time per frame of each run (this process and its ffmpeg children): their ratio is what the
   fps ratio tends to when CPU is the limit, and it does not depend on other load.
 - ``stages_ms``: each stage alone on the same frames (one thread): the remap, the thresholds and
-  each mask the rule uses, the searches, the measurements, the tracker's update, and the video
-  path's undistort and overlay.
+  each mask the rule uses, the searches, the measurements, the tracker's update, the overlay on
+  the raw frame (the video path) and the full-frame undistort the images path and --debug add.
 
 Single-thread timings are CPU time of the timing thread (``time.thread_time``), which a busy
 machine does not inflate; the wall-clock medians are printed beside them. The clip is the
@@ -123,11 +123,10 @@ def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, d
                 add("search, prior", lambda: pipe.search(mask, prior))
                 add("search, windows", lambda: pipe.search(mask))
                 add("measure", lambda: pipe.measure(prior[0], prior[1]))
-                add("undistort (video path)", lambda: pipe.undistort(raw))
-        und = pipe.undistort(frames[0])
+                add("undistort (images, --debug)", lambda: pipe.undistort(raw))
         result = pipe.detect(frames[0])
         for _ in range(repeats * len(frames)):
-            add("annotate (video path)", lambda: pipe.annotate(und, result))
+            add("annotate raw (video path)", lambda: pipe.annotate(frames[0], result, raw=True))
         for _ in range(repeats):
             tracker = LaneTracker(pipe)
             for raw in frames:

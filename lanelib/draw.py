@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -17,7 +18,12 @@ Color = tuple[int, int, int]
 
 @dataclass(frozen=True)
 class DrawConfig:
-    """Colours (RGB), opacity and text size of the overlays."""
+    """Colours (RGB), opacity and text size of the overlays.
+
+    ``video_undistorted``: the ``video`` command draws on the RAW frame by default, the lane
+    mapped through the lens model (what the camera saw, and one full-frame remap per frame
+    cheaper); true draws on the undistorted frame, as the ``images`` command does.
+    """
 
     lane_color: Color = (0, 200, 90)
     left_color: Color = (255, 60, 40)
@@ -26,6 +32,7 @@ class DrawConfig:
     line_thickness_px: int = 12
     font_scale: float = 1.0
     samples: int = 48
+    video_undistorted: bool = False
 
 
 def line_points(coeffs, height_px: int, samples: int = 48) -> np.ndarray:
@@ -39,11 +46,14 @@ def _to_int(pts: np.ndarray) -> np.ndarray:
 
 
 def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs, Minv: np.ndarray | None,
-                 config: DrawConfig = DrawConfig(), height_px: int | None = None) -> np.ndarray:
+                 config: DrawConfig = DrawConfig(), height_px: int | None = None,
+                 lens: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Return ``image`` with the lane area and lines drawn, fits mapped through ``Minv``.
 
     ``left_coeffs``/``right_coeffs`` are bird's-eye pixel fits (None: that line is not drawn,
     and the area only when both exist). ``Minv`` None draws in the bird's-eye view itself.
+    ``lens`` maps undistorted-image points on into the image drawn on (e.g. the raw frame
+    through the lens distortion, ``camera.distort_points``); None: ``image`` is undistorted.
     """
     h = height_px or image.shape[0]
     out = image.copy()
@@ -52,8 +62,9 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs, Minv: np.ndarray 
         if coeffs is None:
             continue
         pts = line_points(coeffs, h, config.samples)
-        mapped[side] = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2) \
-            if Minv is not None else pts
+        if Minv is not None:
+            pts = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2)
+        mapped[side] = lens(pts) if lens is not None else pts
     if len(mapped) == 2:
         poly = _to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))
         # blend only inside the polygon's bounding box: outside it the blend gives the image back

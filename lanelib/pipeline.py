@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from . import draw, lanes, thresholds
-from .camera import Calibration, Undistorter
+from .camera import Calibration, Undistorter, distort_points
 from .config import PipelineConfig
 from .errors import InputError
 from .lanes import LaneMeasurement, LaneSearch, LineFit
@@ -259,10 +259,16 @@ class LanePipeline:
                                                        self.config.draw, self.config.search.prior_margin_px)
         return result
 
-    def annotate(self, undistorted: np.ndarray, result: FrameResult) -> np.ndarray:
-        """Return the undistorted frame with the lane, the lines and the measurements drawn."""
-        out = draw.lane_overlay(undistorted, result.left.coeffs_px, result.right.coeffs_px,
-                                self.perspective.Minv, self.config.draw, self.size[1])
+    def annotate(self, frame: np.ndarray, result: FrameResult, raw: bool = False) -> np.ndarray:
+        """Return the frame with the lane, the lines and the measurements drawn.
+
+        ``frame`` is the undistorted frame, or with ``raw`` the RAW frame: the lane is then mapped
+        through the lens model onto it (no full-frame undistortion needed).
+        """
+        cal = self.undistorter.calibration
+        lens = (lambda pts: distort_points(cal, pts)) if raw and cal is not None else None
+        out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px,
+                                self.perspective.Minv, self.config.draw, self.size[1], lens)
         return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
                                                           result.lane_width_m, result.found,
                                                           result.reason), self.config.draw)
@@ -355,6 +361,9 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                   progress: bool = True, threads: int | None = None) -> VideoRun:
     """Track the lane through a video; write the annotated (or debug composite) video; return a summary.
 
+    The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
+    video_undistorted`` draws on undistorted frames instead, at one more remap per frame).
+
     Parameters
     ----------
     in_path, out_path : input video and output mp4 (H.264, the input's size and frame rate).
@@ -380,6 +389,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         pipe = tracker.pipeline
         result = tracker.update(frame, keep_images=debug)
         found[0] += result.found
+        if not (debug or config.draw.video_undistorted):
+            return pipe.annotate(frame, result, raw=True), video_log_row(index, time_s, result)
         und = pipe.undistort(frame)
         annotated = pipe.annotate(und, result)
         if debug:

@@ -142,3 +142,20 @@ def test_udacity_radius(udacity_results):
         assert udacity_results[name].radius_m > 300, name
     for name in ("straight_lines1", "straight_lines2"):
         assert udacity_results[name].radius_m > 2000, name
+
+
+def test_lane_drawn_on_the_raw_frame_lands_where_the_undistorted_drawing_does():
+    from lanelib.camera import Calibration
+    from lanelib.lanes import LaneMeasurement, LineFit
+    from lanelib.pipeline import FrameResult
+
+    K = np.array([[1000.0, 0, 640.0], [0, 1000.0, 360.0], [0, 0, 1]])
+    pipe = LanePipeline(calibration=Calibration(K, np.array([-0.25, 0.05, 0.0, 0.0, 0.0]), (1280, 720)))
+    left, right = LineFit((1e-4, 0.0, 330.0), 5000, 700.0), LineFit((1e-4, 0.0, 950.0), 5000, 700.0)
+    result = FrameResult(left, right, pipe.measure(left, right), "windows", 1.0, 1.0)
+    black = np.zeros((720, 1280, 3), np.uint8)
+    on_raw = pipe.undistort(pipe.annotate(black, result, raw=True))[..., 1] > 20
+    on_und = pipe.annotate(black, result)[..., 1] > 20
+    on_raw[:200], on_und[:200] = False, False  # leave out the text
+    iou = (on_raw & on_und).sum() / (on_raw | on_und).sum()
+    assert iou > 0.9

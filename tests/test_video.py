@@ -425,8 +425,8 @@ def test_bench_reports_every_figure_consistently(capsys):
     assert f["video_to_codec"] == pytest.approx(f["video_fps"] / f["codec_fps"], abs=0.01)
     assert f["size"] == [1280, 720] and f["calibrated"]
     stages = f["stages_ms"]
-    assert {"remap", "detect", "band_binary (prior bands)", "undistort (video path)",
-            "annotate (video path)", "tracker update"} <= set(stages)
+    assert {"remap", "detect", "band_binary (prior bands)", "undistort (images, --debug)",
+            "annotate raw (video path)", "tracker update"} <= set(stages)
     rule = thresholds.rule_masks(PipelineConfig().thresholds)
     assert len(rule) >= 2 and {f"  mask {n}" for n in rule} <= set(stages)
     report = bench.format_report(f)
