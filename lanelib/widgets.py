@@ -43,7 +43,7 @@ import ipywidgets as widgets
 import numpy as np
 
 from . import draw, hough, io, lanes, thresholds
-from .camera import Calibration, Undistorter, calibrate
+from .camera import Calibration, FastBirdseye, Undistorter, calibrate
 from .config import PipelineConfig, load_config, save_config
 from .errors import InputError, LaneLibError
 from .perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
@@ -606,43 +606,6 @@ def straight_line_check(binary: np.ndarray, xm_per_px: float,
     return StraightLineCheck(slopes[0], slopes[1], width, fits[0], fits[1])
 
 
-class _UndistortCanvas:
-    """Bird's-eye views of raw frames for any perspective as the pipeline makes them, quickly.
-
-    ``LanePipeline`` composes undistortion and warp into one remap exactly
-    (``Undistorter.maps_through``), which takes about a second: too slow for a slider. Here the
-    undistortion map of a canvas a quarter of the frame larger on each side (as far as
-    ``maps_through`` samples) is made once, and a perspective's remap maps are that map warped
-    by ``Minv``. The view is within 2 grey levels of the pipeline's (warping the undistorted
-    frame instead, two interpolations, differs by up to 80 and moves marginal line pixels).
-    """
-
-    def __init__(self, calibration: Calibration | None, size: tuple[int, int]):
-        w, h = size
-        self.pad = (w // 4, h // 4)
-        cw, ch = w + 2 * self.pad[0], h + 2 * self.pad[1]
-        if calibration is None:
-            xs, ys = np.meshgrid(np.arange(cw, dtype=np.float32) - self.pad[0],
-                                 np.arange(ch, dtype=np.float32) - self.pad[1])
-            self.map = np.dstack([xs, ys])
-        else:
-            K = calibration.camera_matrix
-            shifted = K.copy()
-            shifted[0, 2] += self.pad[0]
-            shifted[1, 2] += self.pad[1]
-            self.map = cv2.initUndistortRectifyMap(K, calibration.dist_coeffs, None, shifted,
-                                                   (cw, ch), cv2.CV_32FC2)[0]
-        self.size = (w, h)
-
-    def birdseye(self, raw: np.ndarray, Minv: np.ndarray) -> np.ndarray:
-        """Return the bird's-eye view of a RAW frame for the perspective whose inverse is ``Minv``."""
-        to_canvas = np.array([[1, 0, self.pad[0]], [0, 1, self.pad[1]], [0, 0, 1]], float) @ Minv
-        maps = cv2.warpPerspective(self.map, to_canvas, self.size,
-                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_CONSTANT, borderValue=(-1, -1, -1, -1))
-        return cv2.remap(raw, maps, None, cv2.INTER_LINEAR)
-
-
 def _trapezoid_of(src_px) -> dict[str, float]:
     """Return top_y, bottom_y, top_width, bottom_width, centre_x of src points (tl, bl, br, tr)."""
     (tlx, tly), (blx, bly), (brx, bry), (trx, try_) = src_px
@@ -711,7 +674,7 @@ class PerspectiveTuner(Tuner):
         key = (id(calibration), size)
         if getattr(self, "_undistorter_key", None) != key:
             self._undistorter = Undistorter(calibration, size)
-            self._canvas = _UndistortCanvas(self._undistorter.calibration, size)
+            self._canvas = FastBirdseye(self._undistorter.calibration, size)
             self._undistorter_key = key
         self.undistorted = self._undistorter.undistort(raw)
         self._focal_px = implied_focal_px(self.config.perspective)
