@@ -122,6 +122,20 @@ def _mirror_repo(dest: Path) -> Path:
     return root
 
 
+def _own_session_dies_with_parent() -> None:
+    """In the server's child: a session (process group) of its own, and SIGTERM when pytest dies.
+
+    Even a pytest killed with SIGKILL (a CI time-out) then takes the server, and so its kernels,
+    with it; the normal end of the test goes through ``_stop``.
+    """
+    os.setsid()
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG (Linux)
+    except (OSError, AttributeError):
+        pass
+
+
 def _pids_mentioning(marker: str) -> list[int]:
     """Pids of processes whose command line mentions ``marker`` (our unique temp folder)."""
     pids = []
@@ -205,7 +219,7 @@ def lab(need_browser, tmp_path_factory) -> Lab:
            "--ServerApp.allow_root=True"]
     with open(log_path, "wb") as log:
         proc = subprocess.Popen(cmd, cwd=root, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, start_new_session=True)
+                                stdin=subprocess.DEVNULL, preexec_fn=_own_session_dies_with_parent)
     try:
         server = Lab(url=url, token=token, root=root, log=log_path)
         deadline = time.monotonic() + 60

@@ -238,7 +238,7 @@ def test_drag_slider_changes_preview(lab, browser_context, notebook, prefer, req
             shutil.copyfile(shot, REPO / "docs" / "e2e_thresholds.png")
 
         # Release-to-paint: short drags back and forth, each released at once.
-        samples = []
+        samples, to_src = [], []
         for i in range(TIMED_DRAGS):
             page.evaluate("() => { const p = window.__lanelibProbe; p.events = []; p.up = null; }")
             src_before = preview.get_attribute("src")
@@ -248,9 +248,10 @@ def test_drag_slider_changes_preview(lab, browser_context, notebook, prefer, req
             final = preview.get_attribute("src")
             if final == src_before or probe["up"] is None:
                 continue  # nothing new to paint (value unchanged)
-            painted = [e["painted"] for e in probe["events"] if e["src"] == final]
-            if painted:
-                samples.append(painted[-1] - probe["up"])
+            shown = [e for e in probe["events"] if e["src"] == final]
+            if shown:
+                samples.append(shown[-1]["painted"] - probe["up"])
+                to_src.append(shown[-1]["changed"] - probe["up"])
         errors = page.evaluate(ERRORS_JS)
         assert not errors, f"{notebook}: a cell shows an error after the drags:\n" + "\n---\n".join(errors)
         assert not offsite, f"{notebook}: the page asked for non-loopback addresses: {offsite[:5]}"
@@ -262,6 +263,8 @@ def test_drag_slider_changes_preview(lab, browser_context, notebook, prefer, req
             "release_to_paint_ms": [round(s, 1) for s in samples],
             "median_ms": round(statistics.median(samples), 1) if samples else None,
             "max_ms": round(max(samples), 1) if samples else None,
+            # of which: release -> the widget sets the new src (kernel round trip + widget JS)
+            "release_to_src_median_ms": round(statistics.median(to_src), 1) if to_src else None,
             "goal_ms": 150, "test_s": round(time.monotonic() - started, 1),
         }
         _record(request.config, report)
@@ -280,7 +283,8 @@ def _record(config, report: dict) -> None:
             f"{report['preview_px'][0]}x{report['preview_px'][1]}): release-to-paint median "
             f"{report['median_ms']} ms, max {report['max_ms']} ms over "
             f"{len(report['release_to_paint_ms'])} drags {report['release_to_paint_ms']} "
-            f"(goal < {report['goal_ms']} ms); test took {report['test_s']} s")
+            f"(goal < {report['goal_ms']} ms; new src set after a median "
+            f"{report['release_to_src_median_ms']} ms); test took {report['test_s']} s")
     with open(OUTPUT / "latency.txt", "a") as fh:
         fh.write(time.strftime("%Y-%m-%d %H:%M:%S ") + line + "\n")
     with open(OUTPUT / "latency.jsonl", "a") as fh:
