@@ -19,7 +19,7 @@ from . import io
 from .draw import DrawConfig
 from .errors import ConfigError
 from .hough import HoughConfig
-from .lanes import SearchConfig
+from .lanes import LaneChecks, SearchConfig
 from .perspective import PerspectiveConfig
 from .thresholds import ThresholdConfig
 from .tracking import TrackerConfig
@@ -32,6 +32,7 @@ class PipelineConfig:
     perspective: PerspectiveConfig = PerspectiveConfig()
     thresholds: ThresholdConfig = ThresholdConfig()
     search: SearchConfig = SearchConfig()
+    checks: LaneChecks = LaneChecks()
     tracking: TrackerConfig = TrackerConfig()
     draw: DrawConfig = DrawConfig()
     hough: HoughConfig = HoughConfig()
@@ -94,8 +95,55 @@ def _convert(value, tp, key: str):
     return value
 
 
+# Keys that moved: (old section, key) -> the (section, key)s that take its value. The plausibility
+# checks of a lane moved from ``tracking`` to ``checks`` when single images got them too; the old
+# ``tracking.max_width_spread_m`` also limited a line's bend against its track, now
+# ``tracking.max_bend_m``.
+MOVED_KEYS = {
+    ("tracking", "min_width_m"): (("checks", "min_width_m"),),
+    ("tracking", "max_width_m"): (("checks", "max_width_m"),),
+    ("tracking", "max_width_spread_m"): (("checks", "max_width_spread_m"), ("tracking", "max_bend_m")),
+    ("tracking", "max_curvature_diff_1pm"): (("checks", "max_curvature_diff_1pm"),),
+    ("tracking", "max_band_fill"): (("checks", "max_band_fill"),),
+    ("tracking", "check_rows"): (("checks", "check_rows"),),
+}
+
+
+def migrate(data: dict) -> dict:
+    """Return a PipelineConfig dict with the keys of older files moved to where they live now.
+
+    Each old key in ``MOVED_KEYS`` gives its value to its new keys, unless the file sets a new key
+    itself; a file that sets both an old key and its new key to different values raises
+    ``ConfigError`` naming both.
+    """
+    moved = {k: dict(v) if isinstance(v, dict) else v for k, v in data.items()}
+    explicit = {(sec, key) for sec, part in data.items() if isinstance(part, dict) for key in part}
+    for (sec, key), targets in MOVED_KEYS.items():
+        part = moved.get(sec)
+        if not isinstance(part, dict) or key not in part:
+            continue
+        value = part.pop(key)
+        for new_sec, new_key in targets:
+            target = moved.setdefault(new_sec, {})
+            if not isinstance(target, dict):
+                continue  # the type check of from_dict reports it
+            if (new_sec, new_key) in explicit:
+                if target[new_key] != value and new_key == key:
+                    raise ConfigError(f"{sec}.{key} is now {new_sec}.{new_key}; this file sets both, "
+                                      f"to {value!r} and {target[new_key]!r}: keep only "
+                                      f"{new_sec}.{new_key}")
+                continue
+            target[new_key] = value
+    return moved
+
+
 def from_dict(cls, data: dict, prefix: str = ""):
-    """Return an instance of dataclass ``cls`` from a (partial) dict; strict about keys and types."""
+    """Return an instance of dataclass ``cls`` from a (partial) dict; strict about keys and types.
+
+    For a ``PipelineConfig`` the keys of older files are moved first (``migrate``).
+    """
+    if cls is PipelineConfig and not prefix and isinstance(data, dict):
+        data = migrate(data)
     hints = typing.get_type_hints(cls)
     names = {f.name for f in fields(cls) if f.init}
     base = cls()

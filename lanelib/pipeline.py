@@ -1,14 +1,15 @@
 """``LanePipeline``: the advanced lane-finding pipeline wired from one ``PipelineConfig``.
 
 One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
-search -> fits -> measurements -> overlay on the undistorted frame. The notebooks, the tuners and
-the CLI all use this object, so what a slider tunes is exactly what a video run uses.
+search -> fits -> plausibility checks (``lanes.LaneChecks``, the same as the video tracker's) ->
+measurements -> overlay on the undistorted frame. A lane that fails the checks is not found; what
+it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
+use this object, so what a slider tunes is exactly what a video run uses.
 """
 from __future__ import annotations
 
-import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -17,77 +18,10 @@ import numpy as np
 from . import draw, lanes, thresholds
 from .camera import Calibration, Undistorter, distort_points
 from .config import PipelineConfig
-from .errors import InputError
-from .lanes import LaneMeasurement, LaneSearch, LineFit
+from .errors import ConfigError, InputError
+from .lanes import (FrameResult, LaneCheck, LaneMeasurement, LaneSearch, LineFit, Rejected,
+                    line_confidence)
 from .perspective import Perspective, scaled
-
-
-@dataclass(frozen=True)
-class FrameResult:
-    """What the pipeline found in one frame.
-
-    ``found`` is true when both lines were found (the measurements need both); ``reason`` says
-    what was missing otherwise. ``left_conf``/``right_conf`` are 0-1 confidences per line.
-    ``images`` holds the stage images (undistorted, birdseye, binary, search, result) when the
-    pipeline was asked to keep them.
-    """
-
-    left: LineFit
-    right: LineFit
-    measurement: LaneMeasurement
-    method: str
-    left_conf: float
-    right_conf: float
-    reason: str = ""
-    search: LaneSearch | None = field(default=None, repr=False)
-    images: dict = field(default_factory=dict, repr=False)
-
-    @property
-    def left_found(self) -> bool:
-        return self.left.found
-
-    @property
-    def right_found(self) -> bool:
-        return self.right.found
-
-    @property
-    def found(self) -> bool:
-        return self.left.found and self.right.found
-
-    @property
-    def radius_m(self) -> float:
-        return self.measurement.radius_m
-
-    @property
-    def curvature_1pm(self) -> float:
-        return self.measurement.curvature_1pm
-
-    @property
-    def offset_m(self) -> float:
-        return self.measurement.offset_m
-
-    @property
-    def lane_width_m(self) -> float:
-        return self.measurement.lane_width_m
-
-    def summary(self) -> dict:
-        """Return the per-image record written to results.json (NaN where not found)."""
-        return {"found": self.found, "left_found": self.left_found, "right_found": self.right_found,
-                "radius_m": _round(self.radius_m, 1), "offset_m": _round(self.offset_m, 3),
-                "lane_width_m": _round(self.lane_width_m, 3), "reason": self.reason}
-
-
-def _round(v: float, nd: int) -> float:
-    return v if math.isnan(v) else round(float(v), nd)
-
-
-def line_confidence(fit: LineFit, height_px: int, config: lanes.SearchConfig) -> float:
-    """Return a 0-1 confidence of a fitted line: vertical span covered times pixel support."""
-    if not fit.found:
-        return 0.0
-    span = min(1.0, fit.span_px / (0.75 * height_px))
-    support = min(1.0, fit.n_pixels / (4.0 * config.min_line_pixels))
-    return round(span * support, 3)
 
 
 BAND_STRIPS = 4  # strips in which band_binary computes the bands around prior fits
@@ -222,28 +156,62 @@ class LanePipeline:
             computed[name] = join([m[c] for c in cuts])
         return thresholds.combine(join([grown[c] for c in cuts]), tconf, computed)
 
-    def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-               keep_images: bool = False) -> FrameResult:
-        """Return the lane found in one RAW frame, without drawing (the per-frame hot path).
+    def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
+                     keep_images: bool = False) -> tuple[LaneSearch, dict]:
+        """Return the lane search of one RAW frame, unchecked, and the stage images kept.
 
         With a ``prior`` and no ``keep_images``, only the bands around the prior fits are
         remapped and thresholded (``band_binary``); the search sees the same pixels either way.
+        ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
+        without a usable prior, or with ``keep_images``).
         """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
-            return self._result(self.search(self.band_binary(raw, prior), prior), {})
+            return self.search(self.band_binary(raw, prior), prior), {}
         bird = self.birdseye(raw)
         mask = self.binary(bird)
-        search = self.search(mask, prior)
-        return self._result(search, {"birdseye": bird, "binary": mask} if keep_images else {})
+        return self.search(mask, prior), {"birdseye": bird, "binary": mask}
 
-    def _result(self, search: LaneSearch, images: dict) -> FrameResult:
+    def check(self, search: LaneSearch) -> LaneCheck:
+        """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's fits."""
+        p = self.perspective
+        return lanes.check_lane(search.left, search.right,
+                                lanes.search_bands_px(search, self.size, self.config.search),
+                                self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks)
+
+    def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
+               keep_images: bool = False) -> FrameResult:
+        """Return the lane found in one RAW frame, checked, without drawing (the per-frame hot path).
+
+        The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
+        checks is not found, and is kept apart in ``rejected``.
+        """
+        search, images = self.search_frame(raw, prior, keep_images)
+        return self.result(search, images if keep_images else {})
+
+    def result(self, search: LaneSearch, images: dict | None = None) -> FrameResult:
+        """Return the FrameResult of a search: its fits if they pass ``check``, else not found.
+
+        A line that fails its own check, or both lines when the pair fails, become not-found
+        fits whose ``reason`` is the failed check; the measurement is then NaN and the search's
+        fits with what they measured are kept in ``rejected``. Confidences are those of the
+        fits reported (0 for a rejected line).
+        """
         h = self.size[1]
+        check = self.check(search)
+        left, right, rejected = search.left, search.right, None
+        if not check.ok:
+            left = _rejected(left, check.left or check.pair)
+            right = _rejected(right, check.right or check.pair)
+            rejected = Rejected(search.left, search.right, self.measure(search.left, search.right),
+                                check.reason)
         reasons = [f"{side} line not found ({fit.reason})"
                    for side, fit in (("left", search.left), ("right", search.right)) if not fit.found]
-        return FrameResult(search.left, search.right, self.measure(search.left, search.right),
-                           search.method, line_confidence(search.left, h, self.config.search),
-                           line_confidence(search.right, h, self.config.search),
-                           "; ".join(reasons), search, images)
+        if check.reason:
+            reasons.append(check.reason)
+        return FrameResult(left, right, self.measure(left, right), search.method,
+                           line_confidence(left, h, self.config.search),
+                           line_confidence(right, h, self.config.search),
+                           "; ".join(reasons), search, images if images is not None else {}, rejected)
 
     def process(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
         """Return the lane in one RAW frame with the annotated frame in ``images["result"]``.
@@ -293,6 +261,13 @@ class LanePipeline:
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
 
 
+def _rejected(fit: LineFit, why: str) -> LineFit:
+    """Return ``fit`` unchanged when ``why`` is empty, else a not-found fit saying ``why``."""
+    if not why or not fit.found:
+        return fit
+    return LineFit(None, fit.n_pixels, fit.span_px, why, fit.scatter_px)
+
+
 def pipeline_for(image: np.ndarray, config: PipelineConfig = PipelineConfig(),
                  calibration: Calibration | None = None) -> LanePipeline:
     """Return a LanePipeline for frames of ``image``'s size."""
@@ -305,7 +280,9 @@ def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
     """Run the pipeline on image files; write annotated images and ``results.json``; return rows.
 
     Frames of several sizes are allowed: one pipeline is built per size (the calibration is
-    rescaled or refused per ``Calibration.for_size``).
+    rescaled or refused per ``Calibration.for_size``). A file that cannot be read, an image too
+    small for the bird's-eye view, or one whose size the calibration does not fit gets a row with
+    an ``error`` (``runs.run_images``), and the run goes on.
     """
     from .runs import run_images
 
@@ -314,7 +291,14 @@ def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
     def process(rgb: np.ndarray):
         size = (rgb.shape[1], rgb.shape[0])
         if size not in cache:
-            cache[size] = LanePipeline(config, calibration, size=size)
+            try:
+                cache[size] = LanePipeline(config, calibration, size=size)
+            except ConfigError:
+                LanePipeline(config)  # a bad config raises here again: it fails every image alike
+                w, h = config.perspective.size_px
+                raise InputError(f"the image is {size[0]}x{size[1]} px, too small for the bird's-eye "
+                                 "view (the perspective points collapse when scaled to it); pass "
+                                 f"larger images (the config's points are for {w}x{h})") from None
         pipe = cache[size]
         result = pipe.process(rgb, keep_images=debug)
         image = pipe.debug_composite(result) if debug else result.images["result"]
@@ -374,7 +358,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     threads : encoder threads (None: ffmpeg's choice).
 
     Every output is written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing
-    under ``out_path`` or ``log_path``.
+    under ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs
+    keep the frames before the break, and ``PartialOutputError`` says so.
     """
     from .runs import run_video
     from .tracking import LaneTracker

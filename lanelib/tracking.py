@@ -8,15 +8,18 @@ debug composite work on it unchanged. Per frame:
    sliding windows when the tracker is lost or reset ("windows"), started from the tracked lines'
    positions when there is a track. A prior search that fails the checks is retried with sliding
    windows on the same mask.
-2. **Checks.** Each line alone: its pixels may not fill more than ``max_band_fill`` of the band
-   they were searched in (a bright verge is not a line). Each line against the track: its
-   position at the car may not move more than
-   ``max_jump_m`` and its shape may not bend away from the tracked line by more than
-   ``max_width_spread_m``. The pair: lane width at the car within ``min_width_m`` to
-   ``max_width_m``, the lines roughly parallel (the width varies by at most ``max_width_spread_m``
-   from the bottom to the top row) and their curvatures consistent (differ by at most
-   ``max_curvature_diff_1pm``). When the pair fails but a track exists, the line with the higher
-   confidence is kept.
+2. **Checks.** The plausibility checks every found lane passes, image or video
+   (``lanes.LaneChecks``, ``PipelineConfig.checks``), by the same functions ``LanePipeline.detect``
+   uses. Each line alone (``lanes.line_problem``): its pixels may not fill more than
+   ``max_band_fill`` of the band they were searched in (a bright verge is not a line), nor spread
+   across it like texture (``max_band_scatter``). Each line against the track (this module's
+   own checks, ``TrackerConfig``): its position at the car may not move more than ``max_jump_m``
+   and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair
+   (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
+   lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
+   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_1pm``).
+   When the pair fails but a track exists, the line with the higher confidence is kept. A
+   detection that lost a line to the checks is kept in the result's ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one and the tracked lane: it is
    the kept line plus the tracked difference between the two lines, i.e. the tracked lane width
    at every row. Its confidence is half the kept line's.
@@ -34,68 +37,53 @@ debug composite work on it unchanged. Per frame:
    ``hold_frames`` frames with a confidence falling linearly to zero; then the tracker resets
    and reports no lane until a pair passes the checks again.
 
-Confidence per line (0-1): ``pipeline.line_confidence`` of the accepted detection (span of rows
+Confidence per line (0-1): ``lanes.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
 the share of the hold that is left for a held line, 0 when no lane is reported.
 """
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import lanes
 from .errors import ConfigError
-from .lanes import LaneSearch, LineFit
+from .lanes import FrameResult, LaneChecks, LaneSearch, LineFit, Rejected, line_confidence
 
-if TYPE_CHECKING:  # pipeline imports config, which imports this module
-    from .pipeline import FrameResult, LanePipeline
+if TYPE_CHECKING:  # for annotations only: pipeline imports config, which imports this module
+    from .pipeline import LanePipeline
 
 
 @dataclass(frozen=True)
 class TrackerConfig:
-    """Parameters of ``LaneTracker``.
+    """Parameters of ``LaneTracker`` (the checks every lane passes are ``lanes.LaneChecks``).
 
     Parameters
     ----------
-    min_width_m, max_width_m : a detection whose lane width at the car lies outside is rejected.
-    max_width_spread_m : largest difference of the lane width between the bottom and top rows
-        (lines roughly parallel); also the largest change of a line's shape against its track.
-    max_curvature_diff_1pm : largest difference of the two lines' curvature at the car (1/m).
     max_jump_m : largest change of a line's position at the car from one frame to the next.
+    max_bend_m : largest change of a line's shape against its track: the spread, over the check
+        rows, of its distance from the tracked line.
     smooth_frames : good frames averaged (weighted towards the newest) for the reported fit.
     recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
-    check_rows : rows (evenly spaced, top to bottom) on which widths and shapes are compared.
-    max_band_fill : largest share of its search band (window or prior band, over the rows it
-        spans) a line's pixels may fill; a wider patch is a bright area (grass, sky, concrete)
-        whose edge would pass for a line. Real lines fill at most about 0.4.
     """
 
-    min_width_m: float = 3.0
-    max_width_m: float = 4.5
-    max_width_spread_m: float = 0.7
-    max_curvature_diff_1pm: float = 0.004
     max_jump_m: float = 0.5
+    max_bend_m: float = 0.7
     smooth_frames: int = 5
     recency_decay: float = 0.6
     hold_frames: int = 12
-    check_rows: int = 8
-    max_band_fill: float = 0.6
 
     def __post_init__(self):
-        if not 0 < self.min_width_m < self.max_width_m:
-            raise ConfigError("tracking: need 0 < min_width_m < max_width_m")
-        if self.smooth_frames < 1 or self.hold_frames < 0 or self.check_rows < 2:
-            raise ConfigError("tracking: smooth_frames >= 1, hold_frames >= 0 and check_rows >= 2")
+        if self.smooth_frames < 1 or self.hold_frames < 0:
+            raise ConfigError("tracking: smooth_frames >= 1 and hold_frames >= 0")
         if not 0 < self.recency_decay <= 1:
             raise ConfigError("tracking: recency_decay must lie in (0, 1]")
-        if min(self.max_width_spread_m, self.max_curvature_diff_1pm, self.max_jump_m,
-               self.max_band_fill) <= 0:
-            raise ConfigError("tracking: max_width_spread_m, max_curvature_diff_1pm and max_jump_m "
-                              "and max_band_fill must be positive")
+        if min(self.max_jump_m, self.max_bend_m) <= 0:
+            raise ConfigError("tracking: max_jump_m and max_bend_m must be positive")
 
 
 @dataclass(frozen=True)
@@ -115,20 +103,20 @@ class LaneTracker:
     ----------
     pipeline : the pipeline that searches each frame (its size, perspective and search config).
     config : tracking parameters; defaults to ``pipeline.config.tracking``.
+    checks : the plausibility checks; defaults to ``pipeline.config.checks``, those of
+        ``pipeline.detect``.
 
     Call ``update`` once per frame, in order; ``reset`` before a new video.
     """
 
-    def __init__(self, pipeline: "LanePipeline", config: TrackerConfig | None = None):
-        from .pipeline import FrameResult, line_confidence  # late: pipeline -> config -> tracking
-
-        self._FrameResult = FrameResult
-        self._line_confidence = line_confidence
+    def __init__(self, pipeline: "LanePipeline", config: TrackerConfig | None = None,
+                 checks: LaneChecks | None = None):
         self.pipeline = pipeline
         self.config = config if config is not None else pipeline.config.tracking
+        self.checks = checks if checks is not None else pipeline.config.checks
         h = pipeline.size[1]
         self._bottom = float(h - 1)
-        self._rows = np.linspace(0.0, h - 1.0, self.config.check_rows)
+        self._rows = np.linspace(0.0, h - 1.0, self.checks.check_rows)
         self._xm = pipeline.perspective.xm_per_px
         self._ym = pipeline.perspective.ym_per_px
         self.reset()
@@ -162,67 +150,83 @@ class LaneTracker:
 
     # ---- one frame ------------------------------------------------------------------------
 
-    def update(self, raw: np.ndarray, keep_images: bool = False) -> "FrameResult":
+    def update(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
         """Return the tracked lane in the next RAW frame of the video (see the module docstring)."""
         pipe = self.pipeline
         track = self.lane
         prior = None
         if track is not None and self._lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
-        det = pipe.detect(raw, prior=prior, keep_images=keep_images or prior is None)
-        search = det.search
-        left, right, why = self.check(search.left, search.right, track, self._band_px(search))
+        search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None)
+        left, right, why, failed = self._check(search.left, search.right, track, self._band_px(search))
         if track is not None and (left is None or right is None):
             # the search missed: look again with windows started from the tracked lines
-            binary = det.images["binary"] if "binary" in det.images else pipe.binary(pipe.birdseye(raw))
+            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
             retry = lanes.sliding_windows(binary, pipe.config.search,
                                           bases=self._bases(track), car_x=pipe.car_x_px)
-            l2, r2, why2 = self.check(retry.left, retry.right, track, self._band_px(retry))
+            l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
-                search, left, right, why = retry, l2, r2, why2
-        images = det.images if keep_images else {}
-        return self._advance(search, left, right, why, track, images)
+                search, left, right, why, failed = retry, l2, r2, why2, failed2
+        images = det_images if keep_images else {}
+        result = self._advance(search, left, right, why, track, images)
+        if not failed:
+            return result
+        rejected = Rejected(search.left, search.right, pipe.measure(search.left, search.right),
+                            "; ".join(why))
+        return replace(result, rejected=rejected)
 
     def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
-              band_px: float | None = None) -> tuple[LineFit | None, LineFit | None, list[str]]:
+              band_px: float | tuple[float, float] | None = None
+              ) -> tuple[LineFit | None, LineFit | None, list[str]]:
         """Return the lines that pass the sanity checks (None where rejected) and why others failed.
 
         Parameters
         ----------
         left, right : this frame's fits (bird's-eye pixels).
         track : the tracked pixel coefficients (left, right), or None without a track.
-        band_px : width of the band the lines' pixels were searched in (None: not checked).
+        band_px : width (px) of the band the lines' pixels were searched in, one for both or
+            (left, right) (``lanes.search_bands_px``); None: the band checks are skipped.
         """
+        return self._check(left, right, track, band_px)[:3]
+
+    def _check(self, left: LineFit, right: LineFit, track, band_px
+               ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
+        """Return ``check``'s answer and whether a check rejected a found line."""
         cfg = self.config
+        bands = band_px if isinstance(band_px, tuple) else (band_px or 0.0, band_px or 0.0)
+        failed = False
         why: list[str] = []
         kept: dict[str, LineFit | None] = {"left": None, "right": None}
         for i, (side, fit) in enumerate((("left", left), ("right", right))):
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
                 continue
-            if band_px:
-                fill = fit.n_pixels / ((fit.span_px + 1) * band_px)
-                if fill > cfg.max_band_fill:
-                    why.append(f"{side} line is a bright patch, not a line (fills {fill:.0%} of its "
-                               f"search band, limit {cfg.max_band_fill:.0%})")
-                    continue
+            problem = lanes.line_problem(fit, bands[i], self.checks, self._xm, side)
+            if problem:
+                why.append(problem)
+                failed = True
+                continue
             if track is not None:
                 dx = (np.polyval(fit.coeffs_px, self._rows) - np.polyval(track[i], self._rows)) * self._xm
                 if abs(dx[-1]) > cfg.max_jump_m:
                     why.append(f"{side} line jumped {abs(dx[-1]):.2f} m at the car "
                                f"(limit {cfg.max_jump_m} m)")
+                    failed = True
                     continue
-                if dx.max() - dx.min() > cfg.max_width_spread_m:
+                if dx.max() - dx.min() > cfg.max_bend_m:
                     why.append(f"{side} line bent {dx.max() - dx.min():.2f} m away from its track "
-                               f"(limit {cfg.max_width_spread_m} m)")
+                               f"(limit {cfg.max_bend_m} m)")
+                    failed = True
                     continue
             kept[side] = fit
         if kept["left"] is not None and kept["right"] is not None:
-            problem = self._pair_problem(kept["left"], kept["right"])
+            problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
+                                         self._xm, self._ym, self.checks)
             if problem:
                 why.append(problem)
+                failed = True
                 if track is None:
-                    return None, None, why
+                    return None, None, why, failed
                 lc, rc = (self._conf_of(kept[s]) for s in ("left", "right"))
                 drop = "right" if lc >= rc else "left"
                 why.append(f"{drop} line dropped (lower confidence)")
@@ -230,42 +234,23 @@ class LaneTracker:
         if track is None and (kept["left"] is None or kept["right"] is None):
             if kept["left"] is not None or kept["right"] is not None:
                 why.append("one line alone cannot start a track")
-            return None, None, why
-        return kept["left"], kept["right"], why
+            return None, None, why, failed
+        return kept["left"], kept["right"], why, failed
 
-    def _pair_problem(self, left: LineFit, right: LineFit) -> str:
-        """Return why two lines are not a plausible lane ("" when they are)."""
-        cfg = self.config
-        width = (np.polyval(right.coeffs_px, self._rows) - np.polyval(left.coeffs_px, self._rows)) * self._xm
-        if not cfg.min_width_m <= width[-1] <= cfg.max_width_m:
-            return (f"lane width {width[-1]:.2f} m at the car outside {cfg.min_width_m}-"
-                    f"{cfg.max_width_m} m")
-        spread = float(width.max() - width.min())
-        if spread > cfg.max_width_spread_m:
-            return f"lines not parallel (width varies by {spread:.2f} m, limit {cfg.max_width_spread_m} m)"
-        y_m = self._bottom * self._ym
-        kl = lanes.curvature(lanes.fit_to_metres(left.coeffs_px, self._xm, self._ym), y_m)
-        kr = lanes.curvature(lanes.fit_to_metres(right.coeffs_px, self._xm, self._ym), y_m)
-        if abs(kl - kr) > cfg.max_curvature_diff_1pm:
-            return (f"curvatures differ by {abs(kl - kr):.4f} 1/m "
-                    f"(limit {cfg.max_curvature_diff_1pm} 1/m)")
-        return ""
-
-    def _band_px(self, search: LaneSearch) -> float:
-        """Return the width (px) of the band a search looked in: prior band or sliding window."""
-        sconf = self.pipeline.config.search
-        return 2.0 * (sconf.prior_margin_px if search.method == "prior" else sconf.margin_px)
+    def _band_px(self, search: LaneSearch) -> tuple[float, float]:
+        """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
+        return lanes.search_bands_px(search, self.pipeline.size, self.pipeline.config.search)
 
     def _conf_of(self, fit: LineFit) -> float:
-        """Return the 0-1 confidence of a detected line (``pipeline.line_confidence``)."""
-        return self._line_confidence(fit, self.pipeline.size[1], self.pipeline.config.search)
+        """Return the 0-1 confidence of a detected line (``lanes.line_confidence``)."""
+        return line_confidence(fit, self.pipeline.size[1], self.pipeline.config.search)
 
     def _bases(self, track) -> tuple[float, float]:
         """Return the tracked lines' x (px) on the bottom row, where windows start."""
         return (float(np.polyval(track[0], self._bottom)), float(np.polyval(track[1], self._bottom)))
 
     def _advance(self, search: LaneSearch, left: LineFit | None, right: LineFit | None,
-                 why: list[str], track, images: dict) -> "FrameResult":
+                 why: list[str], track, images: dict) -> FrameResult:
         """Update the state with this frame's accepted lines and return the frame's result."""
         notes = list(why)
         if left is not None or right is not None:
@@ -302,21 +287,21 @@ class LaneTracker:
         return self._result(smoothed, self._conf, method, sources, search, notes, images)
 
     def _result(self, coeffs, confs, method: str, sources: dict, search: LaneSearch,
-                notes: list[str], images: dict) -> "FrameResult":
+                notes: list[str], images: dict) -> FrameResult:
         fits = []
         for side, c in zip(("left", "right"), coeffs):
             src = sources.get(side)
             fits.append(LineFit(tuple(float(v) for v in c), src.n_pixels if src else 0,
                                 src.span_px if src else 0.0, "" if src else _note_for(side, notes)))
         left, right = fits
-        return self._FrameResult(left, right, self.pipeline.measure(left, right), method,
-                                 float(confs[0]), float(confs[1]), "; ".join(notes), search, images)
+        return FrameResult(left, right, self.pipeline.measure(left, right), method,
+                           float(confs[0]), float(confs[1]), "; ".join(notes), search, images)
 
-    def _not_found(self, search: LaneSearch, notes: list[str], images: dict) -> "FrameResult":
+    def _not_found(self, search: LaneSearch, notes: list[str], images: dict) -> FrameResult:
         reason = "; ".join(notes) or "no lane"
         left, right = LineFit(None, reason=reason), LineFit(None, reason=reason)
-        return self._FrameResult(left, right, self.pipeline.measure(left, right), search.method,
-                                 0.0, 0.0, reason, search, images)
+        return FrameResult(left, right, self.pipeline.measure(left, right), search.method,
+                           0.0, 0.0, reason, search, images)
 
 
 def _note_for(side: str, notes: list[str]) -> str:

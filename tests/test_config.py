@@ -70,3 +70,31 @@ def test_to_dict_from_dict_are_inverse():
     d = to_dict(PipelineConfig())
     assert from_dict(PipelineConfig, d) == PipelineConfig()
     json.dumps(d)  # JSON-able
+
+
+def test_the_checks_of_older_files_move_from_tracking_to_checks(tmp_path):
+    p = tmp_path / "old.json"
+    p.write_text(json.dumps({"tracking": {"min_width_m": 2.8, "max_width_m": 4.2, "max_width_spread_m": 0.9,
+                                          "max_curvature_diff_1pm": 0.003, "max_band_fill": 0.5,
+                                          "check_rows": 10, "max_jump_m": 0.4}}))
+    cfg = load_config(p)
+    assert (cfg.checks.min_width_m, cfg.checks.max_width_m, cfg.checks.max_width_spread_m,
+            cfg.checks.max_curvature_diff_1pm, cfg.checks.max_band_fill, cfg.checks.check_rows) == \
+        (2.8, 4.2, 0.9, 0.003, 0.5, 10)
+    assert cfg.tracking.max_bend_m == 0.9 and cfg.tracking.max_jump_m == 0.4  # the old key limited both
+    assert cfg.checks.max_band_scatter == PipelineConfig().checks.max_band_scatter
+    assert load_config(save_config(cfg, tmp_path / "new.json")) == cfg
+    assert "min_width_m" not in json.loads((tmp_path / "new.json").read_text())["tracking"]
+
+
+def test_an_old_key_may_not_contradict_its_new_key(tmp_path):
+    p = tmp_path / "both.json"
+    p.write_text(json.dumps({"tracking": {"min_width_m": 2.8}, "checks": {"min_width_m": 3.1}}))
+    with pytest.raises(ConfigError, match=r"tracking\.min_width_m is now checks\.min_width_m.*keep only "
+                                          r"checks\.min_width_m"):
+        load_config(p)
+    p.write_text(json.dumps({"tracking": {"min_width_m": 3.1, "max_width_spread_m": 0.9, "max_bend_m": 0.5},
+                             "checks": {"min_width_m": 3.1}}))
+    cfg = load_config(p)
+    assert cfg.checks.min_width_m == 3.1 and cfg.checks.max_width_spread_m == 0.9
+    assert cfg.tracking.max_bend_m == 0.5  # set in the file: not overwritten by the old key

@@ -124,6 +124,22 @@ def test_a_bright_patch_is_not_taken_for_a_line(pipe):
     assert bottom_x(r, "left") == pytest.approx(LEFT_X, abs=3)
 
 
+def test_texture_is_not_taken_for_a_line(pipe):
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    bird = np.full((H, W, 3), 70, np.uint8)
+    gravel = np.random.default_rng(5).random((H, 240)) < 0.3  # light gravel over the left line's band
+    bird[:, round(LEFT_X) - 120:round(LEFT_X) + 120][gravel] = (235, 235, 235)
+    cv2.line(bird, (round(RIGHT_X), 0), (round(RIGHT_X), H - 1), (235, 235, 235), 24)
+    r = tracker.update(pipe.perspective.unwarp(bird))
+    assert r.found and "left line is texture, not a line" in r.reason
+    assert number_after(r.reason, "m, ") > 70
+    assert "left line inferred from the right line" in r.reason
+    assert bottom_x(r, "left") == pytest.approx(LEFT_X, abs=3)
+    assert r.rejected is not None and r.rejected.left.found and "texture" in r.rejected.reason
+
+
 def test_hold_then_reset_then_reacquire(pipe):
     cfg = TrackerConfig(hold_frames=3)
     tracker = LaneTracker(pipe, cfg)
@@ -168,11 +184,10 @@ def test_smoothing_reduces_frame_to_frame_noise(pipe):
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(min_width_m=5.0), "min_width_m < max_width_m"),
     (dict(smooth_frames=0), "smooth_frames >= 1"),
     (dict(recency_decay=0.0), "recency_decay"),
     (dict(max_jump_m=-1.0), "must be positive"),
-    (dict(max_band_fill=0.0), "max_band_fill must be positive"),
+    (dict(max_bend_m=0.0), "max_bend_m must be positive"),
 ])
 def test_tracker_config_is_validated(kwargs, message):
     with pytest.raises(ConfigError, match=message):
