@@ -3,8 +3,10 @@
 The stages live in their own modules (camera, perspective, thresholds, lanes, tracking, draw,
 hough); ``lanelib.pipeline.LanePipeline`` wires them from one ``PipelineConfig``.
 """
-from .errors import CalibrationError, ConfigError, InputError, LaneLibError
+from .errors import (CalibrationError, ConfigError, DecodeStoppedError, InputError, LaneLibError,
+                     PartialOutputError)
 
 __version__ = "0.1.0"
 
-__all__ = ["LaneLibError", "InputError", "CalibrationError", "ConfigError", "__version__"]
+__all__ = ["LaneLibError", "InputError", "CalibrationError", "ConfigError", "DecodeStoppedError",
+           "PartialOutputError", "__version__"]

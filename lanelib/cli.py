@@ -1,9 +1,12 @@
 """Command-line interface: ``python -m lanelib SUBCOMMAND ...``.
 
 Each subcommand has one ``_add_<name>`` function below that registers its parser and a thin
-``_run_<name>`` that calls into the module owning the work. A ``LaneLibError`` (missing or
-unreadable input, bad config, ...) prints one line to stderr and exits with code 2; Ctrl-C exits
-with 130 and leaves no half-written output.
+``_run_<name>`` that calls into the module owning the work. The exit codes (``main``): 0 when
+every input ran; 1 when the run finished but some inputs failed (a bad file in a folder: its own
+row and one ``error:`` line each; a video that broke off half-way: the outputs keep the frames
+before the break); 2 when nothing was run (usage error, missing or empty input, unreadable video,
+bad config or calibration: one line on stderr, nothing written); 130 on Ctrl-C, which leaves no
+half-written output.
 """
 from __future__ import annotations
 
@@ -11,7 +14,27 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import LaneLibError
+from . import data
+from .errors import LaneLibError, PartialOutputError
+
+_EXIT_OK = "exit codes: 0 every input ran;"
+_EXIT_REST = ("2 nothing was run: a usage error, a missing or empty input, an unreadable video, a bad "
+              "config or calibration, an output over an input (one line on stderr, nothing written); "
+              "130 interrupted by Ctrl-C (no half-written output is left).")
+_EXIT_IMAGES = ("1 the run finished but some files failed (unreadable, not an image, too small, a "
+                "size the calibration does not fit): one `error:` line each on stderr, a row with "
+                "its \"error\" in results.json, no output image;")
+_EXIT_HOUGH = ("1 images: the run finished but some files failed (unreadable, not an image): one "
+               "`error:` line each on stderr, a row with its \"error\" in results.json, no output "
+               "image; video: the video broke off half-way (decoding stopped): the output video and "
+               "log keep the frames before the break, and one `error:` line says where and why;")
+_EXIT_VIDEO = ("1 the video broke off half-way (decoding stopped): the output video and log keep the "
+               "frames before the break, and one `error:` line says where and why;")
+
+
+def _exit_codes(*code_1: str) -> str:
+    """Return the ``--help`` epilog that lists a subcommand's exit codes (code 1 as given)."""
+    return " ".join((_EXIT_OK, *code_1, _EXIT_REST))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -55,7 +78,8 @@ def _add_calibrate(sub) -> None:
     p = sub.add_parser("calibrate", help="calibrate a camera from chessboard photos",
                        description="Find the chessboard in every image of CAL_DIR, calibrate the "
                                    "camera and write the calibration as JSON (camera_matrix, "
-                                   "dist_coeffs, image_size [w, h], rms_px, used, skipped).")
+                                   "dist_coeffs, image_size [w, h], rms_px, used, skipped).",
+                       epilog=_exit_codes())
     p.add_argument("cal_dir", type=Path, metavar="CAL_DIR", help="folder of chessboard photos")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE",
                    help="calibration JSON to write")
@@ -65,15 +89,11 @@ def _add_calibrate(sub) -> None:
 
 
 def _run_calibrate(args) -> int:
-    import warnings
-
     from .camera import calibrate, parse_pattern
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        cal = calibrate(args.cal_dir, parse_pattern(args.pattern))
-    for w in caught:
-        print(f"warning: {w.message}", file=sys.stderr)
+    cal = calibrate(args.cal_dir, parse_pattern(args.pattern))
+    for name, why in sorted(cal.skip_reasons.items()):
+        print(f"skipped {args.cal_dir / name}: {why}", file=sys.stderr)
     cal.save(args.output)
     print(f"{args.output}: {len(cal.used)} boards used, {len(cal.skipped)} skipped, "
           f"RMS reprojection error {cal.rms_px:.3f} px, image size "
@@ -85,7 +105,12 @@ def _add_images(sub) -> None:
     p = sub.add_parser("images", help="find the lane in a folder of images",
                        description="Run the lane pipeline on every image of IN_DIR; write one "
                                    "annotated image per input and OUT_DIR/results.json (file, found, "
-                                   "left_found, right_found, radius_m, offset_m, lane_width_m).")
+                                   "left_found, right_found, radius_m, offset_m, lane_width_m, "
+                                   "and note when the image was grey, 16-bit or slightly corrupt). "
+                                   "Grey, RGBA and 16-bit images are read as RGB (16-bit: value "
+                                   ">> 8); a file that fails gets a row {file, error} and the run "
+                                   "goes on.",
+                       epilog=_exit_codes(_EXIT_IMAGES))
     p.add_argument("in_dir", type=Path, metavar="IN_DIR", help="folder of road images")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT_DIR",
                    help="folder for the annotated images and results.json")
@@ -103,12 +128,23 @@ def _run_images(args) -> int:
     config, calibration = _load_pipeline_inputs(args)
     rows = process_images(files, args.output, config, calibration, debug=args.debug)
     for r in rows:
+        if "error" in r:
+            continue
         status = (f"radius {r['radius_m']} m, offset {r['offset_m']} m, width {r['lane_width_m']} m"
                   if r["found"] else f"no lane found: {r['reason']}")
-        print(f"{r['file']}: {status}")
-    print(f"{sum(r['found'] for r in rows)} of {len(rows)} images: lane found; "
-          f"results in {args.output / 'results.json'}")
-    return 0
+        print(f"{r['file']}: {status}" + (f" (note: {r['note']})" if r.get("note") else ""))
+    failed = _print_failed(rows)
+    print(f"{sum(bool(r.get('found')) for r in rows)} of {len(rows)} images: lane found"
+          + (f"; {failed} failed" if failed else "") + f"; results in {args.output / 'results.json'}")
+    return 1 if failed else 0
+
+
+def _print_failed(rows: list[dict]) -> int:
+    """Print one ``error:`` line on stderr per row that failed; return how many did."""
+    failed = [r for r in rows if "error" in r]
+    for r in failed:
+        print(f"error: {r['error']}", file=sys.stderr)
+    return len(failed)
 
 
 def _add_video(sub) -> None:
@@ -116,7 +152,8 @@ def _add_video(sub) -> None:
                        description="Track the lane through IN (frame by frame, with sanity checks, "
                                    "smoothing and fall back) and write the annotated video OUT "
                                    "(H.264, same size and frame rate). A progress bar shows fps "
-                                   "and ETA; Ctrl-C leaves no half-written file.")
+                                   "and ETA; Ctrl-C leaves no half-written file.",
+                       epilog=_exit_codes(_EXIT_VIDEO))
     p.add_argument("input", type=Path, metavar="IN", help="input video (mp4)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="output video (mp4) to write")
@@ -151,7 +188,9 @@ def _add_hough(sub) -> None:
                                    "right_found, left_x_bottom, left_x_top, right_x_bottom, "
                                    "right_x_top in px, reason); for a video, write the annotated "
                                    "video OUT (lines smoothed across frames, a lost line held for "
-                                   "a few frames).")
+                                   "a few frames). A file that fails gets a row {file, error} "
+                                   "and the run goes on.",
+                       epilog=_exit_codes(_EXIT_HOUGH))
     p.add_argument("input", type=Path, metavar="IN", help="folder of road images, or a video (mp4)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                    help="output folder (images) or output video (mp4)")
@@ -181,12 +220,16 @@ def _run_hough(args) -> int:
             raise InputError("--log is for videos; for images the rows are in OUT/results.json")
         rows = hough.process_images(list_images(args.input), args.output, config)
         for r in rows:
+            if "error" in r:
+                continue
             print(f"{r['file']}: left x {r['left_x_bottom']} px, right x {r['right_x_bottom']} px "
-                  f"at the bottom row" + (f"; {r['reason']}" if r["reason"] else ""))
-        both = sum(r["left_found"] and r["right_found"] for r in rows)
-        print(f"{both} of {len(rows)} images: both lines found; results in "
-              f"{args.output / 'results.json'}")
-        return 0
+                  f"at the bottom row" + (f"; {r['reason']}" if r["reason"] else "")
+                  + (f" (note: {r['note']})" if r.get("note") else ""))
+        failed = _print_failed(rows)
+        both = sum(bool(r.get("left_found") and r.get("right_found")) for r in rows)
+        print(f"{both} of {len(rows)} images: both lines found" + (f"; {failed} failed" if failed else "")
+              + f"; results in {args.output / 'results.json'}")
+        return 1 if failed else 0
     if not args.input.exists():
         raise InputError(f"{args.input}: no such file or folder; check the path")
     if args.input.suffix.lower() not in VIDEO_SUFFIXES:
@@ -208,7 +251,13 @@ def _add_evaluate(sub) -> None:
                     "|curvature error| (1/m), median radius error (%, on curves of radius <= 3 km), "
                     "point accuracy (TuSimple: share of truth line points within 20 px across the "
                     "line, in the raw image, inside the bird's-eye view), and the false-positive and "
-                    "false-negative line rates. See lanelib/evaluate.py for the exact rules.")
+                    "false-negative line rates. See lanelib/evaluate.py for the exact rules. An "
+                    "image that cannot be scored (unreadable, its truth missing or corrupt, another "
+                    "size than the truth's camera) is left out of the scores, and the table says "
+                    "how many failed.",
+        epilog=_exit_codes("1 images: some images could not be scored (one `error:` line each on "
+                           "stderr; the table and the figures cover the rest; a video that stops "
+                           "decoding before the frames to score counts as unreadable: 2);"))
     p.add_argument("kind", choices=("images", "video"),
                    help="images: PATH is a folder of images, each NAME.jpg with NAME.json beside it; "
                         "video: PATH is a video with NAME.csv and NAME.json beside it")
@@ -228,8 +277,8 @@ def _add_evaluate(sub) -> None:
     p.add_argument("--json", type=Path, metavar="OUT",
                    help="also write the figures as JSON (frames, found_rate, offset_err_cm_median, "
                         "offset_err_cm_p95, curvature_err_median, radius_err_pct_median, "
-                        "point_accuracy, fp_rate, fn_rate; rates as fractions, null where nothing "
-                        "was scored)")
+                        "point_accuracy, fp_rate, fn_rate, files_failed; rates as fractions, null "
+                        "where nothing was scored)")
     p.set_defaults(func=_run_evaluate)
 
 
@@ -261,10 +310,12 @@ def _run_evaluate(args) -> int:
         report = evaluate.evaluate_video(args.path, pipe, use_tracker=detector == "tracker",
                                          max_frames=args.max_frames)
     print(report.table())
+    for _, error in report.failed:
+        print(f"error: {error}", file=sys.stderr)
     if args.json:
         write_json(args.json, report.to_dict(), inputs=inputs)
         print(f"figures written to {args.json}")
-    return 0
+    return 1 if report.failed else 0
 
 
 def _add_synth(sub) -> None:
@@ -274,7 +325,8 @@ def _add_synth(sub) -> None:
                     "same seeds. --all rewrites the bundled camera_cal/ (20 chessboards and "
                     "camera_truth.json), test_images/ (8 scenes, NAME.json beside each) and videos/ "
                     "(project, challenge, harder: 10 s each, NAME.csv per frame and NAME.json beside "
-                    "each). The subcommands render one part.")
+                    "each). The subcommands render one part.",
+        epilog=_exit_codes())
     p.add_argument("--all", action="store_true", help="render all the bundled data")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="with --all: folder to write camera_cal/, test_images/ and videos/ into "
@@ -301,7 +353,7 @@ def _add_synth(sub) -> None:
         if args.all == bool(args.synth_kind):
             p.error("give either --all or one of the kinds: images, boards, video")
         if args.all:
-            root = args.out or Path(synth.__file__).resolve().parents[2]
+            root = args.out or data.PACKAGE_REPO
             files = synth.generate_all(root, progress=print)
             print(f"{len(files)} files (and their truth) written under {root}")
         elif args.synth_kind == "images":
@@ -324,7 +376,8 @@ def _add_bench(sub) -> None:
                                    "(one thread) and the video command against decode + encode of "
                                    "the same clip; print the figures and the per-stage times. The "
                                    "clip is the Udacity project video when the Udacity data is "
-                                   "present, else the bundled videos/project.mp4.")
+                                   "present, else the bundled videos/project.mp4.",
+                       epilog=_exit_codes())
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--video", type=Path, metavar="FILE",
                    help="1280x720 clip to time (default: see above); pass --calibration with it")
@@ -349,10 +402,26 @@ def _run_bench(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the exit code (0 ok, 2 bad input, 130 interrupted)."""
+    """Run the CLI; return the exit code.
+
+    Exit codes
+    ----------
+    0 : every input ran.
+    1 : the run finished but some inputs failed: a file of a folder (``images``, ``hough``,
+        ``evaluate images``) that could not be read or processed has its own row with an
+        ``error`` and one ``error:`` line on stderr; or a video (``video``, ``hough``) broke off
+        half-way, and its outputs keep the frames before the break (``PartialOutputError``).
+    2 : nothing was run: a usage error (argparse), or a ``LaneLibError`` before any work (missing
+        or empty input folder, unreadable or empty video, bad config or calibration, an output
+        over an input); one line on stderr, nothing written.
+    130 : interrupted (Ctrl-C); no half-written output is left.
+    """
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
+    except PartialOutputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     except LaneLibError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

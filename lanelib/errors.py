@@ -1,4 +1,7 @@
 """Errors raised by lanelib. Every error says what was wrong, with which file, and what to do."""
+from __future__ import annotations
+
+import os
 
 
 class LaneLibError(Exception):
@@ -15,3 +18,39 @@ class CalibrationError(LaneLibError):
 
 class ConfigError(LaneLibError):
     """A configuration value or file is invalid (unknown key, wrong type, out of range)."""
+
+
+class DecodeStoppedError(InputError):
+    """A video stopped decoding part-way (truncated or corrupt); ``frames`` frames came before.
+
+    ``VideoReader`` raises it after yielding the frames it could decode; a run that catches it
+    may keep what it made of those frames (``runs.run_video`` does, and raises
+    ``PartialOutputError``).
+    """
+
+    def __init__(self, message: str, frames: int, cause: str):
+        super().__init__(message)
+        self.frames = frames
+        self.cause = cause
+
+
+class PartialOutputError(LaneLibError):
+    """A run stopped early on a broken input; its outputs are complete up to where it stopped.
+
+    The outputs named in the message were written (atomically) and hold the ``frames`` frames
+    processed before the input broke; the CLI exits with code 1.
+    """
+
+    def __init__(self, message: str, frames: int):
+        super().__init__(message)
+        self.frames = frames
+
+
+def naming_the_file(message: str, path: str | os.PathLike, *related: str | os.PathLike) -> str:
+    """Return ``message`` led by ``path`` unless it already names that file or one of ``related``.
+
+    ``related`` are files that belong to ``path`` (e.g. the truth file beside an image): a message
+    about one of them names the culprit already.
+    """
+    named = any(os.path.basename(f) in message for f in (path, *related))
+    return message if named else f"{path}: {message}"

@@ -45,14 +45,17 @@ from typing import Sequence
 import numpy as np
 
 from .camera import Calibration, distort_points, undistort_points
-from .errors import InputError
+from .errors import DecodeStoppedError, InputError, LaneLibError, naming_the_file
+from .io import VideoReader, list_images, read_image
+from .synth.truth import load_image_truth, load_video_truth
+from .tracking import LaneTracker
 
 POINT_THRESHOLD_PX = 20.0    # TuSimple ``pixel_thresh``
 MATCH_ACCURACY = 0.85        # TuSimple ``pt_thresh``: a truth line is matched at this accuracy
 RADIUS_SCORED_MAX_M = 3000.0  # radius error is scored on frames with a true radius up to this
 SUMMARY_KEYS = ("frames", "found_rate", "offset_err_cm_median", "offset_err_cm_p95",
                 "curvature_err_median", "radius_err_pct_median", "point_accuracy", "fp_rate",
-                "fn_rate")
+                "fn_rate", "files_failed")
 
 
 # --------------------------------------------------------------------------- point accuracy
@@ -238,6 +241,8 @@ class EvalReport:
     source : what was evaluated (folder or video path).
     detector : ``"frame"`` (each frame on its own) or ``"tracker"`` (``LaneTracker``).
     names : the image file names, or the frame numbers as text.
+    failed : ``(file name, error)`` of each image that could not be scored (unreadable image,
+        missing or corrupt truth, another size than the truth's camera); left out of every figure.
     """
 
     source: str
@@ -258,6 +263,7 @@ class EvalReport:
     fp_lines: np.ndarray
     fn_lines: np.ndarray
     truth: tuple = field(default=(), repr=False)
+    failed: tuple[tuple[str, str], ...] = ()
 
     @property
     def frames(self) -> int:
@@ -310,6 +316,7 @@ class EvalReport:
             "point_accuracy": _nan_stat(self.frame_point_accuracy, np.mean),
             "fp_rate": float(np.mean(fp)) if n else float("nan"),
             "fn_rate": float(np.mean(fn)) if n else float("nan"),
+            "files_failed": len(self.failed),
         }
 
     def to_dict(self) -> dict:
@@ -371,6 +378,11 @@ def format_table(reports: Sequence[EvalReport], titles: Sequence[str] | None = N
         lines.append(notes[0])
     else:
         lines += [f"{t}: {n}" for t, n in zip(titles, notes)]
+    for t, r in zip(titles, reports):
+        if r.failed:
+            lines.append((f"{t}: " if len(reports) > 1 else "")
+                         + f"{len(r.failed)} of {r.frames + len(r.failed)} files failed and are left "
+                           "out of the scores")
     return "\n".join(lines)
 
 
@@ -392,21 +404,24 @@ class _Collector:
                           m.curvature_1pm, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
                           s.accuracy, s.pred_lines, s.gt_lines, s.fp_lines, s.fn_lines, lane))
 
-    def report(self) -> EvalReport:
+    def report(self, failed: Sequence[tuple[str, str]] = ()) -> EvalReport:
         cols = list(zip(*self.rows)) if self.rows else [()] * 16
         f = lambda i: np.asarray(cols[i], np.float64)  # noqa: E731
         i_ = lambda i: np.asarray(cols[i], np.int64)  # noqa: E731
         acc = np.asarray(cols[10], np.float64).reshape(-1, 2)
         return EvalReport(self.source, self.detector, tuple(cols[0]), np.asarray(cols[1], bool),
                           f(2), f(3), f(4), f(5), f(6), f(7), f(8), f(9), acc,
-                          i_(11), i_(12), i_(13), i_(14), tuple(cols[15]))
+                          i_(11), i_(12), i_(13), i_(14), tuple(cols[15]), tuple(failed))
 
 
 def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None = None) -> EvalReport:
     """Return the per-image evaluation of ``pipeline`` on a folder of images with truth beside them.
 
     Each image is detected on its own (``LanePipeline.detect``) and scored against the JSON truth
-    beside it (``lanelib.synth.truth.load_image_truth``).
+    beside it (``lanelib.synth.truth.load_image_truth``). An image that cannot be scored (not
+    readable, its truth missing or corrupt, another size than ``pipeline.size``) goes to the
+    report's ``failed`` with a one-line error naming the file, is left out of every figure, and
+    the run goes on.
 
     Parameters
     ----------
@@ -417,17 +432,26 @@ def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None 
     Raises
     ------
     InputError
-        If the folder holds no images, or an image is unreadable or has no truth beside it.
+        If the folder does not exist or holds no images.
     """
-    from .io import list_images, read_image
-    from .synth.truth import load_image_truth
-
     files = list_images(folder)[:max_frames]
-    truths = [load_image_truth(f) for f in files]  # every truth file checked before any work
     col = _Collector(pipeline, str(folder), "frame")
-    for f, t in zip(files, truths):
-        col.add(f.name, pipeline.detect(read_image(f)), t.lane)
-    return col.report()
+    failed: list[tuple[str, str]] = []
+    w, h = pipeline.size
+    for f in files:
+        try:
+            lane = load_image_truth(f).lane
+            rgb = read_image(f)
+            if rgb.shape[:2] != (h, w):
+                raise InputError(f"{f}: is {rgb.shape[1]}x{rgb.shape[0]} but the ground truth's camera "
+                                 f"is {w}x{h}; score images rendered by that camera (regenerate them "
+                                 "with `python -m lanelib synth images`)")
+            result = pipeline.detect(rgb)
+        except LaneLibError as e:
+            failed.append((f.name, naming_the_file(str(e), f, f.with_suffix(".json"))))
+            continue
+        col.add(f.name, result, lane)
+    return col.report(failed)
 
 
 def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
@@ -445,27 +469,29 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
     Raises
     ------
     InputError
-        If the video or its truth is missing or unreadable, or the video holds more frames than
-        its truth.
+        If the video or its truth is missing or unreadable, the video stops decoding before the
+        frames to score (a truncated file), or it holds more frames than its truth.
     """
-    from .io import VideoReader
-    from .synth.truth import load_video_truth
-    from .tracking import LaneTracker
-
     truth = load_video_truth(path)
     frames = truth.frames[:max_frames]
     tracker = LaneTracker(pipeline) if use_tracker else None
     col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
     with VideoReader(path) as reader:
-        for i, raw in enumerate(reader):
-            if i >= len(frames):
-                if max_frames is None or i < max_frames:
-                    raise InputError(f"{path}: the video has more frames than its truth "
-                                     f"{Path(path).with_suffix('.csv')} ({len(truth.frames)}); "
-                                     "regenerate the truth with `python -m lanelib synth --all`")
-                break
-            result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
-            col.add(str(i), result, frames[i])
+        try:
+            for i, raw in enumerate(reader):
+                if i >= len(frames):
+                    if max_frames is None or i < max_frames:
+                        raise InputError(f"{path}: the video has more frames than its truth "
+                                         f"{Path(path).with_suffix('.csv')} ({len(truth.frames)}); "
+                                         "regenerate the truth with `python -m lanelib synth --all`")
+                    break
+                result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+                col.add(str(i), result, frames[i])
+                if max_frames is not None and i + 1 >= max_frames:
+                    break  # not one frame more: the video may end (or break off) right here
+        except DecodeStoppedError as e:
+            raise InputError(f"{e}; only {e.frames} of the {len(frames)} frames to score could be "
+                             "read: pass a complete video, or --max-frames up to that") from None
     if len(col.rows) < len(frames):
         raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
                          f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
@@ -476,13 +502,23 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
 def calibration_from_truth(path: str | os.PathLike) -> Calibration:
     """Return the true camera recorded in the ground truth of a folder of images or of a video.
 
-    For a folder, the truth beside its first image (by name) is read; for a video, its JSON.
-    """
-    from .io import list_images
-    from .synth.truth import load_image_truth, load_video_truth
+    For a folder, the first truth (by image name) that can be read; for a video, its JSON.
 
+    Raises
+    ------
+    InputError
+        If the path does not exist, or no truth beside it can be read (the message is the first
+        image's error).
+    """
     p = Path(path)
     if not p.exists():
         raise InputError(f"{p}: no such file or folder; check the path")
-    truth = load_image_truth(list_images(p)[0]) if p.is_dir() else load_video_truth(p)
-    return truth_calibration(truth.camera)
+    if not p.is_dir():
+        return truth_calibration(load_video_truth(p).camera)
+    first_error = None
+    for image in list_images(p):
+        try:
+            return truth_calibration(load_image_truth(image).camera)
+        except InputError as e:
+            first_error = first_error or e
+    raise first_error

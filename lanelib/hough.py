@@ -466,7 +466,8 @@ def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
     """Find the lines in each image; write annotated images and ``results.json``; return rows.
 
     Each row holds ``file``, ``left_found``, ``right_found``, each line's x (px) at the bottom
-    row and at the top of the region (None when not found), and ``reason``.
+    row and at the top of the region (None when not found), and ``reason``; a file that cannot be
+    read holds ``file`` and ``error`` instead, and the run goes on (``runs.run_images``).
     """
     finder = HoughLaneFinder(config)
 
@@ -494,7 +495,9 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
 
     ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
     CSV at ``log_path`` holds ``frame, time_s`` and the columns of ``HoughResult.row``. Outputs
-    are written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing behind.
+    are written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing behind, except
+    a video that stops decoding half-way: its outputs keep the frames before the break, and
+    ``PartialOutputError`` says so.
     """
     if Path(out_path).suffix.lower() not in io.VIDEO_SUFFIXES:
         raise InputError(f"{out_path}: the output video needs a video suffix "

@@ -10,15 +10,18 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Iterator
 
 import cv2
+import imageio_ffmpeg
 import numpy as np
 
-from .errors import InputError
+from .errors import DecodeStoppedError, InputError
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff")
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm")
@@ -26,25 +29,142 @@ VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm")
 
 # --------------------------------------------------------------------------- images
 
+@dataclass(frozen=True)
+class ImageFileInfo:
+    """What an image file held before ``read_image_info`` made it an RGB uint8 array.
+
+    Parameters
+    ----------
+    path : the file.
+    width, height : size in pixels.
+    channels : 1 (grey) or 3 (colour) as decoded; an alpha channel is dropped.
+    bit_depth : 8 or 16 bits per sample as stored; 16-bit samples are scaled to 8 bits by keeping
+        their high byte (``value >> 8``: 65535 -> 255, 257 -> 1, 255 -> 0).
+    colour : False when every pixel has R == G == B (a grey image, whatever its format).
+    decoder_messages : what the decoder printed while reading an image it could still decode
+        (e.g. libjpeg's "Corrupt JPEG data: ..."), one line each.
+    """
+
+    path: Path
+    width: int
+    height: int
+    channels: int
+    bit_depth: int
+    colour: bool
+    decoder_messages: tuple[str, ...] = ()
+
+
+_IMAGE_FIX = "replace it with a valid jpg or png"
+# "[ WARN:0@0.067] global grfmt_png.cpp:834 read_chunk " -> ""  (OpenCV's log prefix)
+_CV_LOG_PREFIX = re.compile(r"^\[\s*(?:WARN|ERROR|INFO|FATAL)[^\]]*\]\s*(?:global\s+)?\S+:\d+\s+\S+\s+")
+
+
+@contextlib.contextmanager
+def captured_native_stderr() -> Iterator[list[str]]:
+    """Yield a list that, when the block ends, holds the lines C code wrote to stderr inside it.
+
+    libjpeg, libpng and OpenCV's log write straight to file descriptor 2, past ``sys.stderr``;
+    reading images inside this block turns those lines into a file's note or error instead of
+    letting them break a run's one-line-per-problem output. Not thread-safe: what another thread
+    writes to fd 2 during the block is captured too.
+    """
+    lines: list[str] = []
+    with contextlib.suppress(Exception):
+        sys.stderr.flush()
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr to redirect: nothing to capture
+        yield lines
+        return
+    try:
+        with tempfile.TemporaryFile() as tmp:
+            os.dup2(tmp.fileno(), 2)
+            try:
+                yield lines
+            finally:
+                os.dup2(saved, 2)
+                tmp.seek(0)
+                text = tmp.read().decode("utf-8", "replace")
+                lines += [line.strip() for line in text.splitlines() if line.strip()]
+    finally:
+        os.close(saved)
+
+
+def _decoder_message(line: str, limit: int = 160) -> str:
+    """Return one decoder line without OpenCV's log prefix, cut to ``limit`` characters."""
+    line = _CV_LOG_PREFIX.sub("", line.strip())
+    return line if len(line) <= limit else line[:limit - 3] + "..."
+
+
+def read_image_info(path: str | os.PathLike) -> tuple[np.ndarray, ImageFileInfo]:
+    """Return the image at ``path`` as an RGB uint8 array (H x W x 3), and what the file held.
+
+    Grey images are returned with three equal channels, an alpha channel is dropped, and 16-bit
+    samples are scaled to 8 bits by keeping the high byte (``value >> 8``). The EXIF orientation
+    of a JPEG is applied, as OpenCV does by default.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist, is not a file, cannot be read, is empty, cannot be decoded
+        as an image, or holds samples other than 8- or 16-bit integers. The message names the
+        file, the cause and the fix, on one line.
+    """
+    p = Path(path)
+    if not p.exists():
+        if p.is_symlink():
+            raise InputError(f"{p}: a broken symbolic link (its target is gone); fix or remove it")
+        raise InputError(f"{p}: no such file; check the path")
+    if not p.is_file():
+        raise InputError(f"{p}: not a file; pass an image file (jpg or png)")
+    try:
+        data = p.read_bytes()
+    except OSError as e:
+        raise InputError(f"{p}: cannot be read ({e.strerror or e}); check its permissions") from None
+    if not data:
+        raise InputError(f"{p}: the file is empty (0 bytes); {_IMAGE_FIX}")
+    failure = ""
+    with captured_native_stderr() as printed:
+        try:
+            img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_ANYCOLOR | cv2.IMREAD_ANYDEPTH)
+        except cv2.error as e:  # e.g. a header announcing more pixels than OpenCV allows
+            img, failure = None, str(e).strip().splitlines()[-1] if str(e).strip() else "cv2.error"
+    messages = tuple(dict.fromkeys(_decoder_message(m) for m in printed))  # distinct, in order
+    if img is None or img.size == 0:
+        cause = failure or (messages[0] if messages else
+                            "no image format OpenCV can decode: not an image, or truncated")
+        raise InputError(f"{p}: not a readable image ({_decoder_message(cause)}); {_IMAGE_FIX}")
+    if img.dtype == np.uint16:
+        bit_depth, img = 16, (img >> 8).astype(np.uint8)
+    elif img.dtype == np.uint8:
+        bit_depth = 8
+    else:
+        raise InputError(f"{p}: {img.dtype} samples are not supported; save the image with 8- or "
+                         "16-bit integer samples (jpg or png)")
+    if img.ndim == 2:
+        channels, rgb = 1, cv2.cvtColor(img, cv2.COLOR_GRAY2RGB)
+    elif img.ndim == 3 and img.shape[2] in (3, 4):
+        channels = 3
+        rgb = cv2.cvtColor(img, cv2.COLOR_BGR2RGB if img.shape[2] == 3 else cv2.COLOR_BGRA2RGB)
+    else:
+        raise InputError(f"{p}: an image of shape {img.shape} is not supported; {_IMAGE_FIX}")
+    colour = channels == 3 and not (np.array_equal(rgb[..., 0], rgb[..., 1])
+                                    and np.array_equal(rgb[..., 1], rgb[..., 2]))
+    h, w = rgb.shape[:2]
+    return rgb, ImageFileInfo(p, w, h, channels, bit_depth, colour, messages)
+
+
 def read_image(path: str | os.PathLike) -> np.ndarray:
     """Return the image at ``path`` as an RGB uint8 array (H x W x 3).
+
+    Grey, RGBA and 16-bit images are converted as ``read_image_info`` says.
 
     Raises
     ------
     InputError
         If the file does not exist, is not a file, or cannot be decoded as an image.
     """
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"{p}: no such file; check the path")
-    if not p.is_file():
-        raise InputError(f"{p}: not a file; pass an image file (jpg or png)")
-    data = np.fromfile(str(p), dtype=np.uint8)
-    bgr = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
-    if bgr is None:
-        raise InputError(f"{p}: not a readable image (empty, corrupt or not an image); "
-                         "replace it with a valid jpg or png")
-    return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    return read_image_info(path)[0]
 
 
 def encode_image(rgb: np.ndarray, suffix: str = ".png", jpeg_quality: int = 90) -> bytes:
@@ -71,19 +191,26 @@ def write_image(path: str | os.PathLike, rgb: np.ndarray, jpeg_quality: int = 95
 
 
 def list_images(folder: str | os.PathLike) -> list[Path]:
-    """Return the image files directly in ``folder``, sorted by name.
+    """Return the entries of ``folder`` named like images (``IMAGE_SUFFIXES``), sorted by name.
+
+    Every entry with an image suffix is listed, also one that is not a readable file (a folder
+    named ``x.jpg``, a broken link): a batch run reports it as that file's error instead of
+    skipping it without a word.
 
     Raises
     ------
     InputError
-        If the folder does not exist or holds no image files.
+        If the folder does not exist, cannot be listed, or holds no image files.
     """
     d = Path(folder)
     if not d.exists():
         raise InputError(f"{d}: no such folder; check the path")
     if not d.is_dir():
         raise InputError(f"{d}: not a folder; pass a folder of images")
-    files = sorted(f for f in d.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES and f.is_file())
+    try:
+        files = sorted(f for f in d.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    except OSError as e:
+        raise InputError(f"{d}: cannot be listed ({e.strerror or e}); check its permissions") from None
     if not files:
         raise InputError(f"{d}: holds no images ({', '.join(IMAGE_SUFFIXES)}); "
                          "pass a folder that contains images")
@@ -106,12 +233,16 @@ def atomic_path(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] =
 
     The temporary file keeps ``target``'s suffix (ffmpeg chooses the container by it). On any
     exception, KeyboardInterrupt included, the temporary file is removed and ``target`` is left
-    as it was.
+    as it was. A folder that cannot be made or written to raises ``InputError``.
     """
     t = Path(target)
     check_not_input(t, inputs)
-    t.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{t.stem}.", suffix=f".part{t.suffix}", dir=t.parent)
+    try:
+        t.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{t.stem}.", suffix=f".part{t.suffix}", dir=t.parent)
+    except OSError as e:
+        raise InputError(f"{t}: cannot be written ({e.strerror or e}); choose a writable output "
+                         "path") from None
     os.close(fd)
     tmp = Path(tmp_name)
     umask = os.umask(0)
@@ -147,6 +278,8 @@ def read_json(path: str | os.PathLike, what: str = "JSON file"):
         return json.loads(p.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise InputError(f"{p}: not valid JSON ({e}); fix or regenerate the {what}") from None
+    except OSError as e:
+        raise InputError(f"{p}: cannot be read ({e.strerror or e}); check its permissions") from None
 
 
 # --------------------------------------------------------------------------- video
@@ -166,36 +299,71 @@ class VideoInfo:
         return (self.width, self.height)
 
 
+# A video that ends more than this many frames (or this share of its announced length) before
+# the length its container announces is taken as broken off: container durations are rounded,
+# so a frame or two of difference is normal.
+SHORTFALL_FRAMES = 2
+SHORTFALL_SHARE = 0.01
+_VIDEO_FIX = "pass a valid video (mp4, H.264)"
+_FFMPEG_LINE = re.compile(r"^\[[^\]]*@ 0x[0-9a-f]+\]\s*(.*)$")
+
+
+def ffmpeg_cause(text: str) -> str:
+    """Return the one line of ffmpeg's output (as imageio-ffmpeg reports it) that says what failed."""
+    log = text.split("=== stderr ===", 1)[-1]
+    lines = [line.strip() for line in log.splitlines() if line.strip()]
+    if any(line.startswith("Input #") for line in lines) and not any(
+            "Video:" in line for line in lines if line.startswith("Stream #")):
+        return "the file holds no video stream"
+    for line in lines:
+        m = _FFMPEG_LINE.match(line)
+        if m and m.group(1) and "misdetection possible" not in m.group(1):
+            cause = m.group(1).rstrip(".")
+            if cause == "moov atom not found":
+                cause += ": the mp4 has no index (truncated, never finished, or not an mp4)"
+            return cause
+    if "=== stderr ===" in text and lines:
+        return lines[-1]
+    return text.strip().splitlines()[0] if text.strip() else "no video stream"
+
+
 class VideoReader:
     """Iterate over a video's frames as RGB uint8 arrays, decoded by imageio-ffmpeg.
 
-    ``info`` is read when the reader is made, so an empty, corrupt or missing file raises
-    ``InputError`` there, with the file's name, not halfway through a run.
+    ``info`` is read when the reader is made, so an empty, corrupt or missing file, or one in a
+    codec ffmpeg cannot decode, raises ``InputError`` there, with the file's name, not halfway
+    through a run. A video that breaks off after some frames (a decoding error, or a file that
+    ends well before the length its container announces: a truncated download) raises
+    ``DecodeStoppedError`` after the frames it could decode; one with no frame at all raises
+    ``InputError``.
     """
 
     def __init__(self, path: str | os.PathLike):
-        import imageio_ffmpeg
-
         self.path = Path(path)
         if not self.path.is_file():
             raise InputError(f"{self.path}: no such video file; check the path")
         if self.path.stat().st_size == 0:
-            raise InputError(f"{self.path}: the video file is empty; pass a valid video (mp4)")
+            raise InputError(f"{self.path}: the video file is empty (0 bytes); {_VIDEO_FIX}")
         self._gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
         try:
             meta = next(self._gen)
         except (RuntimeError, OSError, StopIteration) as e:
             self.close()
-            raise InputError(f"{self.path}: not a readable video ({str(e).splitlines()[0] if str(e) else 'no stream'}); "
-                             "pass a valid video (mp4, H.264)") from None
+            raise InputError(f"{self.path}: not a readable video ({ffmpeg_cause(str(e))}); "
+                             f"{_VIDEO_FIX}") from None
         w, h = meta.get("size", (0, 0))
         fps = float(meta.get("fps") or 0.0)
         if not w or not h or fps <= 0:
             self.close()
-            raise InputError(f"{self.path}: no video stream found; pass a valid video (mp4, H.264)")
+            raise InputError(f"{self.path}: no video stream found; {_VIDEO_FIX}")
         duration = float(meta.get("duration") or 0.0)
         self.info = VideoInfo(self.path, int(w), int(h), fps, int(round(duration * fps)))
         self._frame_bytes = int(w) * int(h) * 3
+
+    def _stopped(self, n: int, cause: str) -> InputError:
+        if n == 0:
+            return InputError(f"{self.path}: no frame could be decoded ({cause}); {_VIDEO_FIX}")
+        return DecodeStoppedError(f"{self.path}: decoding stopped at frame {n}: {cause}", n, cause)
 
     def __iter__(self) -> Iterator[np.ndarray]:
         w, h = self.info.size
@@ -203,14 +371,17 @@ class VideoReader:
         try:
             for raw in self._gen:
                 if len(raw) != self._frame_bytes:
-                    break
+                    raise self._stopped(n, f"a partial frame ({len(raw)} of {self._frame_bytes} bytes)")
                 n += 1
                 yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)
         except RuntimeError as e:
-            raise InputError(f"{self.path}: decoding failed after {n} frames ({e}); "
-                             "the video may be truncated or corrupt") from None
+            raise self._stopped(n, ffmpeg_cause(str(e))) from None
+        expected = self.info.n_frames
         if n == 0:
-            raise InputError(f"{self.path}: the video holds no frames; pass a valid video")
+            raise InputError(f"{self.path}: the video holds no frames; {_VIDEO_FIX}")
+        if expected - n > max(SHORTFALL_FRAMES, SHORTFALL_SHARE * expected):
+            raise self._stopped(n, f"the file ends after {n} of the {expected} frames its container "
+                                   "announces (truncated?)")
 
     def close(self) -> None:
         with contextlib.suppress(Exception):
@@ -249,8 +420,6 @@ class VideoWriter:
         self.frames_written = 0
 
     def _start(self, size: tuple[int, int]) -> None:
-        import imageio_ffmpeg
-
         params = dict(H264_PARAMS)
         out = list(params.pop("output_params"))
         if self._threads is not None:

@@ -6,6 +6,7 @@ from pathlib import Path
 import math
 import shutil
 
+import cv2
 import numpy as np
 import pytest
 
@@ -292,3 +293,52 @@ def test_cli_json_may_not_overwrite_a_truth_file(tmp_path, capsys):
     code = cli.main(["evaluate", "images", str(tmp_path), "--json", str(truth)])
     assert code == 2 and "overwrite an input" in capsys.readouterr().err
     assert truth.read_bytes() == before
+
+
+def test_cli_images_leaves_bad_files_out_of_the_scores_and_exits_1(tmp_path, capsys):
+    _need(TEST_IMAGES)
+    good = sorted(TEST_IMAGES.glob("*.jpg"))[:2]
+    for image in good:
+        for f in (image, image.with_suffix(".json")):
+            shutil.copy(f, tmp_path / f.name)
+    truth = good[0].with_suffix(".json")
+    (tmp_path / "a_corrupt.jpg").write_bytes(b"\xff\xd8\xff\xe0 not really a jpeg")
+    shutil.copy(truth, tmp_path / "a_corrupt.json")
+    shutil.copy(good[0], tmp_path / "b_no_truth.jpg")
+    shutil.copy(good[0], tmp_path / "c_bad_truth.jpg")
+    (tmp_path / "c_bad_truth.json").write_text('{"radius_m": ')
+    shutil.copy(truth, tmp_path / "d_small.json")
+    cv2.imwrite(str(tmp_path / "d_small.png"), np.zeros((72, 128, 3), np.uint8))
+    out = tmp_path.parent / f"{tmp_path.name}.json"
+    code = cli.main(["evaluate", "images", str(tmp_path), "--json", str(out)])
+    captured = capsys.readouterr()
+    assert code == 1
+    errors = captured.err.strip().splitlines()
+    assert len(errors) == 4 and all(e.startswith(f"error: {tmp_path}/") for e in errors)
+    assert errors[0].startswith(f"error: {tmp_path / 'a_corrupt.jpg'}: not a readable image")
+    assert errors[1].startswith(f"error: {tmp_path / 'b_no_truth.json'}: no ground truth beside "
+                                "b_no_truth.jpg")
+    assert errors[2].startswith(f"error: {tmp_path / 'c_bad_truth.json'}: not valid JSON")
+    assert errors[3] == (f"error: {tmp_path / 'd_small.png'}: is 128x72 but the ground truth's camera "
+                         "is 1280x720; score images rendered by that camera (regenerate them with "
+                         "`python -m lanelib synth images`)")
+    assert "4 of 6 files failed and are left out of the scores" in captured.out
+    d = json.loads(out.read_text())
+    assert tuple(d) == SUMMARY_KEYS and d["frames"] == 2 and d["files_failed"] == 4
+    # the scores are those of the two good images alone
+    clean = tmp_path.parent / f"{tmp_path.name}_clean"
+    clean.mkdir()
+    for image in good:
+        for f in (image, image.with_suffix(".json")):
+            shutil.copy(f, clean / f.name)
+    assert cli.main(["evaluate", "images", str(clean), "--json", str(clean / "e.json")]) == 0
+    clean_d = json.loads((clean / "e.json").read_text())
+    assert clean_d == {**d, "files_failed": 0}
+    assert "failed" not in capsys.readouterr().out
+
+
+def test_table_counts_failed_files_only_when_there_are_some():
+    assert "failed" not in _report().table()
+    text = _report(failed=(("x.jpg", "x.jpg: broken"),)).table()
+    assert text.splitlines()[-1] == "1 of 6 files failed and are left out of the scores"
+    assert _report(failed=(("x.jpg", "x.jpg: broken"),)).to_dict()["files_failed"] == 1

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import csv
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -10,13 +11,14 @@ import time
 from pathlib import Path
 
 import cv2
+import imageio_ffmpeg
 import numpy as np
 import pytest
 
 from lanelib import io, thresholds
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config_or_preset, preset
-from lanelib.errors import ConfigError
+from lanelib.errors import ConfigError, DecodeStoppedError
 from lanelib.pipeline import VIDEO_LOG_COLUMNS, LanePipeline, process_video
 
 COLUMNS = ["frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
@@ -200,11 +202,39 @@ def first_long_left_curve(curvature: np.ndarray, min_frames: int = 100) -> tuple
     raise AssertionError("no long left curve")
 
 
+def check_readme_video_row(readme_table, clip: str, rows: list[dict]) -> None:
+    """Compare a video's per-frame log with its row of the README's 'Real video' table.
+
+    Percentages to the 0.1 point they are written with (a whole percent where written so), widths
+    within 0.05 m and the largest |offset| within 0.03 m.
+    """
+    row = next((r for r in readme_table("Real video") if r["clip"].split()[-1] == clip), None)
+    assert row is not None, f"README.md: no row for {clip} in the 'Real video' table"
+    found = column(rows, "found") > 0
+    width = column(rows, "lane_width_m")
+    offset = column(rows, "offset_m")
+    assert len(rows) == int(row["frames"].replace(",", ""))
+
+    def percent(cell: str, value: float) -> None:
+        text = cell.replace("%", "").strip()
+        tol = 0.05 if "." in text else 0.5
+        assert 100 * value == pytest.approx(float(text), abs=tol), (clip, cell, 100 * value)
+
+    percent(row["lane found"], found.mean())
+    percent(row["width in 3.0–4.5 m"], np.mean((width >= 3.0) & (width <= 4.5)))
+    lo, med, hi = (float(v) for v in row["width min / median / max (m)"].split("/"))
+    w = width[found]
+    assert (w.min(), np.median(w), w.max()) == pytest.approx((lo, med, hi), abs=0.05), clip
+    max_offset = float(row["max \\|offset\\|"].replace("m", ""))
+    assert np.nanmax(np.abs(offset[found])) == pytest.approx(max_offset, abs=0.03), clip
+
+
 @pytest.mark.udacity
 @pytest.mark.slow
-def test_project_video_figures(project_run):
+def test_project_video_figures(project_run, readme_table):
     rows, out = project_run
     assert len(rows) == 1260 and io.VideoReader(out).info.n_frames == 1260
+    check_readme_video_row(readme_table, "project_video", rows)
     found = column(rows, "found")
     width = column(rows, "lane_width_m")
     offset = column(rows, "offset_m")
@@ -223,7 +253,7 @@ def test_project_video_figures(project_run):
 @pytest.mark.udacity
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["solidWhiteRight", "solidYellowLeft"])
-def test_p1_clips_with_the_p1_preset(udacity_p1, tmp_path, name):
+def test_p1_clips_with_the_p1_preset(udacity_p1, tmp_path, name, readme_table):
     log = tmp_path / "frames.csv"
     p = run("video", udacity_p1 / "test_videos" / f"{name}.mp4", "-o", tmp_path / "out.mp4",
             "--config", "p1", "--log", log, "--no-progress")
@@ -232,6 +262,7 @@ def test_p1_clips_with_the_p1_preset(udacity_p1, tmp_path, name):
     assert len(rows) == {"solidWhiteRight": 221, "solidYellowLeft": 681}[name]
     width = column(rows, "lane_width_m")
     assert np.mean((width >= 3.0) & (width <= 4.5)) >= 0.95
+    check_readme_video_row(readme_table, name, rows)
 
 
 # --------------------------------------------------------------------------- the band hot path
@@ -386,9 +417,7 @@ SYNTH = Path(__file__).resolve().parents[1] / "videos"
 def synthetic_report(name: str, use_tracker: bool = True):
     from lanelib import evaluate
 
-    path = SYNTH / f"{name}.mp4"
-    if not path.is_file():
-        pytest.skip(f"{path} not found: generate it with `python -m lanelib synth --all`")
+    path = SYNTH / f"{name}.mp4"  # bundled with the repo: missing is a failure, not a skip
     cal = evaluate.calibration_from_truth(path)
     return evaluate.evaluate_video(path, LanePipeline(PipelineConfig(), cal, size=cal.image_size),
                                    use_tracker=use_tracker)
@@ -414,9 +443,7 @@ def test_bench_reports_every_figure_consistently(capsys):
     from lanelib import bench
     from lanelib.evaluate import calibration_from_truth
 
-    clip = SYNTH / "project.mp4"
-    if not clip.is_file():
-        pytest.skip(f"{clip} not found: generate it with `python -m lanelib synth --all`")
+    clip = SYNTH / "project.mp4"  # bundled with the repo
     f = bench.run(clip, calibration_from_truth(clip), clip_frames=12, stage_frames=4, repeats=1,
                   video_rounds=1)
     assert {"detect_ms", "remap_ms", "detect_to_remap", "video_fps", "codec_fps",
@@ -436,3 +463,81 @@ def test_bench_reports_every_figure_consistently(capsys):
 def test_bench_refuses_a_tiny_clip():
     p = run("bench", "--frames", "5")
     assert p.returncode == 2 and "--frames 5: give 10 frames or more" in p.stderr
+
+
+# --------------------------------------------------------------------------- broken videos
+
+PROJECT = SYNTH / "project.mp4"
+
+
+def broken_video(kind: str, folder: Path, faststart: Path) -> Path:
+    """Write a video that cannot be read at all into ``folder``, with the project's truth beside it."""
+    path = folder / f"{kind}.mp4"
+    data = PROJECT.read_bytes()
+    if kind == "truncated":  # the first 30 % of the bytes: the index (written last) is gone
+        path.write_bytes(data[:int(0.3 * len(data))])
+    elif kind == "codec":  # a codec tag no decoder knows
+        i = data.index(b"avc1", data.index(b"stsd"))
+        path.write_bytes(data[:i] + b"zzzz" + data[i + 4:])
+    elif kind == "no_frames":
+        subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(PROJECT), "-c",
+                        "copy", "-frames:v", "0", str(path)], check=True)
+    elif kind == "first_frame_cut":  # the index, and half of the first frame
+        head = faststart.read_bytes()
+        path.write_bytes(head[:head.index(b"mdat") + 5000])
+    else:
+        path.write_bytes(b"GIF89a" + bytes(range(256)) * 8)
+    for suffix in (".csv", ".json"):
+        shutil.copy(PROJECT.with_suffix(suffix), path.with_suffix(suffix))
+    return path
+
+
+@pytest.mark.parametrize("kind,cause", [
+    ("truncated", "moov atom not found: the mp4 has no index"),
+    ("codec", "unknown codec"),
+    ("no_frames", "the file holds no video stream"),
+    ("first_frame_cut", "not a readable video"),
+    ("not_a_video", "no video stream found"),
+])
+def test_an_unreadable_video_is_one_line_exit_2_and_nothing_written(tmp_path, faststart, capsys, kind, cause):
+    src = broken_video(kind, tmp_path, faststart)
+    before = leftovers(tmp_path)
+    out = tmp_path / "out"
+    for args in (["video", src, "-o", out / "v.mp4", "--log", out / "v.csv", "--no-progress"],
+                 ["hough", src, "-o", out / "h.mp4", "--log", out / "h.csv", "--no-progress"],
+                 ["evaluate", "video", src, "--json", out / "e.json"]):
+        assert main([str(a) for a in args]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"error: {src}: ") and cause in err[0], err
+    assert leftovers(tmp_path) == before  # no output, not even the output folder's files
+    assert not out.exists() or leftovers(out) == []
+
+
+def test_a_video_broken_half_way_keeps_the_frames_before_the_break(tmp_path, faststart, capsys):
+    data = faststart.read_bytes()
+    src = tmp_path / "cut.mp4"
+    src.write_bytes(data[:len(data) // 12])
+    with pytest.raises(DecodeStoppedError) as e:  # how many frames the cut file holds
+        for _ in io.VideoReader(src):
+            pass
+    n = e.value.frames
+    assert 8 <= n <= 40
+    for command in ("video", "hough"):
+        out, log = tmp_path / f"{command}.mp4", tmp_path / f"{command}.csv"
+        assert main([command, str(src), "-o", str(out), "--log", str(log), "--no-progress"]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"error: {src}: decoding stopped at frame {n}: the file ends after {n} of the 250 "
+                       f"frames its container announces (truncated?); wrote {n} frames to {out} and "
+                       f"{n} rows to {log}"]
+        assert sum(1 for _ in io.VideoReader(out)) == n
+        assert [int(r["frame"]) for r in read_log(log)] == list(range(n))
+    assert not list(tmp_path.glob(".*part*"))
+    # evaluate cannot score frames that are not there: exit 2, unless it needs only those
+    for use in ([], ["--max-frames", str(n + 1)]):
+        for suffix in (".csv", ".json"):
+            shutil.copy(PROJECT.with_suffix(suffix), src.with_suffix(suffix))
+        assert main(["evaluate", "video", str(src), *use]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"only {n} of the {n + 1 if use else 250} frames to score" in err[0]
+    assert main(["evaluate", "video", str(src), "--max-frames", str(n)]) == 0
+    assert capsys.readouterr().err == ""
