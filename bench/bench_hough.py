@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import os
 import statistics
 import time
 from pathlib import Path
@@ -22,15 +21,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from lanelib import hough, io
-
-CLIP = Path("udacity-lanelines-p1") / "test_videos" / "solidWhiteRight.mp4"
-
+from lanelib import data, hough, io
 
 def default_video() -> Path:
-    """Return where solidWhiteRight.mp4 is expected (LANELIB_DATA or ../shared/data)."""
-    root = Path(os.environ.get("LANELIB_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
-    return root / CLIP
+    """Return where solidWhiteRight.mp4 is expected (``lanelib.data``: LANELIB_DATA or ../shared/data)."""
+    return data.data_root() / data.UDACITY_P1 / "test_videos" / "solidWhiteRight.mp4"
 
 
 def synthetic_frame() -> np.ndarray:

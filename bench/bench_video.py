@@ -11,38 +11,25 @@ tested.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
-import warnings
 from pathlib import Path
 
-from lanelib import bench
+from lanelib import bench, data, io
 from lanelib.config import PipelineConfig, preset
 from lanelib.errors import LaneLibError
-
-REPO = Path(__file__).resolve().parents[1]
-
+from lanelib.evaluate import calibration_from_truth
 
 def sources() -> list[tuple[str, Path, object, PipelineConfig]]:
     """Return (name, clip, calibration, config) of each clip that exists."""
-    data = Path(os.environ.get("LANELIB_DATA", REPO.parent / "shared" / "data"))
     out = []
-    udacity = data / "udacity-advanced"
-    if (udacity / "videos" / "project_video.mp4").is_file():
-        from lanelib.camera import calibrate
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            cal = calibrate(udacity / "camera_cal")
-        out.append(("udacity project", udacity / "videos" / "project_video.mp4", cal, PipelineConfig()))
-    synth = REPO / "videos" / "project.mp4"
+    udacity = data.udacity("videos/project_video.mp4")
+    if udacity is not None:
+        out.append(("udacity project", udacity, data.udacity_calibration(), PipelineConfig()))
+    synth = data.bundled("videos") / "project.mp4"
     if synth.is_file():
-        from lanelib.evaluate import calibration_from_truth
-
         out.append(("synthetic project", synth, calibration_from_truth(synth), PipelineConfig()))
-    p1 = data / "udacity-lanelines-p1" / "test_videos" / "solidYellowLeft.mp4"
-    if p1.is_file():
+    p1 = data.udacity("test_videos/solidYellowLeft.mp4", data.UDACITY_P1)
+    if p1 is not None:
         out.append(("p1 solidYellowLeft", p1, None, preset("p1")))
     return out
 
@@ -72,9 +59,7 @@ def main() -> int:
               f"{f['remap_ms']:8.2f} {f['detect_to_remap']:5.2f} {f['video_fps']:9.1f} "
               f"{f['codec_fps']:9.1f} {f['video_to_codec']:5.2f} {f['cpu_codec_to_video']:7.2f}")
     if args.json:
-        from lanelib.io import write_json
-
-        write_json(args.json, results)
+        io.write_json(args.json, results)
     return 0
 
 

@@ -30,7 +30,6 @@ import resource
 import statistics
 import tempfile
 import time
-import warnings
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
@@ -38,34 +37,26 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from . import io, thresholds
+from . import data, io, thresholds
 from .camera import Calibration
 from .config import PipelineConfig
 from .errors import InputError
-from .lanes import LineFit
+from .evaluate import calibration_from_truth
 
-REPO = Path(__file__).resolve().parents[1]
 GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7)}
 
 
 def default_video() -> tuple[Path, Calibration | None]:
     """Return the clip to benchmark and its calibration (Udacity data first, then the bundled video)."""
-    data = Path(os.environ.get("LANELIB_DATA", REPO.parent / "shared" / "data"))
-    udacity = data / "udacity-advanced"
-    if (udacity / "videos" / "project_video.mp4").is_file():
-        from .camera import calibrate
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return udacity / "videos" / "project_video.mp4", calibrate(udacity / "camera_cal")
-    synth = REPO / "videos" / "project.mp4"
+    udacity = data.udacity("videos/project_video.mp4")
+    if udacity is not None:
+        return udacity, data.udacity_calibration()
+    synth = data.bundled("videos") / "project.mp4"
     if synth.is_file():
-        from .evaluate import calibration_from_truth
-
         return synth, calibration_from_truth(synth)
-    raise InputError(f"no video to benchmark: neither {udacity / 'videos' / 'project_video.mp4'} nor "
-                     f"{synth} exists; pass --video, set LANELIB_DATA, or run "
-                     "`python -m lanelib synth --all`")
+    raise InputError(f"no video to benchmark: neither the Udacity project video "
+                     f"({data.missing_reason('videos/project_video.mp4')}) nor {synth}; pass --video, "
+                     "or run `python -m lanelib synth --all`")
 
 
 @contextmanager

@@ -5,7 +5,8 @@ images in which a board is found. A photo up to 2 px larger or smaller in each d
 taken as the same sensor with a row or column more or less at the right/bottom edge (the
 Udacity set holds two 1281x721 photos among 1280x720 ones): its corner coordinates are used as
 they are, since cropping or padding at the right/bottom edge does not move a pixel. A photo of
-any other size is skipped with a warning that names it.
+any other size is skipped. Every skipped photo is named, with why, in the record
+(``Calibration.skipped`` and ``skip_reasons``); nothing is only warned about.
 
 Frames of another size than the calibration: when the aspect ratio matches within 0.5 %, the
 camera matrix is rescaled to the frame (focal lengths and principal point scale with the image;
@@ -15,7 +16,6 @@ the distortion coefficients act on normalised coordinates and stay as they are).
 from __future__ import annotations
 
 import os
-import warnings
 from collections import Counter
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -164,7 +164,8 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
     pattern : inner corners per row and per column, e.g. (9, 6).
     detections : corners found earlier by ``detect_boards`` (to avoid finding them twice).
 
-    Images with no board are named in a warning and skipped; fewer than 3 usable boards raise
+    Images with no board (or of another size) are skipped and listed with the reason in the
+    record's ``skipped`` and ``skip_reasons``; fewer than 3 usable boards raise
     ``CalibrationError``.
     """
     dets = detections if detections is not None else detect_boards(folder, pattern)
@@ -176,9 +177,6 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
             if max(abs(d.size[0] - size[0]), abs(d.size[1] - size[1])) > SIZE_TOLERANCE_PX:
                 reasons[d.file] = f"image is {d.size[0]}x{d.size[1]}, the others {size[0]}x{size[1]}"
         found = [d for d in found if d.file not in reasons]
-    if reasons:
-        warnings.warn(f"{folder}: skipped " + "; ".join(f"{k} ({v})" for k, v in sorted(reasons.items())),
-                      stacklevel=2)
     if len(found) < MIN_BOARDS:
         raise CalibrationError(
             f"{folder}: only {len(found)} image(s) show a {pattern[0]}x{pattern[1]} chessboard, "
