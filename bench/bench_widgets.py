@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lanelib import io, widgets
+from lanelib import data, io, widgets
 from lanelib.errors import LaneLibError
 
 # (tuner, control key, two values to alternate between)
@@ -39,7 +39,13 @@ MOVES = {
                        ("margin_px", 80, 100),
                        ("minpix", 50, 1000),
                        ("prior_margin_px", 60, 80)],
+    widgets.HoughTuner: [("canny", (50, 150), (60, 170)),
+                         ("threshold_votes", 25, 40),
+                         ("min_line_length_px", 20, 60),
+                         ("roi.top_y", 0.60, 0.64)],
 }
+# controls whose change may leave the preview's pixels as they were
+MAY_NOT_CHANGE = {"yellow.enabled", "threshold_votes", "min_line_length_px"}
 
 
 def pick_image(arg: str | None) -> dict[str, Path]:
@@ -50,8 +56,8 @@ def pick_image(arg: str | None) -> dict[str, Path]:
         choices = widgets.image_choices()
     except LaneLibError:
         choices = {}
-        folder = widgets.data_root(Path.cwd()) / widgets.UDACITY_ADVANCED / "test_images"
-        if folder.is_dir():
+        folder = data.udacity("test_images")
+        if folder is not None:
             choices = {p.name: p for p in io.list_images(folder)}
     for label, path in choices.items():
         if io.read_image(path).shape[:2] == (720, 1280):
@@ -79,7 +85,7 @@ def main() -> None:
                 control.value = a if i % 2 else b
                 times.append((time.perf_counter() - t0) * 1000)
                 cpu.append((time.process_time() - c0) * 1000)
-                if tuner.preview.value == before and key not in ("yellow.enabled",):
+                if tuner.preview.value == before and key not in MAY_NOT_CHANGE:
                     sys.exit(f"{cls.__name__}.{key}: the preview did not change")
             everything += times
             all_cpu += cpu

@@ -1,17 +1,22 @@
-"""Drawing: the lane mapped back onto the road, the measurements as text, the debug composite.
+"""Drawing: the lane mapped back onto the road, the measurements as text, grids of labelled views.
 
 The lane overlay is drawn by mapping the polygon's points from the bird's-eye view into the
 undistorted frame (``Minv``) and filling it there, which is cheaper than drawing in the bird's-eye
 view and warping a whole image back.
+
+``sheet`` lays named views (RGB images or masks) out as one labelled grid: the tuners' previews
+and, as ``composite``, the pipeline's 2x2 debug view.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Mapping, Sequence
 
 import cv2
 import numpy as np
+
+from .errors import InputError
 
 Color = tuple[int, int, int]
 
@@ -135,17 +140,107 @@ def search_view(binary: np.ndarray, search, config: DrawConfig = DrawConfig(),
     return view
 
 
-def composite(panels: list[tuple[str, np.ndarray]], size: tuple[int, int]) -> np.ndarray:
-    """Return a 2x2 grid of labelled panels (RGB or masks) as one image of ``size`` (w, h)."""
+# --------------------------------------------------------------------------- grids of views
+
+Views = Mapping[str, "np.ndarray | None"] | Sequence[tuple[str, "np.ndarray | None"]]
+LABEL_COLOR: Color = (255, 255, 0)
+
+
+def shrink(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Return ``image`` resized down to ``size`` (w, h): halved by area averaging, then linear.
+
+    OpenCV's area averaging is fast for an exact factor of 2 and slow for others, so the image is
+    halved while it is at least twice the target, and the rest is done by linear interpolation.
+    """
     w, h = size
-    pw, ph = w // 2, h // 2
+    while image.shape[1] >= 2 * w and image.shape[0] >= 2 * h:
+        image = cv2.resize(image, (image.shape[1] // 2, image.shape[0] // 2),
+                           interpolation=cv2.INTER_AREA)
+    if (image.shape[1], image.shape[0]) == (w, h):
+        return image
+    return cv2.resize(image, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def sheet(views: Views, tile_width_px: int = 320, columns: int = 3,
+          tile_height_px: int | None = None, interpolation: int | None = None,
+          label_at: str = "top", font_scale: float | None = None) -> np.ndarray:
+    """Return the named views (RGB images or masks, None for "off") as one labelled RGB grid.
+
+    Parameters
+    ----------
+    views : label -> view, or (label, view) pairs (labels may repeat); laid out row by row.
+    tile_width_px, tile_height_px : size of one tile; the height defaults to the aspect of the
+        first view that is not None.
+    columns : tiles per row (fewer when there are fewer views); an unfilled slot stays black.
+    interpolation : OpenCV interpolation of the resize to the tile; None: ``shrink`` (fast).
+    label_at : ``"top"``: the label on a black box at the top left; ``"bottom"``: outlined text
+        at the bottom left (for views that carry their own text at the top).
+    font_scale : scale of the label's font (default: ``tile_width_px / 640``).
+
+    A None view is a grey tile labelled "(off)". The views themselves are never drawn on.
+    """
+    items = list(views.items()) if isinstance(views, Mapping) else list(views)
+    if not items:
+        raise InputError("sheet: no views to show")
+    tw = int(tile_width_px)
+    if tile_height_px is None:
+        shown = [v for _, v in items if v is not None]
+        if not shown:
+            raise InputError("sheet: every view is off; nothing gives the tiles' aspect")
+        h0, w0 = shown[0].shape[:2]
+        th = max(1, round(tile_width_px * h0 / w0))
+    else:
+        th = int(tile_height_px)
+    if label_at not in ("top", "bottom"):
+        raise InputError(f"sheet: label_at is 'top' or 'bottom', not {label_at!r}")
+    cols = max(1, min(columns, len(items)))
+    rows = -(-len(items) // cols)
+    out = np.zeros((rows * th, cols * tw, 3), np.uint8)
+    scale = font_scale if font_scale is not None else tw / 640
+    thick = max(1, round(2 * scale))
+    for i, (label, img) in enumerate(items):
+        if img is None:
+            tile = np.full((th, tw, 3), 48, np.uint8)
+            label = f"{label} (off)"
+        else:
+            tile = (shrink(img, (tw, th)) if interpolation is None
+                    else cv2.resize(img, (tw, th), interpolation=interpolation))
+            if tile.ndim == 2:
+                tile = cv2.cvtColor(tile, cv2.COLOR_GRAY2RGB)
+            elif tile is img:
+                tile = tile.copy()  # the label is drawn on the tile, never on the caller's view
+        _label(tile, label, label_at, scale, thick)
+        r, c = divmod(i, cols)
+        out[r * th:(r + 1) * th, c * tw:(c + 1) * tw] = tile
+    return out
+
+
+def _label(tile: np.ndarray, text: str, at: str, scale: float, thick: int) -> None:
+    """Write ``text`` onto ``tile`` in place: on a black box at the top, or outlined at the bottom."""
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    if at == "top":
+        (w, h), base = cv2.getTextSize(text, font, scale, thick)
+        cv2.rectangle(tile, (0, 0), (w + 8, h + base + 8), (0, 0, 0), -1)
+        cv2.putText(tile, text, (4, h + 4), font, scale, LABEL_COLOR, thick, cv2.LINE_AA)
+        return
+    org = (10, tile.shape[0] - 15)
+    cv2.putText(tile, text, org, font, scale, (0, 0, 0), 2 * thick, cv2.LINE_AA)
+    cv2.putText(tile, text, org, font, scale, LABEL_COLOR, thick, cv2.LINE_AA)
+
+
+def composite(panels: Sequence[tuple[str, np.ndarray]], size: tuple[int, int]) -> np.ndarray:
+    """Return a 2x2 grid of labelled panels (RGB or masks) as one image of ``size`` (w, h).
+
+    The ``sheet`` of the first four panels, each ``w // 2`` by ``h // 2`` (area-averaged), labelled
+    at the bottom left (the result panel has its own text at the top); black where no panel is.
+    """
+    w, h = size
     out = np.zeros((h, w, 3), np.uint8)
-    for i, (label, img) in enumerate(panels[:4]):
-        tile = mask_to_rgb(img) if img.ndim == 2 else img
-        tile = cv2.resize(tile, (pw, ph), interpolation=cv2.INTER_AREA)
-        org = (10, ph - 15)  # bottom-left: the result panel has its own text at the top
-        cv2.putText(tile, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.8, (0, 0, 0), 4, cv2.LINE_AA)
-        cv2.putText(tile, label, org, cv2.FONT_HERSHEY_SIMPLEX, 0.8, (255, 255, 0), 2, cv2.LINE_AA)
-        r, c = divmod(i, 2)
-        out[r * ph:(r + 1) * ph, c * pw:(c + 1) * pw] = tile
+    if not panels:
+        return out
+    grid = sheet(list(panels)[:4], w // 2, 2, tile_height_px=h // 2,
+                 interpolation=cv2.INTER_AREA, label_at="bottom", font_scale=0.8)
+    if grid.shape[:2] == (h, w):
+        return grid
+    out[:grid.shape[0], :grid.shape[1]] = grid
     return out

@@ -11,15 +11,20 @@ point into a visible slant. The bottom corners lie on a 3.7 m lane centred on th
 wide on row 720), so the two dst lines are 3.7 m apart. The visible road length follows from the
 same geometry: with fx = 1156 px the bottom row is 4.79 m ahead, the camera 1.25 m above the
 road, and row 470 is 28.25 m ahead: 23.5 m in all.
+
+``straight_line_check`` measures how well a set of points does that on a frame of a straight road
+(the perspective notebook and ``widgets.PerspectiveTuner`` use it).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from .errors import ConfigError, InputError
+from .lanes import SearchConfig, sliding_windows
 
 Point = tuple[float, float]
 
@@ -162,3 +167,65 @@ class Perspective:
         """Map (N, 2) bird's-eye points back to undistorted-image points."""
         p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
         return cv2.perspectiveTransform(p, self.Minv).reshape(-1, 2)
+
+
+# --------------------------------------------------------------------------- straight-line check
+
+@dataclass(frozen=True)
+class StraightLineCheck:
+    """How straight a straight lane comes out in the bird's-eye view.
+
+    ``left_slope``/``right_slope`` are the x drift of each line's straight fit in px per 100 px
+    of height (0: vertical; NaN: line not found); ``lane_width_m`` is the distance of the two
+    fits on the bottom row in metres. ``left_fit``/``right_fit`` are (slope, intercept) of
+    x = slope * y + intercept in bird's-eye px, or None.
+    """
+
+    left_slope: float
+    right_slope: float
+    lane_width_m: float
+    left_fit: tuple[float, float] | None
+    right_fit: tuple[float, float] | None
+
+    def __str__(self) -> str:
+        return (f"left {_fmt(self.left_slope, 2, ' px/100 px', True)}, right "
+                f"{_fmt(self.right_slope, 2, ' px/100 px', True)}, lane width "
+                f"{_fmt(self.lane_width_m, 2, ' m')}")
+
+
+def straight_line_check(binary: np.ndarray, xm_per_px: float,
+                        search: SearchConfig = SearchConfig(),
+                        car_x: float | None = None) -> StraightLineCheck:
+    """Return the straight-line check of a bird's-eye lane mask of a straight road.
+
+    Parameters
+    ----------
+    binary : the 0/255 bird's-eye lane mask of a frame of a straight road.
+    xm_per_px : metres per bird's-eye pixel across the road.
+    search : the sliding-window search that finds each line's pixels; a line needs
+        ``min_line_pixels`` pixels over ``min_found_span_fraction`` of the height to get a fit.
+    car_x : the car's x (px) in the bird's-eye view, where the search splits left from right.
+    """
+    found = sliding_windows(binary, search, car_x=car_x)
+    h = binary.shape[0]
+    fits = []
+    for ys, xs in (found.left_pixels, found.right_pixels):
+        if len(ys) < search.min_line_pixels or ys.max() - ys.min() < search.min_found_span_fraction * h:
+            fits.append(None)
+            continue
+        slope, intercept = np.polyfit(ys.astype(np.float64), xs.astype(np.float64), 1)
+        fits.append((float(slope), float(intercept)))
+    nan = float("nan")
+    slopes = [100 * f[0] if f else nan for f in fits]
+    width = nan
+    if fits[0] and fits[1]:
+        x_at = [f[0] * (h - 1) + f[1] for f in fits]
+        width = (x_at[1] - x_at[0]) * xm_per_px
+    return StraightLineCheck(slopes[0], slopes[1], width, fits[0], fits[1])
+
+
+def _fmt(v: float, nd: int = 2, unit: str = "", sign: bool = False) -> str:
+    """Return ``v`` rounded to ``nd`` decimals with its unit ("not found" for NaN, no "-0.00")."""
+    if math.isnan(v):
+        return "not found"
+    return f"{round(v, nd) + 0.0:{'+' if sign else ''}.{nd}f}{unit}"

@@ -1,12 +1,18 @@
-"""Perspective warp/unwarp, metric scale, and the default points on the Udacity straight lines."""
+"""Perspective warp/unwarp, metric scale, the default points on the Udacity straight lines, and
+the straight-line check."""
 from __future__ import annotations
 
+import math
+
+import cv2
 import numpy as np
 import pytest
 
 from lanelib import io
 from lanelib.errors import ConfigError, InputError
-from lanelib.perspective import Perspective, PerspectiveConfig, scaled, trapezoid_src
+from lanelib.lanes import SearchConfig
+from lanelib.perspective import (Perspective, PerspectiveConfig, StraightLineCheck, scaled,
+                                 straight_line_check, trapezoid_src)
 from lanelib.pipeline import LanePipeline
 
 
@@ -59,3 +65,34 @@ def test_default_points_make_udacity_straight_lines_vertical(name, udacity_advan
         slant = abs(fit.x_at(0) - fit.x_at(719)) / 720 * 100
         assert slant < 2.0, f"{name}: line slants {slant:.2f} px per 100 px"
     assert result.lane_width_m == pytest.approx(3.7, abs=0.2)
+
+
+# --------------------------------------------------------------------------- straight-line check
+
+def test_straight_line_check_on_drawn_lines():
+    binary = np.zeros((720, 1280), np.uint8)
+    cv2.line(binary, (300, 0), (330, 719), 255, 12)   # 30 px over 719 px: 4.17 px per 100 px
+    cv2.line(binary, (960, 0), (960, 719), 255, 12)
+    c = straight_line_check(binary, 3.7 / 640)
+    assert c.left_slope == pytest.approx(100 * 30 / 719, abs=0.1)
+    assert c.right_slope == pytest.approx(0.0, abs=0.05)
+    assert c.lane_width_m == pytest.approx((960 - 330) * 3.7 / 640, abs=0.02)
+    empty = straight_line_check(np.zeros((720, 1280), np.uint8), 0.005)
+    assert np.isnan(empty.left_slope) and np.isnan(empty.lane_width_m) and empty.left_fit is None
+
+
+def test_straight_line_check_needs_enough_of_a_line():
+    binary = np.zeros((720, 1280), np.uint8)
+    cv2.line(binary, (320, 0), (320, 719), 255, 12)
+    cv2.line(binary, (960, 690), (960, 719), 255, 12)  # 5 % of the height: too short to fit
+    c = straight_line_check(binary, 3.7 / 640, SearchConfig(), car_x=640.0)
+    assert c.left_fit is not None and c.right_fit is None
+    assert math.isnan(c.right_slope) and math.isnan(c.lane_width_m)
+
+
+def test_straight_line_check_prints_rounded_figures():
+    c = StraightLineCheck(-0.0001, 4.166, 3.7049, (0.0, 320.0), (0.04, 930.0))
+    assert str(c) == "left +0.00 px/100 px, right +4.17 px/100 px, lane width 3.70 m"
+    nan = float("nan")
+    assert str(StraightLineCheck(nan, nan, nan, None, None)) == (
+        "left not found, right not found, lane width not found")

@@ -5,18 +5,19 @@ Setting ``.value`` in Python runs the same ``observe`` callback a slider drag in
 from __future__ import annotations
 
 import json
-import warnings
 from dataclasses import replace
 from pathlib import Path
 
 import cv2
+import ipywidgets
 import numpy as np
 import pytest
 
-from lanelib import io, thresholds, widgets
+from lanelib import draw, io, perspective, thresholds, widgets
 from lanelib.camera import calibrate
-from lanelib.config import PipelineConfig, load_config, to_dict
-from lanelib.errors import InputError
+from lanelib.config import PipelineConfig, load_config, save_config, to_dict
+from lanelib.errors import ConfigError, InputError
+from lanelib.hough import HoughConfig
 from lanelib.lanes import SearchConfig
 from lanelib.perspective import PerspectiveConfig, implied_focal_px, road_length_m, trapezoid_src
 from lanelib.pipeline import LanePipeline
@@ -37,9 +38,7 @@ def road():
 @pytest.fixture(scope="module")
 def camera():
     """The calibration of the bundled (synthetic) camera."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return calibrate(REPO / "camera_cal")
+    return calibrate(REPO / "camera_cal")
 
 
 def _decode(jpeg: bytes) -> np.ndarray:
@@ -268,18 +267,6 @@ def test_an_impossible_trapezoid_is_refused(road):
     assert t.error == "" and t.config.perspective.src_px[3][0] == 720.0
 
 
-def test_straight_line_check_on_drawn_lines():
-    binary = np.zeros((720, 1280), np.uint8)
-    cv2.line(binary, (300, 0), (330, 719), 255, 12)   # 30 px over 719 px: 4.17 px per 100 px
-    cv2.line(binary, (960, 0), (960, 719), 255, 12)
-    c = widgets.straight_line_check(binary, 3.7 / 640)
-    assert c.left_slope == pytest.approx(100 * 30 / 719, abs=0.1)
-    assert c.right_slope == pytest.approx(0.0, abs=0.05)
-    assert c.lane_width_m == pytest.approx((960 - 330) * 3.7 / 640, abs=0.02)
-    empty = widgets.straight_line_check(np.zeros((720, 1280), np.uint8), 0.005)
-    assert np.isnan(empty.left_slope) and np.isnan(empty.lane_width_m) and empty.left_fit is None
-
-
 # --------------------------------------------------------------------------- fits
 
 def test_fit_controls_change_the_windows_and_the_preview(road):
@@ -358,22 +345,6 @@ def test_bad_images_raise_clear_errors(road, tmp_path):
         widgets.ThresholdTuner(road, image="nope.jpg")
     with pytest.raises(InputError, match="no images"):
         widgets.ThresholdTuner({})
-    with pytest.raises(InputError, match="no folder holding test_images"):
-        widgets.repo_root(tmp_path)
-
-
-def test_sheet_and_shrink():
-    a = np.full((720, 1280, 3), 200, np.uint8)
-    m = np.zeros((720, 1280), np.uint8)
-    out = widgets.sheet({"a": a, "m": m, "off": None}, tile_width_px=320, columns=2)
-    assert out.shape == (2 * 180, 2 * 320, 3)
-    assert out[100, 100].tolist() == [200, 200, 200]       # view a, below its label
-    assert out[100, 420].tolist() == [0, 0, 0]             # mask m
-    assert out[270, 100].tolist() == [48, 48, 48]          # the "off" tile
-    assert out[270, 420].tolist() == [0, 0, 0]             # the empty slot
-    assert a[10, 10].tolist() == [200, 200, 200]           # the caller's view is not drawn on
-    assert widgets.shrink(a, (400, 225)).shape == (225, 400, 3)
-    assert widgets.shrink(m, (320, 180)).shape == (180, 320)
 
 
 def test_image_choices_lists_bundled_then_udacity(tmp_path):
@@ -386,15 +357,202 @@ def test_image_choices_lists_bundled_then_udacity(tmp_path):
     io.write_image(root / "test_images" / "b.jpg", img)
     io.write_image(root / "test_images" / "a.jpg", img)
     io.write_image(data / "udacity-advanced" / "test_images" / "u.jpg", img)
-    assert widgets.repo_root(root / "notebooks") == root
     choices = widgets.image_choices(root, data)
     assert list(choices) == ["a.jpg", "b.jpg", "udacity/u.jpg"]
     assert choices["udacity/u.jpg"] == data / "udacity-advanced" / "test_images" / "u.jpg"
     assert list(widgets.image_choices(root, tmp_path / "nothing")) == ["a.jpg", "b.jpg"]
 
 
-def test_data_root_follows_lanelib_data(monkeypatch, tmp_path):
-    monkeypatch.setenv("LANELIB_DATA", str(tmp_path))
-    assert widgets.data_root() == tmp_path
-    monkeypatch.delenv("LANELIB_DATA")
-    assert widgets.data_root(REPO) == REPO.parent / "shared" / "data"
+def test_the_preview_grid_and_the_check_are_still_importable_from_widgets():
+    # they live in lanelib.draw and lanelib.perspective now
+    assert widgets.sheet is draw.sheet and widgets.shrink is draw.shrink
+    assert widgets.straight_line_check is perspective.straight_line_check
+    assert widgets.StraightLineCheck is perspective.StraightLineCheck
+    assert {"ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "Tuner", "image_choices",
+            "hough_image_choices"} <= set(widgets.__all__)
+
+
+# --------------------------------------------------------------------------- save and load: the parts
+
+def test_each_tuner_saves_its_own_part_and_shows_what_its_views_use():
+    assert widgets.ThresholdTuner.parts == ("thresholds",)
+    assert widgets.PerspectiveTuner.parts == ("perspective",)
+    assert widgets.FitTuner.parts == ("search",)
+    assert widgets.HoughTuner.parts == ("hough",)
+    for cls in (widgets.ThresholdTuner, widgets.PerspectiveTuner, widgets.FitTuner, widgets.HoughTuner):
+        assert set(cls.parts) <= set(cls.shows), cls.__name__
+    with pytest.raises(TypeError, match="not parts of PipelineConfig"):
+        type("Bad", (widgets.Tuner,), {"parts": ("nope",), "shows": ("nope",)})
+
+
+def test_save_merges_the_tuners_parts_into_one_file(road, tmp_path):
+    path = tmp_path / "tuned.json"
+    # a file that already holds a tuned Hough part (notebook 00)
+    hough = HoughConfig(canny_low=30, canny_high=120)
+    save_config(replace(PipelineConfig(), hough=hough), path)
+    # notebook 04: the perspective
+    p = widgets.PerspectiveTuner(road)
+    p.controls["top_y"].value = 480.0
+    assert p.save(path) == path
+    # notebook 03, with the default perspective in its own config: the thresholds
+    t = widgets.ThresholdTuner(road)
+    t.controls["white.range1"].value = (215, 255)
+    assert t.config.perspective == PerspectiveConfig()
+    t.save(path)
+
+    saved = load_config(path)
+    assert saved.perspective == p.config.perspective != PerspectiveConfig()
+    assert saved.thresholds == t.config.thresholds != PipelineConfig().thresholds
+    assert saved.hough == hough
+    assert saved.search == SearchConfig()
+
+    # a fresh tuner restores both; its bird's-eye view is the tuned perspective's
+    fresh = widgets.ThresholdTuner(road)
+    fresh.load(path)
+    assert fresh.config.perspective == p.config.perspective
+    assert fresh.config.thresholds == t.config.thresholds
+    assert fresh.controls["white.range1"].value == (215, 255)
+    assert np.array_equal(fresh.birdseye,
+                          LanePipeline(fresh.config).birdseye(io.read_image(road[STRAIGHT])))
+    fit = widgets.FitTuner(road)
+    fit.load(path)
+    assert (fit.config.perspective, fit.config.thresholds) == (saved.perspective, saved.thresholds)
+    # the fit tuner's search joins them, the others stay
+    fit.controls["n_windows"].value = 7
+    fit.save(path)
+    again = load_config(path)
+    assert again == replace(saved, search=replace(SearchConfig(), n_windows=7))
+
+
+def test_save_keeps_only_what_the_file_holds(road, tmp_path):
+    path = tmp_path / "partial.json"
+    path.write_text(json.dumps({"perspective": to_dict(PerspectiveConfig(lane_width_m=3.5)),
+                                "tracking": {"min_width_m": 2.9}}))  # an older file's key, kept
+    t = widgets.ThresholdTuner(road)
+    t.controls["rule"].value = "yellow | white"
+    t.save(path)
+    held = json.loads(path.read_text())
+    assert set(held) == {"perspective", "tracking", "thresholds"}
+    assert held["tracking"] == {"min_width_m": 2.9}
+    assert held["thresholds"]["rule"] == "yellow | white"
+    assert load_config(path).perspective.lane_width_m == 3.5
+    # a new file gets the whole config: the one the CLI's --config reads
+    whole = t.save(tmp_path / "new.json")
+    assert set(json.loads(whole.read_text())) == set(to_dict(PipelineConfig()))
+    assert load_config(whole) == t.config
+
+
+def test_save_refuses_to_merge_into_a_file_that_is_not_a_config(road, tmp_path):
+    path = tmp_path / "bad.json"
+    path.write_text('{"thresholds": {"rule": 3}}')
+    t = widgets.ThresholdTuner(road)
+    with pytest.raises(ConfigError, match="thresholds.rule"):
+        t.save(path)
+    assert path.read_text() == '{"thresholds": {"rule": 3}}'
+
+
+def test_load_reads_what_the_file_holds_of_the_parts_shown_and_keeps_the_rest(road, tmp_path):
+    t = widgets.ThresholdTuner(road)
+    t.controls["white.range1"].value = (215, 255)
+    mine = replace(t.config, hough=HoughConfig(canny_low=10))
+    t.set_config(mine)
+    path = tmp_path / "rule_only.json"
+    path.write_text(json.dumps({"thresholds": {"rule": "yellow | white"},
+                                "hough": {"canny_low": 99}, "search": {"n_windows": 5}}))
+    loaded = t.load(path)
+    assert loaded == t.config
+    assert t.config.thresholds.rule == "yellow | white"                   # what the file holds
+    assert t.config.thresholds.white.low == (0, 215, 0)                   # the rest of the part
+    assert t.controls["white.range1"].value == (215, 255)
+    assert t.config.hough == mine.hough and t.config.search == mine.search  # parts not shown
+    assert t.controls["rule"].value == "yellow | white"
+    # a fit tuner shows the search: it takes that
+    f = widgets.FitTuner(road)
+    f.load(path)
+    assert f.config.search.n_windows == 5 and f.controls["n_windows"].value == 5
+    assert len(f.windows.windows) == 2 * 5
+    assert f.config.hough == HoughConfig()
+
+
+def test_apply_returns_the_new_config_and_changes_nothing(road):
+    moves = [(widgets.ThresholdTuner, "white.range1", (215, 255)),
+             (widgets.ThresholdTuner, "s_channel.space", "lab"),
+             (widgets.PerspectiveTuner, "top_y", 480.0),
+             (widgets.FitTuner, "n_windows", 12)]
+    for cls, key, value in moves:
+        t = cls(road)
+        config, preview, views = t.config, t.preview.value, dict(vars(t))
+        options = {k: getattr(c, "options", None) for k, c in t.controls.items()}
+        with t._quiet():
+            t.controls[key].value = value
+        new = t._apply(key)
+        assert new != config, key
+        assert t.config is config and t.preview.value == preview, key
+        assert all(vars(t)[k] is v for k, v in views.items()), key  # no view was recomputed
+        assert {k: getattr(c, "options", None) for k, c in t.controls.items()} == options, key
+        t._on_change(key)  # what the control's observe runs
+        assert t.config == new and t.preview.value != preview, key
+
+
+# --------------------------------------------------------------------------- the base class
+
+class _Probe(widgets.Tuner):
+    """A minimal tuner: one slider that sets a brightness threshold (``search.minpix``, for want of
+    a field of its own); it notes each hook call and each attribute asked for before it exists."""
+
+    parts = ("search",)
+    shows = ("search",)
+
+    def __init__(self, *args, **kwargs):
+        self.__dict__["calls"] = []
+        self.__dict__["missing"] = []
+        super().__init__(*args, **kwargs)
+
+    def __getattr__(self, name):  # only for attributes that do not exist (yet)
+        self.__dict__["missing"].append(name)
+        raise AttributeError(name)
+
+    def _build(self):
+        self.calls.append("build")
+        return [self._control("level", ipywidgets.IntSlider(value=self.config.search.minpix,
+                                                             min=0, max=255))]
+
+    def _prepare(self, raw, calibration):
+        self.calls.append("prepare")
+        self.gray = cv2.cvtColor(raw, cv2.COLOR_RGB2GRAY)
+
+    def _update(self, key):
+        self.calls.append(("update", key))
+        self.bright = np.where(self.gray > self.config.search.minpix, 255, 0).astype(np.uint8)
+
+    def _apply(self, key):
+        self.calls.append(("apply", key))
+        return replace(self.config, search=replace(self.config.search,
+                                                   minpix=int(self.controls["level"].value)))
+
+    def _sync(self):
+        self.controls["level"].value = self.config.search.minpix
+
+    def render(self):
+        return {"bright": self.bright}
+
+
+def test_a_minimal_tuner_needs_nothing_of_its_subclass_before_the_hooks_make_it(road, tmp_path):
+    t = _Probe(road)
+    assert t.missing == []  # the base asked for no attribute the subclass had not made
+    assert t.calls == ["build", "prepare", ("update", None)]
+    assert t.preview_sheet().shape == (225, 400, 3)
+    t.calls.clear()
+    t.controls["level"].value = 200
+    assert t.calls == [("apply", "level"), ("update", "level")]
+    assert t.config.search.minpix == 200
+    assert cv2.countNonZero(t.bright) == int((t.gray > 200).sum())
+    path = t.save(tmp_path / "probe.json")
+    t.calls.clear()
+    t.picker.value = CURVED
+    assert t.calls == ["prepare", ("update", None)]
+    other = _Probe(road)
+    other.load(path)
+    assert other.config.search.minpix == 200 and other.controls["level"].value == 200
+    assert other.missing == [] and t.missing == []
+

@@ -149,6 +149,29 @@ def test_save_writes_the_hough_part_and_keeps_other_parts(images, tmp_path):
     assert bytes(fresh.preview.value) != bytes0
 
 
+def test_load_takes_only_the_hough_part(images, tmp_path):
+    path = tmp_path / "other.json"
+    other = PipelineConfig()
+    save_config(replace(other, hough=HoughConfig(canny_low=20), search=replace(other.search, margin_px=55)),
+                path)
+    t = widgets.HoughTuner(images)
+    t.load(path)
+    assert t.config.hough == HoughConfig(canny_low=20)
+    assert t.config.search == PipelineConfig().search  # not the Hough tuner's to show
+
+
+def test_apply_returns_the_new_config_and_changes_nothing(images):
+    t = widgets.HoughTuner(images)
+    config, result, preview = t.config, t.result, bytes(t.preview.value)
+    with t._quiet():
+        t.controls["canny"].value = (200, 400)
+    new = t._apply("canny")
+    assert (new.hough.canny_low, new.hough.canny_high) == (200, 400)
+    assert t.config is config and t.result is result and bytes(t.preview.value) == preview
+    t._on_change("canny")
+    assert t.config == new and t.result is not result
+
+
 def test_text_output_is_short_and_stable(images):
     t = widgets.HoughTuner(images)
     bundle = t._repr_mimebundle_()

@@ -1,0 +1,54 @@
+"""Interactive tuners for the notebooks: controls that edit a ``PipelineConfig`` and a live preview.
+
+A tuner shows an image picker, its controls, one persistent ``ipywidgets.Image`` holding JPEG bytes
+of a downscaled sheet of named views (``draw.sheet``), and a text readout of the numbers that
+matter. Controls are plain ipywidgets wired with ``observe`` (no ``interact()``, no matplotlib
+re-draw, no debounce): a change rebuilds ``tuner.config``, recomputes only what that control
+affects, and replaces the preview's bytes. What does not depend on the controls (the undistorted
+frame, the bird's-eye view, colour conversions, the lane mask) is computed once per picked image.
+
+- ``ThresholdTuner`` (``widgets/thresholds.py``): every mask of ``ThresholdConfig`` on the
+  bird's-eye view (on/off, colour space and channel, low/high range, Sobel kernel, top-hat width)
+  and the rule that combines them.
+- ``PerspectiveTuner`` (``widgets/perspective.py``): the src trapezoid (top y, top width, bottom
+  width, centre x) and the dst margin; the trapezoid on the undistorted frame, the bird's-eye view
+  and the straight-line check.
+- ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels) and the
+  search around a fit.
+- ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's Canny thresholds, Hough parameters
+  and region of interest (``PipelineConfig.hough``), on the raw frame; its picker adds the
+  960x540 Udacity P1 images.
+
+Each tuner holds its ``PipelineConfig`` in ``tuner.config`` and declares the parts of it that it
+tunes (``parts``: ``("thresholds",)``, ``("perspective",)``, ``("search",)``, ``("hough",)``).
+``tuner.save(path)`` writes those parts into the JSON that ``python -m lanelib images|video
+--config`` reads, keeping every other part the file already holds (so thresholds tuned in notebook
+03 and the perspective tuned in 04 end up in one file); a new file gets the whole config.
+``tuner.load(path)`` reads what the file holds of the parts the tuner shows (``shows``) into the
+controls and keeps the rest of its config. Show a tuner by making it the last expression of a cell
+(or ``display(tuner)``): the widget appears in JupyterLab and the text output is a short, stable
+line for nbval.
+
+Every control is in ``tuner.controls`` under a key (``"white.range1"``, ``"top_y"``, ...). Sliders
+carry the CSS class ``lanelib-slider-<key with '.' as '-'>`` (e.g. ``lanelib-slider-top_y``,
+``lanelib-slider-white-range1``), other controls ``lanelib-control-<key>``; the preview Image
+carries ``lanelib-preview``, the picker ``lanelib-picker`` and the readout ``lanelib-readout``.
+
+A new tuner subclasses ``Tuner`` (``widgets/base.py``), sets ``parts`` and ``shows`` and
+implements ``_build``, ``_prepare``, ``_update``, ``_apply``, ``_sync``, ``render`` and
+``readout`` (see ``Tuner``).
+"""
+from __future__ import annotations
+
+# compatibility: the preview grid lives in lanelib.draw, the straight-line check in
+# lanelib.perspective; they are re-exported here for code that imported them from widgets
+from ..draw import sheet, shrink
+from ..perspective import StraightLineCheck, straight_line_check
+from .base import Tuner, image_choices
+from .fit import FitTuner
+from .hough import HoughTuner, hough_image_choices
+from .perspective import PerspectiveTuner
+from .thresholds import ThresholdTuner
+
+__all__ = ["ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "Tuner", "image_choices",
+           "hough_image_choices", "sheet", "shrink", "straight_line_check", "StraightLineCheck"]

@@ -1,0 +1,332 @@
+"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load), the
+image picker's choices and the layout helpers of the controls.
+
+A tuner shows an image picker, its controls, one persistent ``ipywidgets.Image`` holding JPEG bytes
+of a downscaled ``draw.sheet`` of named views, and a text readout of the numbers that matter.
+Controls are plain ipywidgets wired with ``observe`` (no ``interact()``, no matplotlib re-draw, no
+debounce): a change builds the new config (``_apply``), recomputes what that control affects
+(``_update``) and replaces the preview's bytes. What does not depend on the controls (the
+undistorted frame, the bird's-eye view, colour conversions, the lane mask) is computed once per
+picked image (``_prepare``).
+"""
+from __future__ import annotations
+
+import contextlib
+import html
+import math
+import os
+from dataclasses import fields
+from pathlib import Path
+from typing import Callable, Iterator, Mapping, TypeVar
+
+import ipywidgets as widgets
+import numpy as np
+
+from .. import io
+from ..camera import Calibration
+from ..config import PipelineConfig, from_dict, load_config, migrate, save_config, to_dict
+from ..data import UDACITY_ADVANCED, bundled, data_root, udacity, udacity_calibration
+from ..draw import sheet
+from ..errors import ConfigError, InputError, LaneLibError
+
+UDACITY_PREFIX = "udacity/"
+PARTS = tuple(f.name for f in fields(PipelineConfig))  # the parts of a PipelineConfig file
+T = TypeVar("T")
+
+
+def image_choices(root: str | os.PathLike | None = None,
+                  data: str | os.PathLike | None = None) -> dict[str, Path]:
+    """Return the picker's images: label -> path, bundled ``test_images/`` first.
+
+    Bundled images are labelled by file name; the Udacity test images, when ``data`` (default
+    ``data_root()``) holds ``udacity-advanced/test_images``, follow as ``"udacity/<name>"``.
+    """
+    out = {p.name: p for p in io.list_images(bundled("test_images", root))}
+    extra = Path(data if data is not None else data_root()) / UDACITY_ADVANCED / "test_images"
+    if extra.is_dir():
+        out.update({UDACITY_PREFIX + p.name: p for p in io.list_images(extra)})
+    return out
+
+
+class Tuner:
+    """Shared machinery of the tuners: image picker, controls, preview Image, readout, save/load.
+
+    Parameters
+    ----------
+    images : label -> image path for the picker (default: ``image_choices()``).
+    config : the PipelineConfig to start from.
+    calibration : the camera of the bundled images (None: frames are taken as undistorted).
+        Images labelled ``"udacity/..."`` use the Udacity camera, calibrated from its
+        ``camera_cal/`` the first time one of them is picked.
+    image : label of the image to show first (default: the first one).
+    tile_width_px : width of one view in the preview sheet.
+    jpeg_quality : JPEG quality of the preview bytes.
+
+    A subclass sets ``parts`` (the parts of ``PipelineConfig`` it tunes, which ``save`` writes)
+    and ``shows`` (the parts its views depend on, which ``load`` reads; they include ``parts``),
+    and implements the hooks below. ``__init__`` calls them only after its own state is set up,
+    and a hook relies only on what an earlier hook made: ``_build`` once, then on every pick (and
+    ``load``) ``_prepare`` and ``_update(None)``, on every control change ``_apply(key)`` and,
+    when the value is taken, ``_update(key)``; ``render``/``readout`` after each of those.
+
+    - ``_build()``: make its controls from ``self.config`` with ``self._control(key, widget)``;
+      return the rows of widgets laid out between the picker and the preview;
+    - ``_prepare(raw, calibration)``: compute what depends only on the picked image (and on
+      parts no control changes); ``self._cached`` keeps objects that outlive one image;
+    - ``_update(key)``: recompute the views after control ``key`` changed (None: all of them,
+      after a pick or a load), and fit controls whose choices follow another control's value;
+    - ``_apply(key)``: return the new PipelineConfig after control ``key`` changed, changing
+      nothing (raise ``LaneLibError`` to refuse the value: the readout then shows why);
+    - ``_sync()``: set the controls from ``self.config`` (after ``load``);
+    - ``render()``: the named views of the preview; ``readout()``: the numbers as text.
+    """
+
+    columns = 3
+    default_tile_width_px = 400
+    parts: tuple[str, ...] = ()
+    shows: tuple[str, ...] = ()
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        unknown = sorted(set(cls.parts + cls.shows) - set(PARTS))
+        if unknown:
+            raise TypeError(f"{cls.__name__}: {unknown} are not parts of PipelineConfig ({PARTS})")
+        if not set(cls.parts) <= set(cls.shows):
+            raise TypeError(f"{cls.__name__}: shows {cls.shows} must include the parts it tunes {cls.parts}")
+
+    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+                 config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                 image: str | None = None, tile_width_px: int | None = None, jpeg_quality: int = 80):
+        self.images = {k: Path(v) for k, v in (images if images is not None else image_choices()).items()}
+        if not self.images:
+            raise InputError("tuner: no images to show; pass images={label: path} or add test_images/")
+        image = image if image is not None else next(iter(self.images))
+        if image not in self.images:
+            raise InputError(f"tuner: image {image!r} is not among the picker's images "
+                             f"({', '.join(self.images)})")
+        self._config = config
+        self._calibrations: dict[str, Calibration | None] = {"bundled": calibration}
+        self._cache: dict[str, tuple[object, object]] = {}
+        self.tile_width_px = int(tile_width_px or self.default_tile_width_px)
+        self.jpeg_quality = int(jpeg_quality)
+        self.controls: dict[str, widgets.Widget] = {}
+        self._syncing = False
+        self._widget: widgets.Widget | None = None
+        self._raw = np.zeros((0, 0, 3), np.uint8)
+        self.error = ""
+        self.picker = widgets.Dropdown(options=list(self.images), value=image, description="image",
+                                       layout=widgets.Layout(width="420px"))
+        self.picker.add_class("lanelib-picker")
+        self.preview = widgets.Image(format="jpeg", layout=widgets.Layout(max_width="100%"))
+        self.preview.add_class("lanelib-preview")
+        self.message = widgets.HTML()
+        self.message.add_class("lanelib-readout")
+        # the base is set up: now the subclass's hooks
+        self._rows = self._build()
+        self._pick(image)
+        self.picker.observe(self._on_pick, names="value")
+
+    # ---- public ---------------------------------------------------------------------------
+
+    @property
+    def config(self) -> PipelineConfig:
+        """The PipelineConfig the controls currently describe."""
+        return self._config
+
+    @property
+    def image(self) -> str:
+        """Label of the picked image."""
+        return self.picker.value
+
+    @property
+    def widget(self) -> widgets.VBox:
+        """The tuner's widget: picker, controls, preview and readout (made once)."""
+        if self._widget is None:
+            self._widget = widgets.VBox([self.picker, *self._rows, self.preview, self.message])
+            self._widget.add_class("lanelib-tuner")
+        return self._widget
+
+    def preview_sheet(self) -> np.ndarray:
+        """Return the preview as an RGB array (what the Image shows, before JPEG encoding)."""
+        return sheet(self.render(), self.tile_width_px, self.columns)
+
+    def set_config(self, config: PipelineConfig) -> None:
+        """Show ``config`` in the controls and the preview."""
+        self._show(config)
+        self._prepare(self._raw, self._calibration_for(self.image))
+        self._update(None)
+        self._refresh()
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the tuned parts (``self.parts``) into the PipelineConfig JSON at ``path``; return it.
+
+        A file that exists keeps every other part it holds (e.g. the perspective that
+        ``PerspectiveTuner`` saved there) and is checked first: one that is not a valid config
+        raises ``ConfigError`` and is left as it is. A new file gets the whole config, the file
+        the CLI's ``--config`` reads. The file is replaced atomically.
+        """
+        p = Path(path)
+        if not p.exists():
+            return save_config(self.config, p)
+        load_config(p)  # refuse to merge into a file that is not a valid config
+        held = io.read_json(p, "config file")
+        held.update({part: to_dict(getattr(self.config, part)) for part in self.parts})
+        return io.write_json(p, held)
+
+    def load(self, path: str | os.PathLike) -> PipelineConfig:
+        """Read a PipelineConfig JSON into the controls and the preview; return the new config.
+
+        Every key the file holds in the parts the tuner shows (``self.shows``) replaces the
+        tuner's value; what the file leaves out, and the parts the tuner does not show, keep the
+        tuner's values.
+        """
+        load_config(path)  # the strict check, with the file's name in its errors
+        held = migrate(io.read_json(path, "config file"))
+        merged = to_dict(self.config)
+        for part in self.shows:
+            if part in held:
+                merged[part] = _merged(merged[part], held[part])
+        try:
+            config = from_dict(PipelineConfig, merged)
+        except ConfigError as e:
+            raise ConfigError(f"{path}: {e}") from None
+        self.set_config(config)
+        return config
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(image={self.image!r})"
+
+    def _repr_mimebundle_(self, **kwargs) -> dict:
+        # the widget for JupyterLab; a short stable text instead of the widget tree's repr
+        # (which holds the preview's JPEG bytes) for nbval and plain-text front ends
+        bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
+        bundle["text/plain"] = repr(self)
+        return bundle
+
+    # ---- hooks ----------------------------------------------------------------------------
+
+    def _build(self) -> list[widgets.Widget]:
+        raise NotImplementedError
+
+    def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
+        raise NotImplementedError
+
+    def _update(self, key: str | None) -> None:
+        raise NotImplementedError
+
+    def _apply(self, key: str) -> PipelineConfig:
+        raise NotImplementedError
+
+    def _sync(self) -> None:
+        raise NotImplementedError
+
+    def render(self) -> dict[str, np.ndarray | None]:
+        """Return the named views of the preview (RGB images or masks; None for a view that is off)."""
+        raise NotImplementedError
+
+    def readout(self) -> str:
+        """Return the numbers shown under the preview, as text."""
+        return ""
+
+    # ---- for subclasses -------------------------------------------------------------------
+
+    def _control(self, key: str, widget: widgets.Widget) -> widgets.Widget:
+        """Register ``widget`` under ``key`` (CSS class, ``observe`` wiring); return it."""
+        slider = isinstance(widget, (widgets.IntSlider, widgets.FloatSlider, widgets.IntRangeSlider,
+                                     widgets.FloatRangeSlider))
+        widget.add_class(("lanelib-slider-" if slider else "lanelib-control-") + key.replace(".", "-"))
+        widget.observe(lambda change, k=key: self._on_change(k), names="value")
+        self.controls[key] = widget
+        return widget
+
+    @contextlib.contextmanager
+    def _quiet(self) -> Iterator[None]:
+        """Set controls inside this block without their changes counting as the user's."""
+        self._syncing = True
+        try:
+            yield
+        finally:
+            self._syncing = False
+
+    def _show(self, config: PipelineConfig) -> None:
+        """Make ``config`` the tuner's config and set the controls from it (no views recomputed)."""
+        self._config = config
+        with self._quiet():
+            self._sync()
+
+    def _cached(self, name: str, key: object, make: Callable[[], T]) -> T:
+        """Return the object ``make()`` built for ``key`` under ``name``; rebuilt when ``key`` changes."""
+        hit = self._cache.get(name)
+        if hit is None or hit[0] != key:
+            hit = (key, make())
+            self._cache[name] = hit
+        return hit[1]
+
+    def _tile_size(self) -> tuple[int, int]:
+        """Return (w, h) of one preview tile for the picked image."""
+        h, w = self._raw.shape[:2]
+        return self.tile_width_px, max(1, round(self.tile_width_px * h / w))
+
+    def _calibration_for(self, label: str) -> Calibration | None:
+        camera = "udacity" if label.startswith(UDACITY_PREFIX) else "bundled"
+        if camera not in self._calibrations:
+            self._calibrations[camera] = udacity_calibration() if udacity("camera_cal") else None
+        return self._calibrations[camera]
+
+    # ---- wiring ---------------------------------------------------------------------------
+
+    def _on_change(self, key: str) -> None:
+        if self._syncing:
+            return
+        try:
+            config = self._apply(key)
+        except LaneLibError as e:
+            self.error = str(e)
+            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            return
+        self.error = ""
+        self._config = config
+        self._update(key)
+        self._refresh()
+
+    def _on_pick(self, change) -> None:
+        self._pick(change["new"])
+
+    def _pick(self, label: str) -> None:
+        self._raw = io.read_image(self.images[label])
+        self._prepare(self._raw, self._calibration_for(label))
+        self._update(None)
+        self._refresh()
+
+    def _refresh(self) -> None:
+        self.preview.value = io.encode_image(self.preview_sheet(), ".jpg", self.jpeg_quality)
+        text = self.readout()
+        self.message.value = f'<pre style="margin:0">{html.escape(text)}</pre>' if text else ""
+
+
+def _merged(mine, held):
+    """Return ``mine`` (a part as plain dicts) with every key ``held`` sets replaced, recursively."""
+    if not (isinstance(mine, dict) and isinstance(held, dict)):
+        return held
+    out = dict(mine)
+    for k, v in held.items():
+        out[k] = _merged(out[k], v) if k in out else v
+    return out
+
+
+def row(*children: widgets.Widget) -> widgets.HBox:
+    """Return the controls as one wrapping row."""
+    return widgets.HBox(list(children), layout=widgets.Layout(flex_flow="row wrap",
+                                                              align_items="center"))
+
+
+def sized(width_px: int, label_px: int) -> dict:
+    """Return the layout and style keywords of a control ``width_px`` wide with a label of ``label_px``."""
+    return dict(layout=widgets.Layout(width=f"{width_px}px"), style={"description_width": f"{label_px}px"})
+
+
+def fmt(v: float, nd: int = 2, unit: str = "", sign: bool = False) -> str:
+    """Return ``v`` rounded to ``nd`` decimals with its unit ("not found" for NaN, no "-0.00")."""
+    if math.isnan(v):
+        return "not found"
+    return f"{round(v, nd) + 0.0:{'+' if sign else ''}.{nd}f}{unit}"

@@ -1,0 +1,89 @@
+"""``FitTuner``: the lane-pixel search (sliding windows, the search around a fit) on the bird's-eye
+lane mask, with the fits and the lane drawn back on the road."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import ipywidgets as widgets
+import numpy as np
+
+from .. import draw, lanes, thresholds
+from ..camera import Calibration
+from ..config import PipelineConfig
+from ..pipeline import LanePipeline
+from .base import Tuner, fmt, row, sized
+
+LIMITS = {"n_windows": (1, 30), "margin_px": (5, 300), "minpix": (0, 5000), "prior_margin_px": (5, 300)}
+
+
+class FitTuner(Tuner):
+    """Tune the lane-pixel search: sliding windows and the search around a previous fit.
+
+    Sliders ``n_windows``, ``margin_px``, ``minpix`` (the sliding windows) and
+    ``prior_margin_px`` (the band searched around a previous fit; here the windows' own fits
+    stand in for the previous frame's). The preview shows the windows and fits, the band search
+    and the lane drawn back on the road; the bird's-eye lane mask is made once per image.
+    ``save`` writes the ``search`` part; ``load`` reads it and the ``perspective``,
+    ``thresholds`` and ``draw`` parts the views use.
+    """
+
+    columns = 3
+    default_tile_width_px = 400
+    parts = ("search",)
+    shows = ("perspective", "thresholds", "search", "draw")
+    KEYS = tuple(LIMITS)
+
+    def _build(self) -> list[widgets.Widget]:
+        sc = self.config.search
+        made = [self._control(k, widgets.IntSlider(value=getattr(sc, k), min=lo, max=hi,
+                                                   description=k, **sized(460, 150)))
+                for k, (lo, hi) in LIMITS.items()]
+        return [row(*made[:2]), row(*made[2:])]
+
+    def _sync(self) -> None:
+        for k in self.KEYS:
+            self.controls[k].value = getattr(self.config.search, k)
+
+    def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
+        size = (raw.shape[1], raw.shape[0])
+        self.pipeline = self._cached("pipeline", (id(calibration), size, self.config.perspective),
+                                     lambda: LanePipeline(self.config, calibration, size=size))
+        # the lane mask depends on the thresholds too: always from the current config
+        self.undistorted = self.pipeline.undistort(raw)
+        self.binary = thresholds.combine(self.pipeline.birdseye(raw), self.config.thresholds)
+
+    def _apply(self, key: str) -> PipelineConfig:
+        search = replace(self.config.search, **{k: int(self.controls[k].value) for k in self.KEYS})
+        return replace(self.config, search=search)
+
+    def _update(self, key: str | None) -> None:
+        """Search the lane mask with the current search parameters (windows, then around them)."""
+        sc = self.config.search
+        self.windows = lanes.sliding_windows(self.binary, sc, car_x=self.pipeline.car_x_px)
+        self.around = lanes.search_around(self.binary, self.windows.left, self.windows.right, sc)
+        self.measurement = self.pipeline.measure(self.windows.left, self.windows.right)
+
+    def render(self) -> dict[str, np.ndarray | None]:
+        """Return the windows and fits, the search around the fits, and the lane on the road."""
+        dc = self.config.draw
+        overlay = draw.lane_overlay(self.undistorted, self.windows.left.coeffs_px,
+                                    self.windows.right.coeffs_px, self.pipeline.perspective.Minv, dc)
+        return {"sliding windows": draw.search_view(self.binary, self.windows, dc),
+                "search around the fits": draw.search_view(self.binary, self.around, dc,
+                                                           self.config.search.prior_margin_px),
+                "lane on the road": overlay}
+
+    def readout(self) -> str:
+        lines = []
+        for title, s in (("sliding windows", self.windows), ("search around", self.around)):
+            parts = []
+            for side, fit in (("left", s.left), ("right", s.right)):
+                parts.append(f"{side} {fit.n_pixels} px" + ("" if fit.found else f" (not found: {fit.reason})"))
+            lines.append(f"{title}: " + ", ".join(parts))
+        m = self.measurement
+        if not math.isnan(m.radius_m):
+            rad = "straight" if m.radius_m >= 10_000 else f"{m.radius_m:.0f} m"
+            lines.append(f"radius {rad}, offset {fmt(m.offset_m, 2, ' m', True)}, "
+                         f"lane width {fmt(m.lane_width_m, 2, ' m')}")
+        return "\n".join(lines)

@@ -1,0 +1,138 @@
+"""Grids of labelled views: ``draw.sheet`` (the tuners' previews), ``draw.shrink``, and
+``draw.composite`` (the pipeline's 2x2 debug view) as one case of the sheet."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import draw
+from lanelib.errors import InputError
+from lanelib.pipeline import LanePipeline
+
+YELLOW = (255, 255, 0)
+
+
+def textured(w: int, h: int, seed: int) -> np.ndarray:
+    """Return a smooth random RGB image (every pixel differs from its neighbours a little)."""
+    rng = np.random.default_rng(seed)
+    return cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (0, 0), 3)
+
+
+def panels(w: int, h: int) -> list[tuple[str, np.ndarray]]:
+    img = textured(w, h, 1)
+    mask = np.where(np.random.default_rng(2).random((h, w)) < 0.1, 255, 0).astype(np.uint8)
+    return [("undistorted", img), ("binary (bird's-eye)", mask), ("search and fits", img[:, ::-1].copy()),
+            ("result", textured(w, h, 3))]
+
+
+def label_box(label: str, ph: int) -> tuple[slice, slice]:
+    """Return the rows and columns of a tile that a bottom label (font scale 0.8) may touch."""
+    (tw, th), base = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.8, 2)
+    return slice(ph - 15 - th - 4, ph - 15 + base + 4), slice(0, 10 + tw + 4)
+
+
+# --------------------------------------------------------------------------- sheet and shrink
+
+def test_sheet_and_shrink():
+    a = np.full((720, 1280, 3), 200, np.uint8)
+    m = np.zeros((720, 1280), np.uint8)
+    out = draw.sheet({"a": a, "m": m, "off": None}, tile_width_px=320, columns=2)
+    assert out.shape == (2 * 180, 2 * 320, 3)
+    assert out[100, 100].tolist() == [200, 200, 200]       # view a, below its label
+    assert out[100, 420].tolist() == [0, 0, 0]             # mask m
+    assert out[270, 100].tolist() == [48, 48, 48]          # the "off" tile
+    assert out[270, 420].tolist() == [0, 0, 0]             # the empty slot
+    assert a[10, 10].tolist() == [200, 200, 200]           # the caller's view is not drawn on
+    assert draw.shrink(a, (400, 225)).shape == (225, 400, 3)
+    assert draw.shrink(m, (320, 180)).shape == (180, 320)
+
+
+def test_shrink_halves_by_area_then_goes_linear():
+    img = textured(1280, 720, 4)
+    half = cv2.resize(img, (640, 360), interpolation=cv2.INTER_AREA)
+    assert np.array_equal(draw.shrink(img, (640, 360)), half)
+    assert np.array_equal(draw.shrink(img, (400, 225)),
+                          cv2.resize(half, (400, 225), interpolation=cv2.INTER_LINEAR))
+    assert draw.shrink(img, (1280, 720)) is img  # nothing to do
+
+
+def test_sheet_takes_pairs_with_repeated_labels_and_an_explicit_tile_size():
+    img = textured(200, 100, 5)
+    out = draw.sheet([("same", img), ("same", img)], tile_width_px=100, columns=2, tile_height_px=40,
+                     interpolation=cv2.INTER_AREA)
+    assert out.shape == (40, 200, 3)
+    tile = cv2.resize(img, (100, 40), interpolation=cv2.INTER_AREA)
+    assert np.array_equal(out[:, 100:][30:, 60:], tile[30:, 60:])  # right of and below the label
+
+
+def test_sheet_labels_at_the_top_or_the_bottom():
+    grey = np.full((360, 640, 3), 90, np.uint8)
+    top = draw.sheet({"a label": grey}, tile_width_px=640, columns=1)
+    bottom = draw.sheet({"a label": grey}, tile_width_px=640, columns=1, label_at="bottom")
+    is_yellow = lambda im: np.all(im == YELLOW, axis=2)  # noqa: E731
+    assert is_yellow(top[:40]).any() and not is_yellow(top[40:]).any()
+    assert is_yellow(bottom[-40:]).any() and not is_yellow(bottom[:-40]).any()
+    assert np.all(top[0, :20] == 0)  # the black box behind a top label
+
+
+def test_sheet_refuses_what_it_cannot_lay_out():
+    with pytest.raises(InputError, match="no views"):
+        draw.sheet({})
+    with pytest.raises(InputError, match="every view is off"):
+        draw.sheet({"a": None})
+    assert draw.sheet({"a": None}, tile_width_px=64, tile_height_px=36).shape == (36, 64, 3)
+    with pytest.raises(InputError, match="label_at"):
+        draw.sheet({"a": np.zeros((8, 8), np.uint8)}, label_at="left")
+
+
+# --------------------------------------------------------------------------- the debug composite
+
+@pytest.mark.parametrize("size", [(1280, 720), (960, 540), (1281, 721), (333, 201)])
+def test_composite_tiles_are_the_area_resized_panels_with_a_label_at_the_bottom(size):
+    w, h = size
+    pw, ph = w // 2, h // 2
+    views = panels(w, h)
+    copies = [v.copy() for _, v in views]
+    out = draw.composite(views, size)
+    assert out.shape == (h, w, 3) and out.dtype == np.uint8
+    for i, (label, view) in enumerate(views):
+        r, c = divmod(i, 2)
+        tile = out[r * ph:(r + 1) * ph, c * pw:(c + 1) * pw]
+        rgb = cv2.cvtColor(view, cv2.COLOR_GRAY2RGB) if view.ndim == 2 else view
+        expected = cv2.resize(rgb, (pw, ph), interpolation=cv2.INTER_AREA)
+        rows, cols = label_box(label, ph)
+        outside = np.ones((ph, pw), bool)
+        outside[rows, cols] = False
+        assert np.array_equal(tile[outside], expected[outside]), (size, label)
+        inside = tile[rows, cols]
+        assert np.all(inside == YELLOW, axis=-1).sum() > 20, (size, label)  # the label's text
+        assert (inside[..., 2] < 30).sum() > 1.2 * np.all(inside == YELLOW, axis=-1).sum()  # + outline
+    # an odd width or height leaves one black column or row
+    assert not out[2 * ph:].any() and not out[:, 2 * pw:].any()
+    assert all(np.array_equal(v, copy) for (_, v), copy in zip(views, copies))  # views untouched
+
+
+def test_composite_is_the_sheet_of_four_panels():
+    views = panels(1280, 720)
+    sheet = draw.sheet(views, 640, 2, tile_height_px=360, interpolation=cv2.INTER_AREA,
+                       label_at="bottom", font_scale=0.8)
+    assert np.array_equal(draw.composite(views, (1280, 720)), sheet)
+    # a fifth panel is left out; fewer than four leave the rest black
+    assert np.array_equal(draw.composite(views + [("more", views[0][1])], (1280, 720)), sheet)
+    two = draw.composite(views[:2], (1280, 720))
+    assert np.array_equal(two[:360], sheet[:360]) and not two[360:].any()
+    assert not draw.composite([], (64, 36)).any()
+
+
+def test_the_pipelines_debug_composite_shows_its_stage_images():
+    pipe = LanePipeline()
+    frame = textured(1280, 720, 6)
+    result = pipe.process(frame, keep_images=True)
+    out = pipe.debug_composite(result)
+    im = result.images
+    expected = draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
+                               ("search and fits", im["search"]), ("result", im["result"])], (1280, 720))
+    assert np.array_equal(out, expected)
+    top_left = cv2.resize(im["undistorted"], (640, 360), interpolation=cv2.INTER_AREA)
+    assert np.array_equal(out[:300, :640], top_left[:300])
