@@ -9,7 +9,7 @@ OUT    ?= out
 # Udacity data for the real-data tests and benchmarks (skipped when absent)
 export LANELIB_DATA ?= $(abspath ../shared/data)
 
-.PHONY: demo test bench lab venv clean e2e-deps
+.PHONY: demo test portability bench lab venv clean e2e-deps
 
 venv: $(STAMP)
 
@@ -28,9 +28,25 @@ demo: $(STAMP)
 	$(PY) -m lanelib evaluate video videos/project.mp4
 	@echo "annotated images, results.json, the tracked video and its per-frame log are in $(OUT)/"
 
+NBVAL := $(PY) -m pytest -q -n 2 --dist loadfile --nbval --nbval-current-env --nbval-cell-timeout=300
+
 test: $(STAMP) e2e-deps
-	$(PY) -m pytest -q -n 2 --dist loadfile --nbval --nbval-current-env --nbval-cell-timeout=300 \
-		tests notebooks
+	$(NBVAL) tests notebooks
+	@$(MAKE) --no-print-directory portability
+
+# The notebooks' outputs must replay on every machine, not only the one that wrote them. Replay
+# them once more on other kernels: OpenBLAS's oldest x86-64 kernel (Prescott) on one thread, and
+# OpenCV without its AVX/AVX2/AVX-512 code paths; on an AVX-512 CPU also OpenBLAS's SkylakeX
+# kernel (the one that once printed 7e-15 where the committed output said 9e-16).
+PORTABLE_ENV := OPENBLAS_CORETYPE=Prescott OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+	OPENCV_CPU_DISABLE=AVX512-SKX,AVX2,FP16,AVX,SSE4.2,SSE4.1
+portability: $(STAMP)
+	@echo "portability: notebooks replayed with $(PORTABLE_ENV)"
+	env $(PORTABLE_ENV) $(NBVAL) -p no:cacheprovider notebooks
+	@if grep -qw avx512f /proc/cpuinfo 2>/dev/null; then \
+	  echo "portability: notebooks replayed with OPENBLAS_CORETYPE=SkylakeX"; \
+	  env OPENBLAS_CORETYPE=SkylakeX $(NBVAL) -p no:cacheprovider notebooks; \
+	else echo "portability: no AVX-512 on this CPU; the SkylakeX replay is skipped"; fi
 
 # The browser test of the sliders (tests/e2e) drives Debian's chromium through Playwright (never
 # Playwright's own browser download). Installed here when missing and we are root with apt-get

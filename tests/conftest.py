@@ -1,46 +1,84 @@
-"""Shared test fixtures: where the Udacity data lives, and small synthetic frames."""
+"""Shared test fixtures: where the Udacity data lives (``lanelib.data``), and the README's tables."""
 from __future__ import annotations
 
-import os
+import re
+import subprocess
 from pathlib import Path
 
+import imageio_ffmpeg
 import pytest
+
+from lanelib import data
 
 REPO = Path(__file__).resolve().parents[1]
 
 
-def data_root() -> Path:
-    """Return the folder holding the Udacity data (LANELIB_DATA, default ../shared/data)."""
-    return Path(os.environ.get("LANELIB_DATA", REPO.parent / "shared" / "data"))
-
-
-def _need(sub: str) -> Path:
-    path = data_root() / sub
-    if not path.exists():
-        pytest.skip(f"{path} not found: set LANELIB_DATA to the folder holding {sub.split('/')[0]}/ "
-                    "(see README, 'Using the Udacity data')")
+def _need(name: str) -> Path:
+    path = data.udacity(name=name)
+    if path is None:
+        pytest.skip(data.missing_reason(name=name))
     return path
 
 
 @pytest.fixture(scope="session")
 def udacity_advanced() -> Path:
     """Path of udacity-advanced/ (camera_cal, test_images, videos), or skip."""
-    return _need("udacity-advanced")
+    return _need(data.UDACITY_ADVANCED)
 
 
 @pytest.fixture(scope="session")
 def udacity_p1() -> Path:
     """Path of udacity-lanelines-p1/ (test_images, test_videos), or skip."""
-    return _need("udacity-lanelines-p1")
+    return _need(data.UDACITY_P1)
 
 
 @pytest.fixture(scope="session")
 def udacity_calibration(udacity_advanced):
     """The calibration of the Udacity highway camera (computed once per test session)."""
-    import warnings
+    return data.udacity_calibration()
 
-    from lanelib.camera import calibrate
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return calibrate(udacity_advanced / "camera_cal")
+@pytest.fixture(scope="session")
+def faststart(tmp_path_factory) -> Path:
+    """videos/project.mp4 remuxed with its index (moov) first, as many cameras write: a cut file still plays."""
+    out = tmp_path_factory.mktemp("faststart") / "project.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(REPO / "videos" / "project.mp4"),
+                    "-c", "copy", "-movflags", "+faststart", str(out)], check=True)
+    return out
+
+
+README = REPO / "README.md"
+
+
+def _cells(line: str) -> list[str]:
+    """Return the cells of a Markdown table row (an escaped ``\\|`` stays inside its cell)."""
+    return [c.strip() for c in re.split(r"(?<!\\)\|", line.strip()[1:-1])]
+
+
+@pytest.fixture(scope="session")
+def readme_table():
+    """Return a function: the first Markdown table after a README heading, as a list of row dicts.
+
+    The tests that guard the README's figures read them from the README itself, so the README
+    cannot drift from what the code measures.
+    """
+
+    def table(heading: str) -> list[dict]:
+        lines = README.read_text(encoding="utf-8").splitlines()
+        try:
+            start = next(i for i, line in enumerate(lines) if line.startswith("#") and heading in line)
+        except StopIteration:
+            raise AssertionError(f"README.md has no heading with {heading!r}") from None
+        block = []
+        for line in lines[start + 1:]:
+            if line.startswith("#"):
+                break
+            if line.startswith("|"):
+                block.append(line)
+            elif block:
+                break
+        assert len(block) >= 3, f"README.md: no table under {heading!r}"
+        head = _cells(block[0])
+        return [dict(zip(head, _cells(line))) for line in block[2:]]
+
+    return table

@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from lanelib import ConfigError, InputError, LaneLibError, hough, io
+from lanelib import config as config_module
 from lanelib.cli import main
 
 H, W = 540, 960
@@ -169,7 +170,6 @@ def test_config_from_json_lists_becomes_tuples_and_round_trips():
     config = hough.HoughConfig(roi_frac=[[0, 1], [0.5, 0.5], [1, 1]], white_hls_lo=[0, 190, 0])
     assert config.roi_frac == ((0, 1), (0.5, 0.5), (1, 1)) and config.white_hls_lo == (0, 190, 0)
     assert hash(config) == hash(replace(config))
-    config_module = pytest.importorskip("lanelib.config")
     pipeline = config_module.PipelineConfig(hough=config)
     assert config_module.from_dict(config_module.PipelineConfig,
                                    json.loads(json.dumps(config_module.to_dict(pipeline)))) == pipeline
@@ -325,7 +325,6 @@ def test_cli_video_writes_video_and_per_frame_log(tmp_path):
 
 
 def test_cli_config_file_uses_its_hough_part(tmp_path):
-    pytest.importorskip("lanelib.config")
     io.write_image(tmp_path / "in" / "road.png", road())
     # a region of interest that holds only the left line
     (tmp_path / "c.json").write_text(json.dumps({"hough": {"roi_frac": [[0, 1], [0, 0.6], [0.45, 0.6],
