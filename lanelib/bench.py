@@ -7,7 +7,7 @@
   measurements) on consecutive 1280x720 frames, one OpenCV thread; ``remap_ms``: one full-frame
   ``cv2.remap`` of the same colour frames with the pipeline's precomputed bird's-eye maps, one
   thread, interleaved with it; ``detect_to_remap`` = their ratio (goal <= 2.5).
-- ``video_fps``: the whole ``video`` command (``pipeline.process_video``: decode, track, draw,
+- ``video_fps``: the whole ``video`` command (``runs.process_video``: decode, track, draw,
   encode) on a 1280x720 clip; ``codec_fps``: decode plus encode of the same clip with the same
   encoder settings (``io.H264_PARAMS`` through ``io.VideoWriter``) and nothing else;
   ``video_to_codec`` = their ratio (goal >= 0.7). The two runs alternate and the faster of each
@@ -42,6 +42,9 @@ from .camera import Calibration
 from .config import PipelineConfig
 from .errors import InputError
 from .evaluate import calibration_from_truth
+from .pipeline import LanePipeline
+from .runs import process_video
+from .tracking import LaneTracker
 
 GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7)}
 
@@ -82,8 +85,6 @@ def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, d
 
     ``detect`` and ``remap`` are timed in alternation on every frame; the other stages after.
     """
-    from .tracking import LaneTracker
-
     samples: dict[str, list[tuple[float, float]]] = {}
 
     def add(name, fn):
@@ -152,8 +153,6 @@ def codec_run(clip: Path, out: Path) -> tuple[float, float]:
 def video_run(clip: Path, out: Path, config: PipelineConfig,
               calibration: Calibration | None) -> tuple[float, float]:
     """Return (fps, CPU ms per frame) of the ``video`` command's work (``process_video``) on ``clip``."""
-    from .pipeline import process_video
-
     start = _clock()
     run = process_video(clip, out, config, calibration, progress=False)
     return _rates(start, run.frames)
@@ -163,8 +162,6 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         config: PipelineConfig = PipelineConfig(), clip_frames: int = 250, stage_frames: int = 60,
         repeats: int = 3, video_rounds: int = 2) -> dict:
     """Return the benchmark figures (see the module docstring) as a JSON-able dict."""
-    from .pipeline import LanePipeline
-
     if video is None:
         video, cal = default_video()
         calibration = calibration or cal

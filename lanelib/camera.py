@@ -12,6 +12,11 @@ Frames of another size than the calibration: when the aspect ratio matches withi
 camera matrix is rescaled to the frame (focal lengths and principal point scale with the image;
 the distortion coefficients act on normalised coordinates and stay as they are). Otherwise
 ``Calibration.for_size`` raises ``CalibrationError`` naming both sizes.
+
+``Lens`` is the lens distortion as a transform of points (``perspective.Transform``, in the style
+of scikit-image): ``lens(points)`` distorts, ``lens.inverse(points)`` undistorts, ``lens.inverse +
+perspective`` maps raw points to the bird's-eye view; ``Lens.valid`` is the one rule for where
+the distortion model can be trusted; ``Lens.undistort_maps`` are its remap grids.
 """
 from __future__ import annotations
 
@@ -25,6 +30,7 @@ import numpy as np
 
 from . import io
 from .errors import CalibrationError, InputError
+from .perspective import Homography, Transform, as_points
 
 SIZE_TOLERANCE_PX = 2
 ASPECT_TOLERANCE = 0.005
@@ -222,40 +228,157 @@ def distort_points(calibration: Calibration, pts: np.ndarray) -> np.ndarray:
     return out.reshape(-1, 2)
 
 
-def undistort_points(calibration: Calibration, pts: np.ndarray) -> np.ndarray:
-    """Map (N, 2) raw-image pixel positions to their undistorted positions."""
+# OpenCV's undistortion iteration run to convergence: at most 50 steps, or 1e-10 px
+EXACT_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
+
+
+def undistort_points(calibration: Calibration, pts: np.ndarray, exact: bool = False) -> np.ndarray:
+    """Map (N, 2) raw-image pixel positions to their undistorted positions.
+
+    OpenCV inverts the distortion by a fixed-point iteration; its default of 5 steps leaves up to
+    0.6 px near the corners of a 1280x720 frame of the synthetic camera. ``exact`` iterates until
+    the result distorts back to within 1e-10 px (at most 50 steps), as ``Lens.inverse`` does.
+    """
     K = calibration.camera_matrix
     p = np.asarray(pts, np.float64).reshape(-1, 1, 2)
+    if exact:
+        return cv2.undistortPoints(p, K, calibration.dist_coeffs, None, None, K,
+                                   EXACT_UNDISTORT_CRITERIA).reshape(-1, 2)
     return cv2.undistortPoints(p, K, calibration.dist_coeffs, P=K).reshape(-1, 2)
+
+
+# A lens model is trusted within this fraction of the frame's width and height beyond its edges.
+MODEL_MARGIN = 0.25
+
+
+class Lens(Transform):
+    """The lens distortion as a transform: undistorted-image points -> raw-frame points.
+
+    ``lens(points)`` is ``distort_points`` and ``lens.inverse(points)`` ``undistort_points`` run
+    to convergence (a ``LensInverse``). It composes with a ``perspective.Perspective``: ``lens.inverse +
+    perspective`` maps raw-frame points to the bird's-eye view, its ``inverse`` maps bird's-eye
+    points to the raw frame, and its ``remap_maps(size)`` take a raw frame to the bird's-eye view
+    in one ``cv2.remap``. ``undistort_maps`` are the lens's own remap grids. ``valid`` is the rule
+    for where the model can be trusted.
+
+    Parameters
+    ----------
+    calibration : the camera's calibration (rescaled to ``size`` by ``Calibration.for_size``), or
+        None for the identity lens (an ideal or an uncalibrated camera).
+    size : (width, height) of the frames in px; default the calibration's ``image_size``.
+    """
+
+    def __init__(self, calibration: Calibration | None, size: tuple[int, int] | None = None):
+        if size is None:
+            if calibration is None:
+                raise CalibrationError("Lens(None): the identity lens needs the frame size, "
+                                       "Lens(None, (width, height))")
+            size = calibration.image_size
+        self.size = (int(size[0]), int(size[1]))
+        self.calibration = calibration.for_size(self.size) if calibration is not None else None
+
+    @property
+    def is_identity(self) -> bool:
+        """Return True for the lens of no calibration (points and frames pass unchanged)."""
+        return self.calibration is None
+
+    def __call__(self, points) -> np.ndarray:
+        if self.calibration is None:
+            return as_points(points).copy()
+        return distort_points(self.calibration, points)
+
+    @property
+    def inverse(self) -> "LensInverse":
+        """Return the undistortion: raw-frame points -> undistorted-image points."""
+        return LensInverse(self)
+
+    def valid(self, points) -> np.ndarray:
+        """Return where undistorted ``points`` lie in the region the lens model is trusted in.
+
+        The one rule for every use (the pipeline's remap, the evaluation's fits in the raw frame):
+        within ``MODEL_MARGIN`` (a quarter) of the frame's width and height beyond its edges,
+        edges included. Farther out the distortion polynomial, fitted to points inside the frame,
+        is not monotonic: it folds back, and a point far outside lands back inside the raw frame.
+        The identity lens keeps the same region, so a pipeline samples the same area with or
+        without a calibration.
+        """
+        p = as_points(points)
+        w, h = self.size
+        m = MODEL_MARGIN
+        return (p[:, 0] >= -m * w) & (p[:, 0] <= (1 + m) * w) & (p[:, 1] >= -m * h) & (p[:, 1] <= (1 + m) * h)
+
+    def undistort_maps(self, pad: tuple[int, int] = (0, 0), m1type: int = cv2.CV_16SC2):
+        """Return the ``cv2.remap`` maps (map1, map2) that undistort a raw frame onto a canvas.
+
+        The canvas is ``pad`` (px in x, px in y) larger than the frame on each side: (0, 0) is the
+        frame's own undistortion (``Undistorter``); a padded canvas also holds what the
+        undistortion moves beyond the frame (``FastBirdseye``). ``m1type`` is OpenCV's map type
+        (``cv2.CV_32FC2`` gives map2 None). The identity lens gives the plain pixel grid.
+        """
+        w, h = self.size
+        px, py = int(pad[0]), int(pad[1])
+        cw, ch = w + 2 * px, h + 2 * py
+        if self.calibration is None:
+            xs, ys = np.meshgrid(np.arange(cw, dtype=np.float32) - px, np.arange(ch, dtype=np.float32) - py)
+            grid = np.dstack([xs, ys])
+            return (grid, None) if m1type == cv2.CV_32FC2 else cv2.convertMaps(grid, None, m1type)
+        K = self.calibration.camera_matrix
+        shifted = K.copy()
+        shifted[0, 2] += px
+        shifted[1, 2] += py
+        return cv2.initUndistortRectifyMap(K, self.calibration.dist_coeffs, None, shifted, (cw, ch), m1type)
+
+    def __repr__(self) -> str:
+        return "Lens(identity)" if self.calibration is None else f"Lens({self.size[0]}x{self.size[1]})"
+
+
+class LensInverse(Transform):
+    """A ``Lens``'s inverse: raw-frame points -> undistorted-image points (``undistort_points``).
+
+    A point is valid where its undistorted position is (``Lens.valid``).
+    """
+
+    def __init__(self, lens: Lens):
+        self.lens = lens
+
+    def __call__(self, points) -> np.ndarray:
+        p = as_points(points)
+        if self.lens.calibration is None or not len(p):
+            return p.copy()
+        return undistort_points(self.lens.calibration, p, exact=True)
+
+    @property
+    def inverse(self) -> Lens:
+        """Return the lens."""
+        return self.lens
+
+    def checked(self, points) -> tuple[np.ndarray, np.ndarray]:
+        out = self(points)
+        return out, self.lens.valid(out)
+
+    def valid(self, points) -> np.ndarray:
+        return self.checked(points)[1]
+
+    def __repr__(self) -> str:
+        return f"{self.lens!r}.inverse"
 
 
 class Undistorter:
     """Undistort frames of one size with remap maps computed once.
 
     ``calibration`` None means an ideal camera (no distortion): frames pass through unchanged.
+    ``lens`` is the ``Lens`` of the calibration at this size.
     """
 
     def __init__(self, calibration: Calibration | None, size: tuple[int, int]):
         self.size = (int(size[0]), int(size[1]))
-        self.calibration = calibration.for_size(self.size) if calibration is not None else None
-        self._maps = None
-        if self.calibration is not None:
-            c = self.calibration
-            self._maps = cv2.initUndistortRectifyMap(c.camera_matrix, c.dist_coeffs, None,
-                                                     c.camera_matrix, self.size, cv2.CV_16SC2)
+        self.lens = Lens(calibration, self.size)
+        self.calibration = self.lens.calibration
+        self._maps = None if self.lens.is_identity else self.lens.undistort_maps()
 
     def check(self, image: np.ndarray, name: str = "frame") -> None:
-        """Raise InputError if ``image`` is not a frame of this undistorter's size."""
-        if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] != 3 \
-                or image.dtype != np.uint8:
-            raise InputError(f"{name}: expected an RGB uint8 image (H x W x 3), got "
-                             f"{getattr(image, 'dtype', type(image).__name__)} array of shape "
-                             f"{getattr(image, 'shape', '?')}; read images with lanelib.io.read_image")
-        h, w = image.shape[:2]
-        if (w, h) != self.size:
-            raise InputError(f"{name}: is {w}x{h} but the pipeline is set up for "
-                             f"{self.size[0]}x{self.size[1]}; make a pipeline for this size "
-                             "(LanePipeline(config, calibration, size=...)) or resize the frames")
+        """Return None; raise InputError if ``image`` is not an RGB frame of this size (``io.check_rgb``)."""
+        io.check_rgb(image, name, self.size)
 
     def undistort(self, image: np.ndarray) -> np.ndarray:
         """Return the undistorted frame (same size)."""
@@ -268,54 +391,35 @@ class Undistorter:
         """Return remap maps that take a RAW frame straight to the view ``Minv`` maps back from.
 
         ``Minv`` maps output pixels to undistorted-image pixels (a perspective's ``Minv``); the
-        maps compose it with the lens distortion, so one ``cv2.remap`` does both steps.
+        maps compose it with the lens distortion, so one ``cv2.remap`` does both steps. The same
+        as ``(self.lens.inverse + perspective).remap_maps(out_size)``, the form the pipeline uses.
         """
-        w, h = int(out_size[0]), int(out_size[1])
-        xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-        grid = np.stack([xs.ravel(), ys.ravel()], axis=1).reshape(-1, 1, 2)
-        und = cv2.perspectiveTransform(grid, Minv).reshape(-1, 2)
-        src = distort_points(self.calibration, und) if self.calibration is not None else und
-        # The distortion polynomial folds back far outside the frame: sample nothing there.
-        fw, fh = self.size
-        outside = ((und[:, 0] < -0.25 * fw) | (und[:, 0] > 1.25 * fw)
-                   | (und[:, 1] < -0.25 * fh) | (und[:, 1] > 1.25 * fh))
-        src[outside] = -1.0
-        mx = src[:, 0].reshape(h, w).astype(np.float32)
-        my = src[:, 1].reshape(h, w).astype(np.float32)
-        return cv2.convertMaps(mx, my, cv2.CV_16SC2)
+        to_raw = Homography(Minv) + self.lens
+        return to_raw.inverse.remap_maps(out_size)
 
 
 class FastBirdseye:
-    """Bird's-eye views of raw frames for any perspective, as ``maps_through`` makes them, quickly.
+    """Bird's-eye views of raw frames for any perspective, as the pipeline's remap makes them, quickly.
 
-    ``Undistorter.maps_through`` composes undistortion and warp into one remap exactly, which
-    takes too long for a slider (the perspective tuner asks for a new one at each change). Here the
-    undistortion map of a canvas a quarter of the frame larger on each side (as far as
-    ``maps_through`` samples) is made once, and a perspective's remap maps are that map warped
-    by ``Minv``. The view is within 2 grey levels of the pipeline's (warping the undistorted
-    frame instead, two interpolations, differs by up to 80 and moves marginal line pixels).
+    ``(lens.inverse + perspective).remap_maps`` composes undistortion and warp into one remap
+    exactly, which takes too long for a slider (the perspective tuner asks for a new one at each
+    change). Here the lens's undistortion map of a canvas ``MODEL_MARGIN`` of the frame larger on
+    each side (as far as ``Lens.valid`` lets the pipeline sample) is made once, and a
+    perspective's remap maps are that map warped by its inverse. The view is within 2 grey levels
+    of the pipeline's (warping the undistorted frame instead, two interpolations, differs by up
+    to 80 and moves marginal line pixels).
     """
 
-    def __init__(self, calibration: Calibration | None, size: tuple[int, int]):
-        w, h = size
-        self.pad = (w // 4, h // 4)
-        cw, ch = w + 2 * self.pad[0], h + 2 * self.pad[1]
-        if calibration is None:
-            xs, ys = np.meshgrid(np.arange(cw, dtype=np.float32) - self.pad[0],
-                                 np.arange(ch, dtype=np.float32) - self.pad[1])
-            self.map = np.dstack([xs, ys])
-        else:
-            K = calibration.camera_matrix
-            shifted = K.copy()
-            shifted[0, 2] += self.pad[0]
-            shifted[1, 2] += self.pad[1]
-            self.map = cv2.initUndistortRectifyMap(K, calibration.dist_coeffs, None, shifted,
-                                                   (cw, ch), cv2.CV_32FC2)[0]
+    def __init__(self, lens: Lens):
+        w, h = lens.size
+        self.pad = (int(w * MODEL_MARGIN), int(h * MODEL_MARGIN))
+        self.map = lens.undistort_maps(self.pad, cv2.CV_32FC2)[0]
         self.size = (w, h)
 
-    def birdseye(self, raw: np.ndarray, Minv: np.ndarray) -> np.ndarray:
-        """Return the bird's-eye view of a RAW frame for the perspective whose inverse is ``Minv``."""
-        to_canvas = np.array([[1, 0, self.pad[0]], [0, 1, self.pad[1]], [0, 0, 1]], float) @ Minv
+    def birdseye(self, raw: np.ndarray, perspective: Homography) -> np.ndarray:
+        """Return the bird's-eye view of a RAW frame for ``perspective`` (undistorted -> view)."""
+        to_canvas = (np.array([[1, 0, self.pad[0]], [0, 1, self.pad[1]], [0, 0, 1]], float)
+                     @ perspective.inverse.params)
         maps = cv2.warpPerspective(self.map, to_canvas, self.size,
                                    flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=(-1, -1, -1, -1))

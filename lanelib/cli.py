@@ -11,11 +11,16 @@ half-written output.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
-from . import data
-from .errors import LaneLibError, PartialOutputError
+from . import bench, data, evaluate, hough, runs, synth
+from .camera import Calibration, calibrate, parse_pattern
+from .config import PipelineConfig, load_config_or_preset
+from .errors import InputError, LaneLibError, PartialOutputError
+from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
+from .pipeline import LanePipeline
 
 _EXIT_OK = "exit codes: 0 every input ran;"
 _EXIT_REST = ("2 nothing was run: a usage error, a missing or empty input, an unreadable video, a bad "
@@ -66,9 +71,6 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
 
 
 def _load_pipeline_inputs(args):
-    from .camera import Calibration
-    from .config import PipelineConfig, load_config_or_preset
-
     config = load_config_or_preset(args.config) if args.config else PipelineConfig()
     calibration = Calibration.load(args.calibration) if args.calibration else None
     return config, calibration
@@ -89,8 +91,6 @@ def _add_calibrate(sub) -> None:
 
 
 def _run_calibrate(args) -> int:
-    from .camera import calibrate, parse_pattern
-
     cal = calibrate(args.cal_dir, parse_pattern(args.pattern))
     for name, why in sorted(cal.skip_reasons.items()):
         print(f"skipped {args.cal_dir / name}: {why}", file=sys.stderr)
@@ -121,12 +121,9 @@ def _add_images(sub) -> None:
 
 
 def _run_images(args) -> int:
-    from .io import list_images
-    from .pipeline import process_images
-
     files = list_images(args.in_dir)
     config, calibration = _load_pipeline_inputs(args)
-    rows = process_images(files, args.output, config, calibration, debug=args.debug)
+    rows = runs.process_images(files, args.output, config, calibration, debug=args.debug)
     for r in rows:
         if "error" in r:
             continue
@@ -168,10 +165,8 @@ def _add_video(sub) -> None:
 
 
 def _run_video(args) -> int:
-    from .pipeline import process_video
-
     config, calibration = _load_pipeline_inputs(args)
-    run = process_video(args.input, args.output, config, calibration, debug=args.debug,
+    run = runs.process_video(args.input, args.output, config, calibration, debug=args.debug,
                         log_path=args.log, progress=not args.no_progress)
     print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
           f"lane found in {run.found_frames} of {run.frames} frames"
@@ -206,19 +201,13 @@ def _add_hough(sub) -> None:
 
 
 def _run_hough(args) -> int:
-    from . import hough
-    from .errors import InputError
-    from .io import VIDEO_SUFFIXES, list_images
-
     config = hough.HoughConfig()
     if args.config:
-        from .config import load_config_or_preset
-
         config = load_config_or_preset(args.config).hough
     if args.input.is_dir():
         if args.log:
             raise InputError("--log is for videos; for images the rows are in OUT/results.json")
-        rows = hough.process_images(list_images(args.input), args.output, config)
+        rows = runs.hough_images(list_images(args.input), args.output, config)
         for r in rows:
             if "error" in r:
                 continue
@@ -235,10 +224,10 @@ def _run_hough(args) -> int:
     if args.input.suffix.lower() not in VIDEO_SUFFIXES:
         raise InputError(f"{args.input}: neither a folder of images nor a video "
                          f"({', '.join(VIDEO_SUFFIXES)}); pass one of those")
-    run = hough.process_video(args.input, args.output, config, log_path=args.log,
-                              progress=not args.no_progress)
+    run = runs.hough_video(args.input, args.output, config, log_path=args.log,
+                           progress=not args.no_progress)
     print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
-          f"both lines found in {run.both_found_frames} of {run.frames} frames"
+          f"both lines found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
     return 0
 
@@ -283,11 +272,6 @@ def _add_evaluate(sub) -> None:
 
 
 def _run_evaluate(args) -> int:
-    from . import evaluate
-    from .errors import InputError
-    from .io import check_not_input, list_images, write_json
-    from .pipeline import LanePipeline
-
     if args.max_frames is not None and args.max_frames < 1:
         raise InputError(f"--max-frames {args.max_frames}: give a number of frames of 1 or more")
     detector = args.detector or ("tracker" if args.kind == "video" else "frame")
@@ -348,8 +332,6 @@ def _add_synth(sub) -> None:
     k.add_argument("--seed", type=int, help="random seed of the scene (default: the set's)")
 
     def run(args) -> int:
-        from . import synth
-
         if args.all == bool(args.synth_kind):
             p.error("give either --all or one of the kinds: images, boards, video")
         if args.all:
@@ -388,11 +370,6 @@ def _add_bench(sub) -> None:
 
 
 def _run_bench(args) -> int:
-    import json
-
-    from . import bench
-    from .errors import InputError
-
     if args.frames < 10:
         raise InputError(f"--frames {args.frames}: give 10 frames or more")
     config, calibration = _load_pipeline_inputs(args)

@@ -98,12 +98,13 @@ def _convert(value, tp, key: str):
 # Keys that moved: (old section, key) -> the (section, key)s that take its value. The plausibility
 # checks of a lane moved from ``tracking`` to ``checks`` when single images got them too; the old
 # ``tracking.max_width_spread_m`` also limited a line's bend against its track, now
-# ``tracking.max_bend_m``.
+# ``tracking.max_bend_m``. Curvatures are named ``_per_m`` everywhere (once also ``_1pm``).
 MOVED_KEYS = {
     ("tracking", "min_width_m"): (("checks", "min_width_m"),),
     ("tracking", "max_width_m"): (("checks", "max_width_m"),),
     ("tracking", "max_width_spread_m"): (("checks", "max_width_spread_m"), ("tracking", "max_bend_m")),
-    ("tracking", "max_curvature_diff_1pm"): (("checks", "max_curvature_diff_1pm"),),
+    ("tracking", "max_curvature_diff_1pm"): (("checks", "max_curvature_diff_per_m"),),
+    ("checks", "max_curvature_diff_1pm"): (("checks", "max_curvature_diff_per_m"),),
     ("tracking", "max_band_fill"): (("checks", "max_band_fill"),),
     ("tracking", "check_rows"): (("checks", "check_rows"),),
 }

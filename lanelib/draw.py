@@ -1,8 +1,9 @@
 """Drawing: the lane mapped back onto the road, the measurements as text, grids of labelled views.
 
 The lane overlay is drawn by mapping the polygon's points from the bird's-eye view into the
-undistorted frame (``Minv``) and filling it there, which is cheaper than drawing in the bird's-eye
-view and warping a whole image back.
+frame drawn on (a transform object: the perspective's ``inverse`` for the undistorted frame, the
+bird's-eye -> raw chain for the raw frame) and filling it there, which is cheaper than drawing in
+the bird's-eye view and warping a whole image back.
 
 ``sheet`` lays named views (RGB images or masks) out as one labelled grid: the tuners' previews
 and, as ``composite``, the pipeline's 2x2 debug view.
@@ -50,16 +51,26 @@ def _to_int(pts: np.ndarray) -> np.ndarray:
     return np.round(pts).astype(np.int32).reshape(-1, 1, 2)
 
 
-def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs, Minv: np.ndarray | None,
-                 config: DrawConfig = DrawConfig(), height_px: int | None = None,
-                 lens: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
-    """Return ``image`` with the lane area and lines drawn, fits mapped through ``Minv``.
+def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
+                 to_image: Callable[[np.ndarray], np.ndarray] | None,
+                 config: DrawConfig = DrawConfig(), height_px: int | None = None) -> np.ndarray:
+    """Return ``image`` with the lane area and lines drawn, the fits mapped by ``to_image``.
 
-    ``left_coeffs``/``right_coeffs`` are bird's-eye pixel fits (None: that line is not drawn,
-    and the area only when both exist). ``Minv`` None draws in the bird's-eye view itself.
-    ``lens`` maps undistorted-image points on into the image drawn on (e.g. the raw frame
-    through the lens distortion, ``camera.distort_points``); None: ``image`` is undistorted.
+    Parameters
+    ----------
+    image : the frame to draw on (RGB uint8).
+    left_coeffs, right_coeffs : bird's-eye pixel fits (None: that line is not drawn, and the
+        area only when both exist).
+    to_image : the transform of bird's-eye points into ``image`` (``perspective.Transform``):
+        ``perspective.inverse`` for the undistorted frame, ``(lens.inverse + perspective).inverse``
+        for the raw frame (``LanePipeline.annotate`` passes the right one); None draws in the
+        bird's-eye view itself. Only the polygon's points are mapped.
+    config : colours, opacity, line width, samples per line.
+    height_px : height of the bird's-eye view (default: the image's).
     """
+    if isinstance(to_image, np.ndarray):
+        raise InputError("lane_overlay: to_image is a transform of points, not a matrix; pass "
+                         "perspective.inverse (or perspective.Homography(Minv))")
     h = height_px or image.shape[0]
     out = image.copy()
     mapped = {}
@@ -67,9 +78,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs, Minv: np.ndarray 
         if coeffs is None:
             continue
         pts = line_points(coeffs, h, config.samples)
-        if Minv is not None:
-            pts = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2)
-        mapped[side] = lens(pts) if lens is not None else pts
+        mapped[side] = to_image(pts) if to_image is not None else pts
     if len(mapped) == 2:
         poly = _to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))
         # blend only inside the polygon's bounding box: outside it the blend gives the image back

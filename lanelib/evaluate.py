@@ -12,7 +12,8 @@ curvature error covers those frames.
 
 Point accuracy and the false-positive and false-negative line rates follow the TuSimple lane
 benchmark (``evaluate/lane.py`` of TuSimple/tusimple-benchmark): each fitted bird's-eye line is
-mapped to the raw image (perspective ``Minv``, then the camera's distortion) and its x is compared
+mapped to the raw image (``pipeline.birdseye_to_raw``: the perspective's inverse, then the
+camera's lens) and its x is compared
 with the truth's x at each truth row. A truth point is hit when the horizontal distance is below
 ``POINT_THRESHOLD_PX / cos(angle)``, where ``angle`` is the truth line's slant from vertical
 (fitted straight through its points), i.e. within about 20 px measured across the line. A truth
@@ -44,7 +45,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .camera import Calibration, distort_points, undistort_points
+from .camera import Calibration
 from .errors import DecodeStoppedError, InputError, LaneLibError, naming_the_file
 from .io import VideoReader, list_images, read_image
 from .synth.truth import load_image_truth, load_video_truth
@@ -146,9 +147,10 @@ def score_lines(pred_xs: Sequence[np.ndarray], gt_xs: Sequence[np.ndarray], rows
 def fit_x_in_raw(coeffs_px, pipeline, rows: np.ndarray) -> np.ndarray:
     """Return the x (px) in the RAW image of a bird's-eye fit at raw ``rows`` (NaN where it ends).
 
-    The fit ``x = a*y**2 + b*y + c`` is sampled over the bird's-eye rows, mapped to the
-    undistorted image by the perspective's ``Minv`` and to the raw image by the pipeline's camera
-    distortion (``camera.distort_points``; none without a calibration), then read at ``rows``.
+    The fit ``x = a*y**2 + b*y + c`` is sampled over the bird's-eye rows, mapped to the raw
+    image by the pipeline's bird's-eye -> raw transform (``pipeline.birdseye_to_raw``: the
+    perspective's inverse, then the lens; no distortion without a calibration), then read at
+    ``rows``. Points where the lens model folds back (``camera.Lens.valid``) are left out.
 
     Parameters
     ----------
@@ -156,18 +158,14 @@ def fit_x_in_raw(coeffs_px, pipeline, rows: np.ndarray) -> np.ndarray:
     pipeline : the ``LanePipeline`` that made the fit.
     rows : raw-image rows (px).
     """
-    w, h = pipeline.size
+    h = pipeline.size[1]
     # a little beyond the view: distortion moves rows near the view's edge by a pixel or two
     yb = np.linspace(-0.05 * h, 1.05 * h, 2 * h)
     xb = np.polyval(coeffs_px, yb)
-    und = pipeline.perspective.unwarp_points(np.column_stack([xb, yb]))
-    # The distortion polynomial folds back far outside the frame: use nothing from there.
-    keep = ((und[:, 0] > -0.25 * w) & (und[:, 0] < 1.25 * w)
-            & (und[:, 1] > -0.25 * h) & (und[:, 1] < 1.25 * h))
+    raw, keep = pipeline.birdseye_to_raw.checked(np.column_stack([xb, yb]))
     if keep.sum() < 2:
         return np.full(len(rows), np.nan)
-    cal = pipeline.undistorter.calibration
-    raw = distort_points(cal, und[keep]) if cal is not None else und[keep]
+    raw = raw[keep]
     order = np.argsort(raw[:, 1])
     return np.interp(np.asarray(rows, float), raw[order, 1], raw[order, 0], left=np.nan, right=np.nan)
 
@@ -180,20 +178,18 @@ def in_view(pipeline, xs: np.ndarray, rows: np.ndarray) -> np.ndarray:
     ok = np.isfinite(xs)
     if not ok.any():
         return out
-    pts = np.column_stack([xs[ok], rows[ok]])
-    cal = pipeline.undistorter.calibration
-    und = undistort_points(cal, pts) if cal is not None else pts
-    bird = pipeline.perspective.warp_points(und)
+    bird = pipeline.raw_to_birdseye(np.column_stack([xs[ok], rows[ok]]))
     w, h = pipeline.size
     out[ok] = (bird[:, 0] >= 0) & (bird[:, 0] <= w - 1) & (bird[:, 1] >= 0) & (bird[:, 1] <= h - 1)
     return out
 
 
 def truth_calibration(camera) -> Calibration:
-    """Return the ``Calibration`` of the true camera recorded in a ground truth (``CameraTruth``)."""
-    return Calibration(np.asarray(camera.camera_matrix, np.float64),
-                       np.asarray(camera.dist_coeffs, np.float64),
-                       tuple(int(v) for v in camera.size_px), 0.0)
+    """Return the ``Calibration`` of the true camera recorded in a ground truth (``CameraTruth``).
+
+    The same as ``camera.calibration()``, which new code calls.
+    """
+    return camera.calibration()
 
 
 def _truth_x(xs) -> np.ndarray:
@@ -251,8 +247,8 @@ class EvalReport:
     found: np.ndarray
     offset_true_m: np.ndarray
     offset_pred_m: np.ndarray
-    curvature_true_1pm: np.ndarray
-    curvature_pred_1pm: np.ndarray
+    curvature_true_per_m: np.ndarray
+    curvature_pred_per_m: np.ndarray
     radius_true_m: np.ndarray
     radius_pred_m: np.ndarray
     lane_width_true_m: np.ndarray
@@ -276,9 +272,9 @@ class EvalReport:
         return np.abs(self.offset_pred_m - self.offset_true_m) * 100.0
 
     @property
-    def curvature_err_1pm(self) -> np.ndarray:
+    def curvature_err_per_m(self) -> np.ndarray:
         """Return |curvature error| per frame (1/m; NaN where no lane was found)."""
-        return np.abs(self.curvature_pred_1pm - self.curvature_true_1pm)
+        return np.abs(self.curvature_pred_per_m - self.curvature_true_per_m)
 
     @property
     def radius_err_pct(self) -> np.ndarray:
@@ -311,7 +307,7 @@ class EvalReport:
             "found_rate": float(np.mean(self.found)) if n else float("nan"),
             "offset_err_cm_median": _nan_stat(self.offset_err_cm, np.median),
             "offset_err_cm_p95": _nan_stat(self.offset_err_cm, lambda v: np.percentile(v, 95)),
-            "curvature_err_median": _nan_stat(self.curvature_err_1pm, np.median),
+            "curvature_err_median": _nan_stat(self.curvature_err_per_m, np.median),
             "radius_err_pct_median": _nan_stat(self.radius_err_pct, np.median),
             "point_accuracy": _nan_stat(self.frame_point_accuracy, np.mean),
             "fp_rate": float(np.mean(fp)) if n else float("nan"),
@@ -401,7 +397,7 @@ class _Collector:
         s = score_frame(self.pipeline, result, lane)
         m = result.measurement
         self.rows.append((name, bool(result.found), lane.offset_m, m.offset_m, lane.curvature_per_m,
-                          m.curvature_1pm, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
+                          m.curvature_per_m, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
                           s.accuracy, s.pred_lines, s.gt_lines, s.fp_lines, s.fn_lines, lane))
 
     def report(self, failed: Sequence[tuple[str, str]] = ()) -> EvalReport:
@@ -514,11 +510,11 @@ def calibration_from_truth(path: str | os.PathLike) -> Calibration:
     if not p.exists():
         raise InputError(f"{p}: no such file or folder; check the path")
     if not p.is_dir():
-        return truth_calibration(load_video_truth(p).camera)
+        return load_video_truth(p).camera.calibration()
     first_error = None
     for image in list_images(p):
         try:
-            return truth_calibration(load_image_truth(image).camera)
+            return load_image_truth(image).camera.calibration()
         except InputError as e:
             first_error = first_error or e
     raise first_error

@@ -13,19 +13,18 @@ y grows, has a negative slope. The stage functions work on plain arrays, for not
 ``HoughLaneFinder`` runs them from one ``HoughConfig`` on single images, and ``HoughTracker``
 adds smoothing across video frames and holds a lost line for a few frames. Nothing in the
 per-frame path raises on the frame's content: a side without a line says why in ``reason``.
+Its batch runs (a folder of images, a video) are ``runs.hough_images`` and ``runs.hough_video``.
 """
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
 
-from . import io, runs
-from .errors import ConfigError, InputError
+from . import io
+from .errors import ConfigError
 
 Triple = tuple[int, int, int]
 
@@ -176,18 +175,6 @@ class HoughResult:
 
 # --------------------------------------------------------------------------- stage functions
 
-def check_rgb(rgb) -> np.ndarray:
-    """Return ``rgb`` as a C-contiguous RGB uint8 array; anything else raises InputError."""
-    if not isinstance(rgb, np.ndarray) or rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
-        what = (f"shape {rgb.shape}, dtype {rgb.dtype}" if isinstance(rgb, np.ndarray)
-                else type(rgb).__name__)
-        raise InputError(f"expected an RGB uint8 image array (H x W x 3), got {what}; "
-                         "read frames with lanelib.io.read_image or VideoReader")
-    if rgb.shape[0] < 1 or rgb.shape[1] < 1:
-        raise InputError(f"expected a non-empty RGB image, got shape {rgb.shape}")
-    return np.ascontiguousarray(rgb)
-
-
 def select_white_yellow(rgb: np.ndarray, white_hls_lo: Triple, white_hls_hi: Triple,
                         yellow_hls_lo: Triple, yellow_hls_hi: Triple) -> np.ndarray:
     """Return the 0/255 mask of pixels inside the white or the yellow HLS range (OpenCV units)."""
@@ -297,7 +284,7 @@ def annotate(rgb: np.ndarray, result: HoughResult, opacity: float = 0.7,
     Left is red, right is blue; ``opacity`` in 0..1 is the weight of the drawn lines. Only the
     band of rows the lines cross is blended, which costs a fraction of a full-frame blend.
     """
-    out = check_rgb(rgb).copy()
+    out = io.check_rgb(rgb).copy()
     lines = [(line, color) for line, color in ((result.left, LEFT_COLOR_RGB),
                                                (result.right, RIGHT_COLOR_RGB)) if line is not None]
     if not lines:
@@ -367,7 +354,7 @@ class HoughLaneFinder:
             If ``rgb`` is not an H x W x 3 uint8 array. The frame's content never raises.
         """
         c = self.config
-        rgb = check_rgb(rgb)
+        rgb = io.check_rgb(rgb)
         region = self._region(rgb.shape)
         box = rgb[region.rows, region.cols]
         color = select_white_yellow(box, c.white_hls_lo, c.white_hls_hi, c.yellow_hls_lo, c.yellow_hls_hi)
@@ -457,60 +444,3 @@ class HoughTracker:
                                                  ("right", right_held, self._right)) if is_held]
         return HoughResult(left, right, measured.n_left_segments, measured.n_right_segments,
                            "; ".join(reasons), left_held, right_held, measured.stages)
-
-
-# --------------------------------------------------------------------------- batch runs
-
-def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
-                   config: HoughConfig = HoughConfig()) -> list[dict]:
-    """Find the lines in each image; write annotated images and ``results.json``; return rows.
-
-    Each row holds ``file``, ``left_found``, ``right_found``, each line's x (px) at the bottom
-    row and at the top of the region (None when not found), and ``reason``; a file that cannot be
-    read holds ``file`` and ``error`` instead, and the run goes on (``runs.run_images``).
-    """
-    finder = HoughLaneFinder(config)
-
-    def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
-        result = finder.process(rgb)
-        return annotate(rgb, result), result.row()
-
-    return runs.run_images(files, out_dir, process)
-
-
-@dataclass(frozen=True)
-class HoughVideoRun:
-    """What a video run did: frames, wall time (s), frames per second, frames with both lines."""
-
-    frames: int
-    seconds: float
-    fps: float
-    both_found_frames: int
-
-
-def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
-                  config: HoughConfig = HoughConfig(), log_path: str | os.PathLike | None = None,
-                  progress: bool = True, threads: int | None = None) -> HoughVideoRun:
-    """Track both lines through a video; write the annotated video (and CSV log); return a summary.
-
-    ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
-    CSV at ``log_path`` holds ``frame, time_s`` and the columns of ``HoughResult.row``. Outputs
-    are written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing behind, except
-    a video that stops decoding half-way: its outputs keep the frames before the break, and
-    ``PartialOutputError`` says so.
-    """
-    if Path(out_path).suffix.lower() not in io.VIDEO_SUFFIXES:
-        raise InputError(f"{out_path}: the output video needs a video suffix "
-                         f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. out.mp4")
-    tracker = HoughTracker(config)
-    both = 0
-
-    def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict]:
-        nonlocal both
-        result = tracker.process(frame)
-        both += result.left_found and result.right_found
-        return annotate(frame, result), {"frame": index, "time_s": time_s, **result.row()}
-
-    summary = runs.run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                             desc=Path(in_path).name, threads=threads)
-    return HoughVideoRun(summary.frames, summary.seconds, summary.fps, both)

@@ -167,6 +167,49 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     return read_image_info(path)[0]
 
 
+PIPELINE_SIZE_FIX = ("make a pipeline for this size (LanePipeline(config, calibration, size=...)) "
+                     "or resize the frames")
+
+
+def check_rgb(image, name: str = "image", size: tuple[int, int] | None = None, *,
+              owner: str = "the pipeline", fix: str = PIPELINE_SIZE_FIX,
+              mask_ok: bool = False) -> np.ndarray:
+    """Return ``image`` as a C-contiguous RGB uint8 array (H x W x 3); anything else raises InputError.
+
+    The one input check of every stage that takes a frame (``Undistorter``, ``Perspective``,
+    ``LanePipeline``, the Hough pipeline). A contiguous array is returned as it is (no copy).
+
+    Parameters
+    ----------
+    image : the array to check.
+    name : what the array is, to lead the message ("frame", "image").
+    size : (width, height) in px the image must have; None: any non-empty size.
+    owner : what the size was set up for, for the message ("the pipeline", "the perspective").
+    fix : what to do about a wrong size, for the message.
+    mask_ok : also accept an H x W uint8 mask (e.g. a 0/255 binary to warp).
+
+    Raises
+    ------
+    InputError
+        If ``image`` is not an H x W x 3 uint8 array (or, with ``mask_ok``, an H x W one), is
+        empty, or is not ``size``.
+    """
+    shape_ok = isinstance(image, np.ndarray) and image.dtype == np.uint8 and (
+        (image.ndim == 3 and image.shape[2] == 3) or (mask_ok and image.ndim == 2))
+    if not shape_ok:
+        what = (f"shape {image.shape}, dtype {image.dtype}" if isinstance(image, np.ndarray)
+                else type(image).__name__)
+        mask = " or a uint8 mask (H x W)" if mask_ok else ""
+        raise InputError(f"{name}: expected an RGB uint8 image array (H x W x 3){mask}, got {what}; "
+                         "read frames with lanelib.io.read_image or VideoReader")
+    h, w = image.shape[:2]
+    if h < 1 or w < 1:
+        raise InputError(f"{name}: expected a non-empty RGB image, got shape {image.shape}")
+    if size is not None and (w, h) != (size[0], size[1]):
+        raise InputError(f"{name}: is {w}x{h} but {owner} is set up for {size[0]}x{size[1]}; {fix}")
+    return np.ascontiguousarray(image)
+
+
 def encode_image(rgb: np.ndarray, suffix: str = ".png", jpeg_quality: int = 90) -> bytes:
     """Return ``rgb`` (or a single-channel mask) encoded as PNG or JPEG bytes."""
     arr = np.asarray(rgb)

@@ -1,9 +1,9 @@
-"""Lane-pixel search, polynomial fits, curvature, offset, lane width, plausibility checks, results.
+"""Lane-pixel search, polynomial fits, curvature, offset, lane width and the plausibility checks.
 
 A lane is found only when both lines pass ``LaneChecks`` (``check_lane``: ``line_problem`` of each
 line, ``pair_problem`` of the two), in a single image (``LanePipeline.detect``) as in a video
-(``LaneTracker``); a ``FrameResult`` that failed them says why in ``reason`` and keeps the fits
-and what they measured apart in ``rejected``, with NaN measurements: no lane rather than a
+(``LaneTracker``); a ``result.FrameResult`` that failed them says why in ``reason`` and keeps the
+fits and what they measured apart in ``rejected``, with NaN measurements: no lane rather than a
 confident wrong one.
 
 Coordinates are bird's-eye pixels, x to the right and y down; each line is fitted as
@@ -89,7 +89,7 @@ class LaneChecks:
     min_width_m, max_width_m : the lane width on the view's bottom row must lie in this range.
     max_width_spread_m : largest difference of the lane width between the check rows, top to
         bottom (the two lines roughly parallel).
-    max_curvature_diff_1pm : largest difference of the two lines' curvatures on the bottom
+    max_curvature_diff_per_m : largest difference of the two lines' curvatures on the bottom
         row (1/m).
     max_band_fill : largest share of its search band (sliding window or prior band, over the
         rows it spans) a line's pixels may fill; a wider patch is a bright area (grass, sky,
@@ -106,7 +106,7 @@ class LaneChecks:
     min_width_m: float = 3.0
     max_width_m: float = 4.5
     max_width_spread_m: float = 0.7
-    max_curvature_diff_1pm: float = 0.004
+    max_curvature_diff_per_m: float = 0.004
     max_band_fill: float = 0.6
     max_band_scatter: float = 0.7
     check_rows: int = 8
@@ -116,9 +116,9 @@ class LaneChecks:
             raise ConfigError("checks: need 0 < min_width_m < max_width_m")
         if self.check_rows < 2:
             raise ConfigError("checks: check_rows must be at least 2")
-        if min(self.max_width_spread_m, self.max_curvature_diff_1pm, self.max_band_fill,
+        if min(self.max_width_spread_m, self.max_curvature_diff_per_m, self.max_band_fill,
                self.max_band_scatter) <= 0:
-            raise ConfigError("checks: max_width_spread_m, max_curvature_diff_1pm, max_band_fill "
+            raise ConfigError("checks: max_width_spread_m, max_curvature_diff_per_m, max_band_fill "
                               "and max_band_scatter must be positive")
 
 
@@ -175,12 +175,12 @@ class LaneSearch:
 class LaneMeasurement:
     """Lane geometry at the car in metres (NaN where a line needed for it was not found)."""
 
-    curvature_1pm: float
+    curvature_per_m: float
     radius_m: float
     offset_m: float
     lane_width_m: float
-    left_curvature_1pm: float
-    right_curvature_1pm: float
+    left_curvature_per_m: float
+    right_curvature_per_m: float
 
 
 # --------------------------------------------------------------------------- pixels
@@ -412,7 +412,7 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; over
     ``check_rows`` rows from the top to the bottom it may vary by at most ``max_width_spread_m``
     (parallel lines); the two curvatures on the bottom row may differ by at most
-    ``max_curvature_diff_1pm``. Only a few rows are evaluated (cheap enough for every frame).
+    ``max_curvature_diff_per_m``. Only a few rows are evaluated (cheap enough for every frame).
     """
     rows = np.linspace(0.0, height_px - 1.0, checks.check_rows)
     width = (np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)) * xm_per_px
@@ -426,9 +426,9 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     y_m = (height_px - 1) * ym_per_px
     kl = curvature(fit_to_metres(left.coeffs_px, xm_per_px, ym_per_px), y_m)
     kr = curvature(fit_to_metres(right.coeffs_px, xm_per_px, ym_per_px), y_m)
-    if abs(kl - kr) > checks.max_curvature_diff_1pm:
+    if abs(kl - kr) > checks.max_curvature_diff_per_m:
         return (f"curvatures differ by {abs(kl - kr):.4f} 1/m "
-                f"(limit {checks.max_curvature_diff_1pm} 1/m)")
+                f"(limit {checks.max_curvature_diff_per_m} 1/m)")
     return ""
 
 
@@ -506,107 +506,3 @@ def search_bands_px(search: LaneSearch, size_px: tuple[int, int],
         xs = fit.x_at(np.linspace(0.0, h - 1.0, 8))
         out.append(float(np.mean(np.clip(xs + half, 0, w) - np.clip(xs - half, 0, w))))
     return out[0], out[1]
-
-
-# --------------------------------------------------------------------------- one frame's result
-
-def line_confidence(fit: LineFit, height_px: int, config: SearchConfig = SearchConfig()) -> float:
-    """Return a 0-1 confidence of a fitted line: vertical span covered times pixel support."""
-    if not fit.found:
-        return 0.0
-    span = min(1.0, fit.span_px / (0.75 * height_px))
-    support = min(1.0, fit.n_pixels / (4.0 * config.min_line_pixels))
-    return round(span * support, 3)
-
-
-def _round(v: float, nd: int) -> float:
-    return v if math.isnan(v) else round(float(v), nd)
-
-
-def _json_number(v: float, nd: int) -> float | None:
-    """Return ``v`` rounded to ``nd`` digits, or None where it is not finite (for JSON)."""
-    return round(float(v), nd) if math.isfinite(v) else None
-
-
-@dataclass(frozen=True)
-class Rejected:
-    """A lane that failed the plausibility checks: its fits, what they measured, and why.
-
-    ``left``/``right`` are the fits as the search made them (a line the search did not find is
-    not found here either); ``measurement`` is what they would have measured (NaN where a line
-    is missing).
-    """
-
-    left: LineFit
-    right: LineFit
-    measurement: LaneMeasurement
-    reason: str
-
-    def summary(self) -> dict:
-        """Return radius, offset and width of the rejected lane (None where not measured) and why."""
-        m = self.measurement
-        return {"radius_m": _json_number(m.radius_m, 1), "offset_m": _json_number(m.offset_m, 3),
-                "lane_width_m": _json_number(m.lane_width_m, 3), "reason": self.reason}
-
-
-@dataclass(frozen=True)
-class FrameResult:
-    """What the pipeline (or the tracker) found in one frame.
-
-    ``found`` is true when both lines were found and passed the plausibility checks
-    (``LaneChecks``); ``reason`` says what was missing or implausible otherwise, and the
-    measurements are NaN. A detection that failed the checks is kept apart in ``rejected``, never
-    reported as the lane. ``left_conf``/``right_conf`` are 0-1 confidences per line (0 for a line
-    not found or rejected). ``images`` holds the stage images (undistorted, birdseye, binary,
-    search, result) when the pipeline was asked to keep them.
-    """
-
-    left: LineFit
-    right: LineFit
-    measurement: LaneMeasurement
-    method: str
-    left_conf: float
-    right_conf: float
-    reason: str = ""
-    search: LaneSearch | None = field(default=None, repr=False)
-    images: dict = field(default_factory=dict, repr=False)
-    rejected: Rejected | None = None
-
-    @property
-    def left_found(self) -> bool:
-        return self.left.found
-
-    @property
-    def right_found(self) -> bool:
-        return self.right.found
-
-    @property
-    def found(self) -> bool:
-        return self.left.found and self.right.found
-
-    @property
-    def radius_m(self) -> float:
-        return self.measurement.radius_m
-
-    @property
-    def curvature_1pm(self) -> float:
-        return self.measurement.curvature_1pm
-
-    @property
-    def offset_m(self) -> float:
-        return self.measurement.offset_m
-
-    @property
-    def lane_width_m(self) -> float:
-        return self.measurement.lane_width_m
-
-    def summary(self) -> dict:
-        """Return the per-image record written to results.json (NaN where not found).
-
-        ``rejected`` is None, or the radius, offset and width of a detection that failed the
-        checks and why (``Rejected.summary``).
-        """
-        return {"found": self.found, "left_found": self.left_found, "right_found": self.right_found,
-                "radius_m": _round(self.radius_m, 1), "offset_m": _round(self.offset_m, 3),
-                "lane_width_m": _round(self.lane_width_m, 3), "reason": self.reason,
-                "rejected": self.rejected.summary() if self.rejected is not None else None}

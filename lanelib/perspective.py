@@ -12,6 +12,12 @@ wide on row 720), so the two dst lines are 3.7 m apart. The visible road length 
 same geometry: with fx = 1156 px the bottom row is 4.79 m ahead, the camera 1.25 m above the
 road, and row 470 is 28.25 m ahead: 23.5 m in all.
 
+Geometry is a set of transform objects in the style of scikit-image's ``ProjectiveTransform``
+(``Transform``): callable on (N, 2) points, with an ``inverse``, composed by ``+`` (``Chain``).
+``Perspective`` is a ``Homography``; ``camera.Lens`` is the lens distortion. The pipeline's one
+remap is ``(lens.inverse + perspective).remap_maps(size)``, and the overlay and the evaluation
+map bird's-eye points to the raw frame by that chain's ``inverse``.
+
 ``straight_line_check`` measures how well a set of points does that on a frame of a straight road
 (the perspective notebook and ``widgets.PerspectiveTuner`` use it).
 """
@@ -23,7 +29,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .errors import ConfigError, InputError
+from . import io
+from .errors import ConfigError
 from .lanes import SearchConfig, sliding_windows
 
 Point = tuple[float, float]
@@ -122,10 +129,135 @@ def scaled(config: PerspectiveConfig, size_px: tuple[int, int]) -> PerspectiveCo
                              config.lane_width_m, config.visible_length_m)
 
 
-class Perspective:
+# --------------------------------------------------------------------------- transforms of points
+
+def as_points(points) -> np.ndarray:
+    """Return ``points`` ((x, y) pairs in px) as an (N, 2) float64 array."""
+    return np.asarray(points, dtype=np.float64).reshape(-1, 2)
+
+
+class Transform:
+    """A map of image points, in the style of scikit-image's ``ProjectiveTransform``.
+
+    ``tform(points)`` maps (N, 2) points (x, y) in px to an (N, 2) float64 array;
+    ``tform.inverse`` is the map back; ``a + b`` applies ``a``, then ``b`` (a ``Chain``).
+    ``valid(points)`` says where the map can be trusted (a lens model folds back far outside its
+    frame: ``camera.Lens.valid``), ``checked(points)`` gives the mapped points and that in one
+    pass, and ``remap_maps`` the ``cv2.remap`` grids that warp an image by the transform.
+    """
+
+    def __call__(self, points) -> np.ndarray:
+        raise NotImplementedError
+
+    @property
+    def inverse(self) -> "Transform":
+        """Return the transform back."""
+        raise NotImplementedError
+
+    def valid(self, points) -> np.ndarray:
+        """Return an (N,) bool array: True where ``points`` map to a trustworthy position (finite here)."""
+        p = as_points(points)
+        return np.isfinite(p[:, 0]) & np.isfinite(p[:, 1])
+
+    def checked(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Return the mapped points ((N, 2) float64) and ``valid(points)`` ((N,) bool)."""
+        return self(points), self.valid(points)
+
+    def __add__(self, other: "Transform") -> "Chain":
+        return Chain(self, other)
+
+    def remap_maps(self, out_size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Return the ``cv2.remap`` maps (CV_16SC2) that warp an image by this transform.
+
+        Output pixel q of the ``out_size`` (w, h) image samples the source at ``self.inverse(q)``,
+        or at (-1, -1), black, where that is not valid. Every output pixel is mapped: work for
+        once per configuration, not per frame.
+        """
+        w, h = int(out_size[0]), int(out_size[1])
+        xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        src, ok = self.inverse.checked(np.stack([xs.ravel(), ys.ravel()], axis=1))
+        src[~ok] = -1.0
+        mx = src[:, 0].reshape(h, w).astype(np.float32)
+        my = src[:, 1].reshape(h, w).astype(np.float32)
+        return cv2.convertMaps(mx, my, cv2.CV_16SC2)
+
+
+class Homography(Transform):
+    """The projective map of the plane by the 3x3 matrix ``params`` (scikit-image's ``params``).
+
+    ``inverse_params`` is the matrix back (default: the matrix inverse); it is kept as given, so
+    ``h.inverse.inverse`` has the very same matrix as ``h``.
+    """
+
+    def __init__(self, params: np.ndarray, inverse_params: np.ndarray | None = None):
+        self.params = np.asarray(params, dtype=np.float64)
+        if self.params.shape != (3, 3):
+            raise ConfigError(f"homography: needs a 3x3 matrix, got shape {self.params.shape}")
+        self.inverse_params = (np.linalg.inv(self.params) if inverse_params is None
+                               else np.asarray(inverse_params, dtype=np.float64))
+
+    def __call__(self, points) -> np.ndarray:
+        p = as_points(points)
+        if not len(p):
+            return p.copy()
+        return cv2.perspectiveTransform(p.reshape(-1, 1, 2), self.params).reshape(-1, 2)
+
+    @property
+    def inverse(self) -> "Homography":
+        """Return the homography back (matrices swapped)."""
+        return Homography(self.inverse_params, self.params)
+
+    def __repr__(self) -> str:
+        return f"Homography({np.round(self.params, 6).tolist()})"
+
+
+class Chain(Transform):
+    """Transforms applied in order: ``Chain(a, b)(p) == b(a(p))``, what ``a + b`` makes.
+
+    A point is valid where every step finds it valid (each step checks its own input).
+    """
+
+    def __init__(self, *transforms: Transform):
+        steps: list[Transform] = []
+        for t in transforms:
+            steps.extend(t.transforms if isinstance(t, Chain) else [t])
+        if not steps:
+            raise ConfigError("chain: needs at least one transform")
+        self.transforms = tuple(steps)
+
+    def __call__(self, points) -> np.ndarray:
+        p = as_points(points)
+        for t in self.transforms:
+            p = t(p)
+        return p
+
+    @property
+    def inverse(self) -> "Chain":
+        """Return the chain back: each step's inverse, in reverse order."""
+        return Chain(*(t.inverse for t in reversed(self.transforms)))
+
+    def checked(self, points) -> tuple[np.ndarray, np.ndarray]:
+        p = as_points(points)
+        ok = np.ones(len(p), bool)
+        for t in self.transforms:
+            p, step_ok = t.checked(p)
+            ok &= step_ok
+        return p, ok
+
+    def valid(self, points) -> np.ndarray:
+        return self.checked(points)[1]
+
+    def __repr__(self) -> str:
+        return " + ".join(repr(t) for t in self.transforms)
+
+
+class Perspective(Homography):
     """Warp between the undistorted image and the bird's-eye view, with its metric scale.
 
-    ``M`` maps undistorted-image points to bird's-eye points; ``Minv`` maps back.
+    As a ``Homography``, ``perspective(points)`` maps undistorted-image points to the bird's-eye
+    view and ``perspective.inverse`` maps back; ``M`` (= ``params``) and ``Minv`` are the two
+    matrices. ``lens.inverse + perspective`` (``camera.Lens``) takes raw-frame points to the
+    bird's-eye view, and its ``inverse`` bird's-eye points to the raw frame.
     """
 
     def __init__(self, config: PerspectiveConfig = PerspectiveConfig()):
@@ -137,16 +269,14 @@ class Perspective:
                               "choose four corners of a trapezoid")
         self.M = cv2.getPerspectiveTransform(src, dst)
         self.Minv = cv2.getPerspectiveTransform(dst, src)
+        super().__init__(self.M, self.Minv)
         self.size = tuple(int(v) for v in config.size_px)
         self.xm_per_px = config.xm_per_px
         self.ym_per_px = config.ym_per_px
 
     def _check(self, image: np.ndarray) -> None:
-        h, w = image.shape[:2]
-        if (w, h) != self.size:
-            raise InputError(f"perspective: image is {w}x{h} but the points are for "
-                             f"{self.size[0]}x{self.size[1]}; use perspective.scaled() or a config "
-                             "made for this camera")
+        io.check_rgb(image, "image", self.size, owner="the perspective",
+                     fix="use perspective.scaled() or a config made for this camera", mask_ok=True)
 
     def warp(self, image: np.ndarray, interpolation: int = cv2.INTER_LINEAR) -> np.ndarray:
         """Return the bird's-eye view of an undistorted image (same size)."""
@@ -159,14 +289,15 @@ class Perspective:
         return cv2.warpPerspective(image, self.Minv, self.size, flags=interpolation)
 
     def warp_points(self, pts: np.ndarray) -> np.ndarray:
-        """Map (N, 2) undistorted-image points to bird's-eye points."""
-        p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
-        return cv2.perspectiveTransform(p, self.M).reshape(-1, 2)
+        """Map (N, 2) undistorted-image points to bird's-eye points (``perspective(pts)``)."""
+        return self(pts)
 
     def unwarp_points(self, pts: np.ndarray) -> np.ndarray:
-        """Map (N, 2) bird's-eye points back to undistorted-image points."""
-        p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
-        return cv2.perspectiveTransform(p, self.Minv).reshape(-1, 2)
+        """Map (N, 2) bird's-eye points back to undistorted-image points (``perspective.inverse(pts)``)."""
+        return self.inverse(pts)
+
+    def __repr__(self) -> str:
+        return f"Perspective({self.size[0]}x{self.size[1]}, src_px={self.config.src_px})"
 
 
 # --------------------------------------------------------------------------- straight-line check

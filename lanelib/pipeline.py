@@ -4,24 +4,22 @@ One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> threshold
 search -> fits -> plausibility checks (``lanes.LaneChecks``, the same as the video tracker's) ->
 measurements -> overlay on the undistorted frame. A lane that fails the checks is not found; what
 it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
-use this object, so what a slider tunes is exactly what a video run uses.
+use this object, so what a slider tunes is exactly what a video run uses. This module is the
+per-frame engine only: runs over image folders and videos are ``runs.process_images`` and
+``runs.process_video``.
 """
 from __future__ import annotations
-
-import os
-from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
 
 from . import draw, lanes, thresholds
-from .camera import Calibration, Undistorter, distort_points
+from .camera import Calibration, Undistorter
 from .config import PipelineConfig
-from .errors import ConfigError, InputError
-from .lanes import (FrameResult, LaneCheck, LaneMeasurement, LaneSearch, LineFit, Rejected,
-                    line_confidence)
+from .errors import InputError
+from .lanes import LaneCheck, LaneMeasurement, LaneSearch, LineFit
 from .perspective import Perspective, scaled
+from .result import FrameResult, Rejected, line_confidence
 
 
 BAND_STRIPS = 4  # strips in which band_binary computes the bands around prior fits
@@ -49,12 +47,16 @@ class LanePipeline:
             pconf = scaled(pconf, self.size)
         self.perspective = Perspective(pconf)
         self.undistorter = Undistorter(calibration, self.size)
-        self._birdseye_maps = self.undistorter.maps_through(self.perspective.Minv, self.size)
+        self.lens = self.undistorter.lens
+        # raw frame -> bird's-eye view, and back (the overlay on the raw frame, the evaluation)
+        self.raw_to_birdseye = self.lens.inverse + self.perspective
+        self.birdseye_to_raw = self.raw_to_birdseye.inverse
+        self._birdseye_maps = self.raw_to_birdseye.remap_maps(self.size)
         self._context_px = thresholds.context_px(config.thresholds)
         self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
         w, h = self.size
-        self.car_x_px = float(self.perspective.warp_points([(w / 2, h - 1)])[0, 0])
+        self.car_x_px = float(self.perspective([(w / 2, h - 1)])[0, 0])
 
     # ---- stages ---------------------------------------------------------------------------
 
@@ -71,11 +73,24 @@ class LanePipeline:
         """Return the combined 0/255 lane-pixel mask of a bird's-eye image."""
         return thresholds.combine(birdseye, self.config.thresholds)
 
-    def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None) -> LaneSearch:
-        """Return the lane search: around ``prior`` fits when given, else sliding windows."""
+    def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
+               bases: tuple[float, float] | None = None) -> LaneSearch:
+        """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows.
+
+        The windows start from ``bases``, the lines' x (px) on the bottom row, when given (e.g.
+        the tracked lane's), else from the histogram peaks nearest the car.
+        """
         if prior is not None:
             return lanes.search_around(binary, prior[0], prior[1], self.config.search)
-        return lanes.sliding_windows(binary, self.config.search, car_x=self.car_x_px)
+        return lanes.sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px)
+
+    def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
+        """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
+        return lanes.search_bands_px(search, self.size, self.config.search)
+
+    def line_confidence(self, fit: LineFit) -> float:
+        """Return the 0-1 confidence of a fitted line (``result.line_confidence``)."""
+        return line_confidence(fit, self.size[1], self.config.search)
 
     def measure(self, left: LineFit, right: LineFit) -> LaneMeasurement:
         """Return curvature, radius, offset and lane width in metres for two fits."""
@@ -174,8 +189,7 @@ class LanePipeline:
     def check(self, search: LaneSearch) -> LaneCheck:
         """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's fits."""
         p = self.perspective
-        return lanes.check_lane(search.left, search.right,
-                                lanes.search_bands_px(search, self.size, self.config.search),
+        return lanes.check_lane(search.left, search.right, self.search_bands_px(search),
                                 self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks)
 
     def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
@@ -196,7 +210,6 @@ class LanePipeline:
         fits with what they measured are kept in ``rejected``. Confidences are those of the
         fits reported (0 for a rejected line).
         """
-        h = self.size[1]
         check = self.check(search)
         left, right, rejected = search.left, search.right, None
         if not check.ok:
@@ -209,8 +222,7 @@ class LanePipeline:
         if check.reason:
             reasons.append(check.reason)
         return FrameResult(left, right, self.measure(left, right), search.method,
-                           line_confidence(left, h, self.config.search),
-                           line_confidence(right, h, self.config.search),
+                           self.line_confidence(left), self.line_confidence(right),
                            "; ".join(reasons), search, images if images is not None else {}, rejected)
 
     def process(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
@@ -219,12 +231,10 @@ class LanePipeline:
         With ``keep_images`` the stage images (undistorted, birdseye, binary, search) are kept too.
         """
         result = self.detect(raw, keep_images=keep_images)
-        und = self.undistort(raw)
-        result.images["result"] = self.annotate(und, result)
         if keep_images:
-            result.images["undistorted"] = und
-            result.images["search"] = draw.search_view(result.images["binary"], result.search,
-                                                       self.config.draw, self.config.search.prior_margin_px)
+            self.draw_views(result, raw)
+        else:
+            result.images["result"] = self.annotate(self.undistort(raw), result)
         return result
 
     def annotate(self, frame: np.ndarray, result: FrameResult, raw: bool = False) -> np.ndarray:
@@ -233,28 +243,42 @@ class LanePipeline:
         ``frame`` is the undistorted frame, or with ``raw`` the RAW frame: the lane is then mapped
         through the lens model onto it (no full-frame undistortion needed).
         """
-        cal = self.undistorter.calibration
-        lens = (lambda pts: distort_points(cal, pts)) if raw and cal is not None else None
-        out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px,
-                                self.perspective.Minv, self.config.draw, self.size[1], lens)
+        to_frame = self.birdseye_to_raw if raw else self.perspective.inverse
+        out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px, to_frame,
+                                self.config.draw, self.size[1])
         return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
                                                           result.lane_width_m, result.found,
                                                           result.reason), self.config.draw)
+
+    def draw_views(self, result: FrameResult, raw: np.ndarray) -> dict:
+        """Return ``result.images`` with the drawn views added: undistorted, result and search.
+
+        ``result`` kept its stage images (``detect``, ``LaneTracker.update`` or ``process`` with
+        ``keep_images=True``) and ``raw`` is its RAW frame. Views already there are kept; the
+        search view needs the kept "binary". The one place the debug views are drawn, for
+        ``process``, ``debug_composite`` and the video's ``--debug``.
+        """
+        im = result.images
+        if "undistorted" not in im:
+            im["undistorted"] = self.undistort(raw)
+        if "result" not in im:
+            im["result"] = self.annotate(im["undistorted"], result)
+        if "search" not in im and "binary" in im and result.search is not None:
+            im["search"] = draw.search_view(im["binary"], result.search, self.config.draw,
+                                            self.config.search.prior_margin_px)
+        return im
 
     def debug_composite(self, result: FrameResult, raw: np.ndarray | None = None) -> np.ndarray:
         """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result.
 
         ``result`` comes from ``process(frame, keep_images=True)``; or from ``detect`` or
         ``LaneTracker.update`` with ``keep_images=True``, passed with its RAW frame ``raw``, from
-        which the missing views (undistorted, search, result) are drawn here.
+        which the missing views (undistorted, search, result) are drawn here (``draw_views``).
         """
         im = result.images
-        if "search" not in im and raw is not None and "binary" in im and result.search is not None:
-            und = im.setdefault("undistorted", self.undistort(raw))
-            im.setdefault("result", self.annotate(und, result))
-            im["search"] = draw.search_view(im["binary"], result.search, self.config.draw,
-                                            self.config.search.prior_margin_px)
-        if "search" not in im:
+        if raw is not None and "binary" in im:
+            self.draw_views(result, raw)
+        if not all(k in im for k in ("undistorted", "binary", "search", "result")):
             raise InputError("debug_composite needs a result from process(frame, keep_images=True), "
                              "or a kept-images result (detect, LaneTracker.update) and its raw frame")
         return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
@@ -272,119 +296,3 @@ def pipeline_for(image: np.ndarray, config: PipelineConfig = PipelineConfig(),
                  calibration: Calibration | None = None) -> LanePipeline:
     """Return a LanePipeline for frames of ``image``'s size."""
     return LanePipeline(config, calibration, size=(image.shape[1], image.shape[0]))
-
-
-def process_images(files: list[str | os.PathLike], out_dir: str | os.PathLike,
-                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
-                   debug: bool = False) -> list[dict]:
-    """Run the pipeline on image files; write annotated images and ``results.json``; return rows.
-
-    Frames of several sizes are allowed: one pipeline is built per size (the calibration is
-    rescaled or refused per ``Calibration.for_size``). A file that cannot be read, an image too
-    small for the bird's-eye view, or one whose size the calibration does not fit gets a row with
-    an ``error`` (``runs.run_images``), and the run goes on.
-    """
-    from .runs import run_images
-
-    cache: dict[tuple[int, int], LanePipeline] = {}
-
-    def process(rgb: np.ndarray):
-        size = (rgb.shape[1], rgb.shape[0])
-        if size not in cache:
-            try:
-                cache[size] = LanePipeline(config, calibration, size=size)
-            except ConfigError:
-                LanePipeline(config)  # a bad config raises here again: it fails every image alike
-                w, h = config.perspective.size_px
-                raise InputError(f"the image is {size[0]}x{size[1]} px, too small for the bird's-eye "
-                                 "view (the perspective points collapse when scaled to it); pass "
-                                 f"larger images (the config's points are for {w}x{h})") from None
-        pipe = cache[size]
-        result = pipe.process(rgb, keep_images=debug)
-        image = pipe.debug_composite(result) if debug else result.images["result"]
-        return image, result.summary()
-
-    return run_images([Path(f) for f in files], out_dir, process)
-
-
-# --------------------------------------------------------------------------- video
-
-VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
-                     "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c")
-
-
-def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
-    """Return one row of the per-frame video log (``VIDEO_LOG_COLUMNS``; NaN where not found).
-
-    The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c.
-    """
-    nan = float("nan")
-    row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),
-           "left_conf": result.left_conf, "right_conf": result.right_conf,
-           "radius_m": result.radius_m, "offset_m": result.offset_m,
-           "lane_width_m": result.lane_width_m}
-    for side, fit in (("left", result.left), ("right", result.right)):
-        coeffs = fit.coeffs_px if fit.found else (nan, nan, nan)
-        row.update({f"{side}_{k}": v for k, v in zip("abc", coeffs)})
-    return row
-
-
-@dataclass(frozen=True)
-class VideoRun:
-    """What a video run did: frames, wall time (s), frames per second, frames with a lane."""
-
-    frames: int
-    seconds: float
-    fps: float
-    found_frames: int
-
-
-def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
-                  config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
-                  debug: bool = False, log_path: str | os.PathLike | None = None,
-                  progress: bool = True, threads: int | None = None) -> VideoRun:
-    """Track the lane through a video; write the annotated (or debug composite) video; return a summary.
-
-    The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
-    video_undistorted`` draws on undistorted frames instead, at one more remap per frame).
-
-    Parameters
-    ----------
-    in_path, out_path : input video and output mp4 (H.264, the input's size and frame rate).
-    config, calibration : as for ``LanePipeline``; the pipeline is made for the video's frame size.
-    debug : write the 2x2 debug composite (undistorted, binary, search, result) instead.
-    log_path : per-frame CSV with ``VIDEO_LOG_COLUMNS`` (optional).
-    progress : show a tqdm bar with fps and ETA.
-    threads : encoder threads (None: ffmpeg's choice).
-
-    Every output is written atomically by ``runs.run_video``: an error or Ctrl-C leaves nothing
-    under ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs
-    keep the frames before the break, and ``PartialOutputError`` says so.
-    """
-    from .runs import run_video
-    from .tracking import LaneTracker
-
-    trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
-    found = [0]
-
-    def process(frame: np.ndarray, index: int, time_s: float):
-        if not trackers:
-            trackers.append(LaneTracker(pipeline_for(frame, config, calibration)))
-        tracker = trackers[0]
-        pipe = tracker.pipeline
-        result = tracker.update(frame, keep_images=debug)
-        found[0] += result.found
-        if not (debug or config.draw.video_undistorted):
-            return pipe.annotate(frame, result, raw=True), video_log_row(index, time_s, result)
-        und = pipe.undistort(frame)
-        annotated = pipe.annotate(und, result)
-        if debug:
-            result.images.update(undistorted=und, result=annotated,
-                                 search=draw.search_view(result.images["binary"], result.search,
-                                                         config.draw, config.search.prior_margin_px))
-            annotated = pipe.debug_composite(result)
-        return annotated, video_log_row(index, time_s, result)
-
-    summary = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                        desc=Path(in_path).name, threads=threads)
-    return VideoRun(summary.frames, summary.seconds, summary.fps, found[0])

@@ -1,9 +1,16 @@
-"""Batch runs shared by every pipeline: a folder of images, or a video, frame by frame.
+"""Batch runs of every pipeline: a folder of images, or a video, frame by frame.
 
-A run takes a ``process`` callable that turns one RGB frame into an output frame and a row of
-numbers; this module does the reading, writing, progress bar, per-frame CSV log and results file,
-all written atomically and never over an input. The advanced pipeline (``pipeline``) and the basic
-Hough pipeline (``hough``) both run through here, so their CLI behaviour is the same.
+The same two verbs on the two pipelines, each a thin ``process`` callable on shared machinery:
+
+- the advanced pipeline (``LanePipeline``, ``LaneTracker`` through a video): ``process_images``,
+  ``process_video``;
+- the basic Hough pipeline (``hough.HoughLaneFinder``, ``hough.HoughTracker`` through a video):
+  ``hough_images``, ``hough_video``.
+
+``run_images`` and ``run_video`` take a ``process`` callable that turns one RGB frame into an
+output frame and a row of numbers, and do the reading, writing, progress bar, per-frame CSV log
+and results file, all written atomically and never over an input; so the two pipelines behave
+the same on the command line. A video run returns one ``VideoRun`` record whichever the pipeline.
 
 Bad inputs: in a folder run, a file that cannot be read or processed (a lanelib error) gets its
 own row with an ``error`` and the run goes on; a video that breaks off half-way keeps the frames
@@ -22,13 +29,19 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from . import io
-from .errors import ConfigError, DecodeStoppedError, LaneLibError, PartialOutputError, naming_the_file
+from . import hough, io
+from .camera import Calibration
+from .config import PipelineConfig
+from .errors import (ConfigError, DecodeStoppedError, InputError, LaneLibError, PartialOutputError,
+                     naming_the_file)
+from .pipeline import LanePipeline, pipeline_for
+from .result import FrameResult
+from .tracking import LaneTracker
 
 # process(rgb) -> (output rgb, row of JSON-able values)
 ImageFn = Callable[[np.ndarray], tuple[np.ndarray, dict]]
-# process(rgb, frame index, time in s) -> (output rgb, row of CSV values)
-FrameFn = Callable[[np.ndarray, int, float], tuple[np.ndarray, dict]]
+# process(rgb, frame index, time in s) -> (output rgb, row of CSV values, whether the lane was found)
+FrameFn = Callable[[np.ndarray, int, float], tuple[np.ndarray, dict, bool]]
 
 
 def _clean(value):
@@ -99,12 +112,18 @@ def run_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike, p
 
 
 @dataclass(frozen=True)
-class VideoRunSummary:
-    """What a video run did: frames processed, wall time (s) and frames per second."""
+class VideoRun:
+    """What a video run did: frames, wall time (s), frames per second, frames with a lane found.
+
+    ``found_frames`` counts the frames whose ``process`` said found: for ``process_video`` a lane
+    that passed the checks (tracked, held or inferred included), for ``hough_video`` both lines
+    (measured or held).
+    """
 
     frames: int
     seconds: float
     fps: float
+    found_frames: int
 
 
 class _CsvLog:
@@ -149,10 +168,12 @@ def _format_csv(v) -> str:
 
 def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: FrameFn,
               log_path: str | os.PathLike | None = None, progress: bool = True,
-              desc: str = "frames", threads: int | None = None) -> VideoRunSummary:
-    """Read a video, process every frame, write the output video (and per-frame CSV log).
+              desc: str = "frames", threads: int | None = None) -> VideoRun:
+    """Return what a run did after processing every frame and writing the output video (and log).
 
-    The output keeps the input's size and frame rate (H.264). A tqdm bar shows fps and ETA when
+    ``process(frame, index, time_s)`` returns the output frame, the row of the per-frame CSV log
+    and whether the lane was found in the frame (counted in ``VideoRun.found_frames``). The
+    output keeps the input's size and frame rate (H.264). A tqdm bar shows fps and ETA when
     ``progress`` is true. An empty, corrupt or missing input, or one in a codec ffmpeg cannot
     decode, raises ``InputError`` with nothing written; an exception or Ctrl-C mid-run removes the
     partial output and log.
@@ -172,7 +193,7 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     writer = io.VideoWriter(out_path, reader.info.fps, inputs=inputs, threads=threads)
     ok = False
     stopped: DecodeStoppedError | None = None
-    n = 0
+    n = found = 0
     t0 = time.perf_counter()
     try:
         bar = tqdm(total=reader.info.n_frames or None, desc=desc, unit="frame", disable=not progress,
@@ -180,7 +201,8 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
         with bar:
             try:
                 for frame in reader:
-                    image, row = process(frame, n, n / reader.info.fps)
+                    image, row, lane = process(frame, n, n / reader.info.fps)
+                    found += bool(lane)
                     writer.write(image)
                     log.write(row)
                     bar.update(1)
@@ -198,4 +220,152 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     if stopped is not None:
         wrote = f"wrote {n} frames to {writer.path}" + (f" and {n} rows to {log.path}" if log.path else "")
         raise PartialOutputError(f"{stopped}; {wrote}", n)
-    return VideoRunSummary(n, seconds, n / seconds if seconds > 0 else float("nan"))
+    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found)
+
+
+# --------------------------------------------------------------------------- the advanced pipeline
+
+def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
+                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                   debug: bool = False) -> list[dict]:
+    """Return the rows of ``results.json`` after finding the lane in each image and writing it annotated.
+
+    Each row is the image's ``FrameResult.summary``. Frames of several sizes are allowed: one
+    pipeline is built per size (the calibration is rescaled or refused per
+    ``Calibration.for_size``). A file that cannot be read, an image too small for the bird's-eye
+    view, or one whose size the calibration does not fit gets a row with an ``error``
+    (``run_images``), and the run goes on. ``debug`` writes the 2x2 debug composite
+    (``LanePipeline.debug_composite``) instead of the annotated frame.
+    """
+    cache: dict[tuple[int, int], LanePipeline] = {}
+
+    def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
+        size = (rgb.shape[1], rgb.shape[0])
+        if size not in cache:
+            try:
+                cache[size] = LanePipeline(config, calibration, size=size)
+            except ConfigError:
+                LanePipeline(config)  # a bad config raises here again: it fails every image alike
+                w, h = config.perspective.size_px
+                raise InputError(f"the image is {size[0]}x{size[1]} px, too small for the bird's-eye "
+                                 "view (the perspective points collapse when scaled to it); pass "
+                                 f"larger images (the config's points are for {w}x{h})") from None
+        pipe = cache[size]
+        result = pipe.process(rgb, keep_images=debug)
+        image = pipe.debug_composite(result) if debug else result.images["result"]
+        return image, result.summary()
+
+    return run_images([Path(f) for f in files], out_dir, process)
+
+
+VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
+                     "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c")
+
+
+def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
+    """Return one row of the per-frame video log (``VIDEO_LOG_COLUMNS``; NaN where not found).
+
+    The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c.
+    """
+    nan = float("nan")
+    row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),
+           "left_conf": result.left_conf, "right_conf": result.right_conf,
+           "radius_m": result.radius_m, "offset_m": result.offset_m,
+           "lane_width_m": result.lane_width_m}
+    for side, fit in (("left", result.left), ("right", result.right)):
+        coeffs = fit.coeffs_px if fit.found else (nan, nan, nan)
+        row.update({f"{side}_{k}": v for k, v in zip("abc", coeffs)})
+    return row
+
+
+def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
+                  config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                  debug: bool = False, log_path: str | os.PathLike | None = None,
+                  progress: bool = True, threads: int | None = None) -> VideoRun:
+    """Return what the run did after tracking the lane through a video and writing it annotated.
+
+    The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
+    video_undistorted`` draws on undistorted frames instead, at one more remap per frame).
+
+    Parameters
+    ----------
+    in_path, out_path : input video and output mp4 (H.264, the input's size and frame rate).
+    config, calibration : as for ``LanePipeline``; the pipeline is made for the video's frame size.
+    debug : write the 2x2 debug composite (undistorted, binary, search, result) instead.
+    log_path : per-frame CSV with ``VIDEO_LOG_COLUMNS`` (optional).
+    progress : show a tqdm bar with fps and ETA.
+    threads : encoder threads (None: ffmpeg's choice).
+
+    Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
+    ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
+    the frames before the break, and ``PartialOutputError`` says so.
+    """
+    trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
+
+    def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict, bool]:
+        if not trackers:
+            trackers.append(LaneTracker(pipeline_for(frame, config, calibration)))
+        tracker = trackers[0]
+        pipe = tracker.pipeline
+        result = tracker.update(frame, keep_images=debug)
+        if debug:
+            image = pipe.debug_composite(result, raw=frame)
+        elif config.draw.video_undistorted:
+            image = pipe.annotate(pipe.undistort(frame), result)
+        else:
+            image = pipe.annotate(frame, result, raw=True)
+        return image, video_log_row(index, time_s, result), result.found
+
+    return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                     desc=Path(in_path).name, threads=threads)
+
+
+# --------------------------------------------------------------------------- the basic Hough pipeline
+
+def hough_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
+                 config: hough.HoughConfig = hough.HoughConfig()) -> list[dict]:
+    """Return the rows of ``results.json`` after finding the lines in each image and writing it annotated.
+
+    Each row holds ``file``, ``left_found``, ``right_found``, each line's x (px) at the bottom
+    row and at the top of the region (None when not found), and ``reason``
+    (``HoughResult.row``); a file that cannot be read holds ``file`` and ``error`` instead, and
+    the run goes on (``run_images``).
+    """
+    finder = hough.HoughLaneFinder(config)
+
+    def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
+        result = finder.process(rgb)
+        return hough.annotate(rgb, result), result.row()
+
+    return run_images(files, out_dir, process)
+
+
+def hough_log_row(frame: int, time_s: float, result: hough.HoughResult) -> dict:
+    """Return one row of the per-frame Hough video log: ``frame``, ``time_s`` and ``HoughResult.row``."""
+    return {"frame": frame, "time_s": time_s, **result.row()}
+
+
+def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
+                config: hough.HoughConfig = hough.HoughConfig(),
+                log_path: str | os.PathLike | None = None, progress: bool = True,
+                threads: int | None = None) -> VideoRun:
+    """Return what the run did after tracking both lines through a video and writing it annotated.
+
+    ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
+    CSV at ``log_path`` holds ``hough_log_row``. ``found_frames`` counts frames with both lines
+    (measured or held). Outputs are written atomically by ``run_video``: an error or Ctrl-C
+    leaves nothing behind, except a video that stops decoding half-way: its outputs keep the
+    frames before the break, and ``PartialOutputError`` says so.
+    """
+    if Path(out_path).suffix.lower() not in io.VIDEO_SUFFIXES:
+        raise InputError(f"{out_path}: the output video needs a video suffix "
+                         f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. out.mp4")
+    tracker = hough.HoughTracker(config)
+
+    def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict, bool]:
+        result = tracker.process(frame)
+        return (hough.annotate(frame, result), hough_log_row(index, time_s, result),
+                result.left_found and result.right_found)
+
+    return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                     desc=Path(in_path).name, threads=threads)

@@ -17,7 +17,7 @@ debug composite work on it unchanged. Per frame:
    and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair
    (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
    lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
-   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_1pm``).
+   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``).
    When the pair fails but a track exists, the line with the higher confidence is kept. A
    detection that lost a line to the checks is kept in the result's ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one and the tracked lane: it is
@@ -37,7 +37,7 @@ debug composite work on it unchanged. Per frame:
    ``hold_frames`` frames with a confidence falling linearly to zero; then the tracker resets
    and reports no lane until a pair passes the checks again.
 
-Confidence per line (0-1): ``lanes.line_confidence`` of the accepted detection (span of rows
+Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
 the share of the hold that is left for a held line, 0 when no lane is reported.
 """
@@ -51,7 +51,8 @@ import numpy as np
 
 from . import lanes
 from .errors import ConfigError
-from .lanes import FrameResult, LaneChecks, LaneSearch, LineFit, Rejected, line_confidence
+from .lanes import LaneChecks, LaneSearch, LineFit
+from .result import FrameResult, Rejected
 
 if TYPE_CHECKING:  # for annotations only: pipeline imports config, which imports this module
     from .pipeline import LanePipeline
@@ -162,8 +163,7 @@ class LaneTracker:
         if track is not None and (left is None or right is None):
             # the search missed: look again with windows started from the tracked lines
             binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
-            retry = lanes.sliding_windows(binary, pipe.config.search,
-                                          bases=self._bases(track), car_x=pipe.car_x_px)
+            retry = pipe.search(binary, bases=self._bases(track))
             l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
                 search, left, right, why, failed = retry, l2, r2, why2, failed2
@@ -239,11 +239,11 @@ class LaneTracker:
 
     def _band_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
-        return lanes.search_bands_px(search, self.pipeline.size, self.pipeline.config.search)
+        return self.pipeline.search_bands_px(search)
 
     def _conf_of(self, fit: LineFit) -> float:
-        """Return the 0-1 confidence of a detected line (``lanes.line_confidence``)."""
-        return line_confidence(fit, self.pipeline.size[1], self.pipeline.config.search)
+        """Return the 0-1 confidence of a detected line (``result.line_confidence``)."""
+        return self.pipeline.line_confidence(fit)
 
     def _bases(self, track) -> tuple[float, float]:
         """Return the tracked lines' x (px) on the bottom row, where windows start."""

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from lanelib import io
-from lanelib.camera import (Calibration, Undistorter, board_points, calibrate, distort_points,
-                            parse_pattern, undistort_points)
+from lanelib.camera import (MODEL_MARGIN, Calibration, FastBirdseye, Lens, Undistorter, board_points,
+                            calibrate, distort_points, parse_pattern, undistort_points)
 from lanelib.errors import CalibrationError, InputError
 from lanelib.perspective import Perspective
 
@@ -132,6 +132,129 @@ def test_composed_remap_equals_undistort_then_warp():
     # compare away from the borders: mean abs difference is a few grey levels at most
     diff = np.abs(two_step[100:-100, 300:-300].astype(int) - one_step[100:-100, 300:-300])
     assert diff.mean() < 4
+
+
+# --------------------------------------------------------------------------- the lens as a transform
+
+def image_grid(step: float = 20.0, size=(1280, 720)) -> np.ndarray:
+    """Return (N, 2) points (x, y) every ``step`` px over a frame, its last row and column included."""
+    xs, ys = np.meshgrid(np.r_[np.arange(0, size[0] - 1, step), size[0] - 1],
+                         np.r_[np.arange(0, size[1] - 1, step), size[1] - 1])
+    return np.column_stack([xs.ravel(), ys.ravel()]).astype(np.float64)
+
+
+@pytest.mark.parametrize("dist", [DIST, np.array([-0.2467, -0.0254, -0.00067, 0.00013, 0.0107])])
+def test_lens_round_trips_within_a_micropixel_over_the_image(dist):
+    lens = Lens(Calibration(K, dist, (1280, 720)))
+    pts = image_grid()
+    np.testing.assert_allclose(lens(lens.inverse(pts)), pts, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(lens.inverse(lens(pts)), pts, rtol=0, atol=1e-6)
+    assert lens.inverse.inverse is lens
+    # the lens is distort_points, its inverse undistort_points run to convergence
+    assert np.array_equal(lens(pts), distort_points(lens.calibration, pts))
+    assert np.array_equal(lens.inverse(pts), undistort_points(lens.calibration, pts, exact=True))
+    # OpenCV's default 5 steps are as good only near the centre (pixels off in the corners)
+    centre = pts[np.hypot(pts[:, 0] - 640, pts[:, 1] - 360) < 200]
+    np.testing.assert_allclose(undistort_points(lens.calibration, centre), lens.inverse(centre), atol=1e-3)
+
+
+def test_lens_is_rescaled_to_the_frame_size():
+    cal = Calibration(K, DIST, (1280, 720))
+    half = Lens(cal, (640, 360))
+    pts = image_grid(size=(640, 360))
+    np.testing.assert_allclose(half(pts), Lens(cal)(2 * pts) / 2, atol=1e-9)
+    assert half.size == (640, 360)
+    np.testing.assert_array_equal(Undistorter(cal, (640, 360)).lens.calibration.camera_matrix,
+                                  half.calibration.camera_matrix)
+
+
+def test_identity_lens():
+    lens = Lens(None, (1280, 720))
+    pts = image_grid(97.0)
+    assert lens.is_identity and not Lens(Calibration(K, DIST, (1280, 720))).is_identity
+    for f in (lens, lens.inverse, lens + lens.inverse):
+        out = f(pts)
+        assert np.array_equal(out, pts) and out is not pts
+    assert lens(np.empty((0, 2))).shape == (0, 2)
+    map1, map2 = lens.undistort_maps((2, 3), cv2.CV_32FC2)
+    assert map2 is None and map1.shape == (726, 1284, 2) and tuple(map1[3, 2]) == (0.0, 0.0)
+    frame = np.random.default_rng(3).integers(0, 255, (720, 1280, 3), dtype=np.uint8)
+    assert Undistorter(None, (1280, 720)).undistort(frame) is frame
+    with pytest.raises(CalibrationError, match="frame size"):
+        Lens(None)
+
+
+def test_the_folded_back_rule_rejects_points_where_the_lens_model_turns_back():
+    # k1 = -0.3 alone: r_d = r (1 - 0.3 r^2) grows up to r = 1.054 (x = 1694 px on the centre
+    # row), then shrinks again: a point far right of the frame lands back inside it.
+    lens = Lens(Calibration(K, np.array([-0.3, 0.0, 0.0, 0.0, 0.0]), (1280, 720)))
+    xs = np.arange(-900.0, 2401.0, 4.0)
+    row = np.column_stack([xs, np.full_like(xs, 360.0)])
+    raw_x = lens(row)[:, 0]
+    far = row[xs == 2300.0]
+    assert 0 <= lens(far)[0, 0] < 1280                     # folded back into the frame
+    ok = lens.valid(row)
+    assert np.array_equal(ok, (xs >= -MODEL_MARGIN * 1280) & (xs <= (1 + MODEL_MARGIN) * 1280))
+    assert not lens.valid(far)[0] and ok[xs == 1600.0][0] and ok[xs == -320.0][0]  # edges kept
+    assert np.all(np.diff(raw_x[ok]) > 0)                  # monotonic where the rule keeps points
+    assert not np.all(np.diff(raw_x) > 0)                  # ... and not over the whole row
+    column = np.array([[640.0, -180.0], [640.0, 900.0], [640.0, -181.0], [640.0, 901.0]])
+    assert lens.valid(column).tolist() == [True, True, False, False]
+    # the rule does not depend on the calibration: the identity lens keeps the same region
+    assert np.array_equal(Lens(None, (1280, 720)).valid(row), ok)
+    # the lens's inverse checks where the raw points land; a chain checks every step's input
+    und, inv_ok = lens.inverse.checked(lens(row[ok]))
+    assert inv_ok.all() and np.abs(und - row[ok]).max() < 1e-3  # slow convergence near the fold
+    persp = Perspective()
+    bird = np.array([[640.0, 700.0], [-3000.0, 700.0], [640.0, 0.0], [4000.0, 700.0]])
+    to_raw = persp.inverse + lens
+    assert np.array_equal(to_raw.valid(bird), lens.valid(persp.inverse(bird)))
+    assert to_raw.valid(bird).tolist() == [True, False, True, False]
+
+
+def old_maps_through(cal, size, Minv, out_size):
+    """The composed remap maps as ``Undistorter.maps_through`` made them before the transforms."""
+    w, h = out_size
+    xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    grid = np.stack([xs.ravel(), ys.ravel()], axis=1).reshape(-1, 1, 2)
+    und = cv2.perspectiveTransform(grid, Minv).reshape(-1, 2)
+    src = distort_points(cal, und) if cal is not None else und
+    fw, fh = size
+    outside = ((und[:, 0] < -0.25 * fw) | (und[:, 0] > 1.25 * fw)
+               | (und[:, 1] < -0.25 * fh) | (und[:, 1] > 1.25 * fh))
+    src[outside] = -1.0
+    return cv2.convertMaps(src[:, 0].reshape(h, w).astype(np.float32),
+                           src[:, 1].reshape(h, w).astype(np.float32), cv2.CV_16SC2)
+
+
+@pytest.mark.parametrize("cal", [Calibration(K, DIST, (1280, 720)), None])
+def test_remap_maps_of_the_chain_are_the_old_composed_maps(cal):
+    persp = Perspective()
+    und = Undistorter(cal, (1280, 720))
+    old = old_maps_through(und.calibration, und.size, persp.Minv, (1280, 720))
+    chain = und.lens.inverse + persp
+    for maps in (chain.remap_maps((1280, 720)), und.maps_through(persp.Minv, (1280, 720))):
+        assert np.array_equal(maps[0], old[0]) and np.array_equal(maps[1], old[1])
+    # the lens's own grids are the Undistorter's
+    if cal is not None:
+        m = und.lens.undistort_maps()
+        ref = cv2.initUndistortRectifyMap(K, DIST, None, K, (1280, 720), cv2.CV_16SC2)
+        assert np.array_equal(m[0], ref[0]) and np.array_equal(m[1], ref[1])
+
+
+def test_fast_birdseye_takes_the_lens_and_the_perspective():
+    cal = Calibration(K, DIST, (1280, 720))
+    rng = np.random.default_rng(4)
+    raw = cv2.resize(rng.integers(0, 255, (90, 160, 3), dtype=np.uint8), (1280, 720),
+                     interpolation=cv2.INTER_CUBIC)
+    lens = Lens(cal)
+    persp = Perspective()
+    fast = FastBirdseye(lens)
+    assert fast.pad == (320, 180)
+    maps = (lens.inverse + persp).remap_maps((1280, 720))
+    exact = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
+    diff = np.abs(fast.birdseye(raw, persp).astype(int) - exact)[:680]  # above the raw frame's edge
+    assert diff.max() <= 2
 
 
 def test_parse_pattern():

@@ -79,12 +79,18 @@ def test_the_checks_of_older_files_move_from_tracking_to_checks(tmp_path):
                                           "check_rows": 10, "max_jump_m": 0.4}}))
     cfg = load_config(p)
     assert (cfg.checks.min_width_m, cfg.checks.max_width_m, cfg.checks.max_width_spread_m,
-            cfg.checks.max_curvature_diff_1pm, cfg.checks.max_band_fill, cfg.checks.check_rows) == \
+            cfg.checks.max_curvature_diff_per_m, cfg.checks.max_band_fill, cfg.checks.check_rows) == \
         (2.8, 4.2, 0.9, 0.003, 0.5, 10)
     assert cfg.tracking.max_bend_m == 0.9 and cfg.tracking.max_jump_m == 0.4  # the old key limited both
     assert cfg.checks.max_band_scatter == PipelineConfig().checks.max_band_scatter
     assert load_config(save_config(cfg, tmp_path / "new.json")) == cfg
     assert "min_width_m" not in json.loads((tmp_path / "new.json").read_text())["tracking"]
+
+
+def test_the_old_1pm_name_of_a_curvature_key_still_loads(tmp_path):
+    p = tmp_path / "old.json"
+    p.write_text(json.dumps({"checks": {"max_curvature_diff_1pm": 0.002}}))
+    assert load_config(p).checks.max_curvature_diff_per_m == 0.002
 
 
 def test_an_old_key_may_not_contradict_its_new_key(tmp_path):

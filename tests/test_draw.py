@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 
 from lanelib import draw
+from lanelib.camera import Calibration, distort_points
 from lanelib.errors import InputError
-from lanelib.pipeline import LanePipeline
+from lanelib.lanes import LineFit
+from lanelib.pipeline import FrameResult, LanePipeline
 
 YELLOW = (255, 255, 0)
 
@@ -136,3 +138,64 @@ def test_the_pipelines_debug_composite_shows_its_stage_images():
     assert np.array_equal(out, expected)
     top_left = cv2.resize(im["undistorted"], (640, 360), interpolation=cv2.INTER_AREA)
     assert np.array_equal(out[:300, :640], top_left[:300])
+
+
+# --------------------------------------------------------------------------- the lane overlay
+
+K = np.array([[1156.46, 0, 671.32], [0, 1151.27, 389.22], [0, 0, 1]])
+DIST = np.array([-0.24667, -0.02544, -0.00067, 0.00013, 0.01067])
+FITS = [((0, 0, 320.0), (0, 0, 960.0)), ((4e-4, -0.5, 420.0), (4e-4, -0.5, 1060.0)),
+        ((-3e-4, 0.1, 250.0), (-3e-4, 0.1, 900.0)), ((0, 0, -3000.0), (0, 0, 5000.0))]
+
+
+def old_lane_overlay(image, left_coeffs, right_coeffs, Minv, config, lens=None):
+    """The overlay as it was drawn before the transforms: fits through ``Minv``, then ``lens``."""
+    out = image.copy()
+    mapped = {}
+    for side, coeffs in (("left", left_coeffs), ("right", right_coeffs)):
+        pts = draw.line_points(coeffs, image.shape[0], config.samples)
+        pts = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2)
+        mapped[side] = lens(pts) if lens is not None else pts
+    fill = out.copy()
+    cv2.fillPoly(fill, [draw._to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))],
+                 config.lane_color, lineType=cv2.LINE_AA)
+    out = cv2.addWeighted(fill, config.lane_alpha, out, 1 - config.lane_alpha, 0)
+    for side, color in (("left", config.left_color), ("right", config.right_color)):
+        cv2.polylines(out, [draw._to_int(mapped[side])], False, color, config.line_thickness_px, cv2.LINE_AA)
+    return out
+
+
+def iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Return the intersection over union of two boolean masks (1 when both are empty)."""
+    union = (a | b).sum()
+    return float((a & b).sum() / union) if union else 1.0
+
+
+@pytest.mark.parametrize("fits", FITS)
+def test_the_overlay_through_transform_objects_is_the_old_drawing(fits):
+    pipe = LanePipeline(calibration=Calibration(K, DIST, (1280, 720)))
+    cal, cfg = pipe.undistorter.calibration, pipe.config.draw
+    image = textured(1280, 720, 7)
+    cases = [(pipe.perspective.inverse, old_lane_overlay(image, *fits, pipe.perspective.Minv, cfg)),
+             (pipe.birdseye_to_raw, old_lane_overlay(image, *fits, pipe.perspective.Minv, cfg,
+                                                     lambda p: distort_points(cal, p)))]
+    for to_image, old in cases:
+        new = draw.lane_overlay(image, *fits, to_image, cfg)
+        assert iou(np.any(new != image, axis=2), np.any(old != image, axis=2)) > 0.99
+        assert np.array_equal(new, old)
+    # the pipeline passes the perspective's inverse on the undistorted frame, the chain on the raw one
+    result = FrameResult(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits),
+                         pipe.measure(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits)),
+                         "windows", 1.0, 1.0)
+    for raw, (to_image, _) in zip((False, True), cases):
+        expected = draw.lane_overlay(image, *fits, to_image, cfg, 720)
+        drawn = pipe.annotate(image, result, raw=raw)
+        below_text = slice(200, None)  # the measurements are written at the top
+        assert np.array_equal(drawn[below_text], expected[below_text])
+
+
+def test_the_overlay_wants_a_transform_not_a_matrix():
+    with pytest.raises(InputError, match="perspective.inverse"):
+        draw.lane_overlay(textured(64, 36, 1), (0, 0, 10.0), (0, 0, 50.0), np.eye(3))
+    plain = draw.lane_overlay(textured(64, 36, 1), (0, 0, 10.0), (0, 0, 50.0), None)  # the bird's-eye view
+    assert plain[20, 30].tolist() != textured(64, 36, 1)[20, 30].tolist()

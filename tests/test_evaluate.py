@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 
 from lanelib import cli
-from lanelib.evaluate import (MATCH_ACCURACY, SUMMARY_KEYS, EvalReport, fit_x_in_raw, in_view,
-                              line_accuracy, line_threshold_px, score_frame, score_lines,
-                              truth_calibration)
+from lanelib.evaluate import (MATCH_ACCURACY, SUMMARY_KEYS, EvalReport, calibration_from_truth,
+                              fit_x_in_raw, in_view, line_accuracy, line_threshold_px, score_frame,
+                              score_lines, truth_calibration)
 from lanelib.lanes import LineFit
-from lanelib.pipeline import FrameResult, LanePipeline
+from lanelib.pipeline import LanePipeline
+from lanelib.result import FrameResult
 from lanelib.synth.camera import Camera
-from lanelib.synth.truth import LaneTruth, camera_truth
+from lanelib.synth.truth import LaneTruth, camera_truth, load_image_truth, load_video_truth
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -120,7 +121,7 @@ def true_pipeline():
 
     cam = camera_truth(Camera())
     config = PipelineConfig(perspective=cam.perspective.config())
-    return LanePipeline(config, truth_calibration(cam))
+    return LanePipeline(config, cam.calibration())
 
 
 def _projected_line_x(x_m: float, rows: np.ndarray) -> np.ndarray:
@@ -144,6 +145,38 @@ def test_birdseye_fit_maps_onto_the_cameras_projection_of_the_line(true_pipeline
 def test_fit_has_no_x_above_the_birdseye_view(true_pipeline):
     pred = fit_x_in_raw((0.0, 0.0, 320.0), true_pipeline, np.array([420.0, 440.0, 500.0]))
     assert np.isnan(pred[:2]).all() and np.isfinite(pred[2])
+
+
+def test_fit_leaves_out_what_the_lens_folds_back(true_pipeline):
+    # 3000 px left of the bird's-eye view: most of the line lies far outside the frame, where the
+    # lens polynomial turns back and folds points into the raw frame
+    rows = np.arange(420.0, 720.0, 10.0)
+    h = true_pipeline.size[1]
+    yb = np.linspace(-0.05 * h, 1.05 * h, 2 * h)
+    pts = np.column_stack([np.full_like(yb, -3000.0), yb])
+    raw = true_pipeline.lens(true_pipeline.perspective.inverse(pts))  # no rule
+    ok = true_pipeline.birdseye_to_raw.valid(pts)
+    inside = (raw[:, 0] >= 0) & (raw[:, 0] < 1280) & (raw[:, 1] >= 0) & (raw[:, 1] < 720)
+    assert (inside & ~ok).sum() > 50  # folded back into the frame
+    # read without the rule, the line would have an x on most rows; with it, on none
+    order = np.argsort(raw[:, 1])
+    unguarded = np.interp(rows, raw[order, 1], raw[order, 0], left=np.nan, right=np.nan)
+    assert np.isfinite(unguarded).sum() > 20
+    assert np.isnan(fit_x_in_raw((0.0, 0.0, -3000.0), true_pipeline, rows)).all()
+    # the rule is the lens's, on the undistorted points of the chain bird's-eye -> raw
+    assert np.array_equal(ok, true_pipeline.lens.valid(true_pipeline.perspective.inverse(pts)))
+    assert 0 < ok.sum() < len(pts)
+
+
+def test_calibration_from_truth_is_the_truths_camera():
+    first = load_image_truth(sorted((REPO / "test_images").glob("*.jpg"))[0]).camera
+    for cal in (calibration_from_truth(REPO / "test_images"), truth_calibration(first)):
+        assert np.array_equal(cal.camera_matrix, first.calibration().camera_matrix)
+        assert np.array_equal(cal.dist_coeffs, first.calibration().dist_coeffs)
+        assert cal.image_size == (1280, 720)
+    clip = REPO / "videos" / "project.mp4"
+    assert np.array_equal(calibration_from_truth(clip).camera_matrix,
+                          load_video_truth(clip).camera.calibration().camera_matrix)
 
 
 def test_only_truth_points_inside_the_birdseye_view_are_scored(true_pipeline):
@@ -185,8 +218,8 @@ def _report(**over) -> EvalReport:
         found=np.array([True, True, True, True, False]),
         offset_true_m=np.array([0.10, -0.20, 0.00, 0.30, 0.0]),
         offset_pred_m=np.array([0.13, -0.25, 0.00, 0.20, np.nan]),
-        curvature_true_1pm=np.array([0.002, -0.0005, 0.0, 1e-4, 0.0]),
-        curvature_pred_1pm=np.array([0.0022, -0.0004, 3e-5, 1e-4, np.nan]),
+        curvature_true_per_m=np.array([0.002, -0.0005, 0.0, 1e-4, 0.0]),
+        curvature_pred_per_m=np.array([0.0022, -0.0004, 3e-5, 1e-4, np.nan]),
         radius_true_m=np.array([500.0, 2000.0, math.inf, 10000.0, math.inf]),
         radius_pred_m=np.array([550.0, 1500.0, 33333.0, 10000.0, np.nan]),
         lane_width_true_m=np.full(n, 3.7), lane_width_pred_m=np.full(n, 3.7),
@@ -223,7 +256,7 @@ def test_offset_sign_errors_are_not_hidden():
 
 def test_to_dict_has_the_keys_and_null_for_nothing_scored():
     d = _report(found=np.zeros(5, bool), offset_pred_m=np.full(5, np.nan),
-                curvature_pred_1pm=np.full(5, np.nan), radius_pred_m=np.full(5, np.nan)).to_dict()
+                curvature_pred_per_m=np.full(5, np.nan), radius_pred_m=np.full(5, np.nan)).to_dict()
     assert tuple(d) == SUMMARY_KEYS
     assert d["found_rate"] == 0.0 and d["offset_err_cm_median"] is None
     json.dumps(d, allow_nan=False)

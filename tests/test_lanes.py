@@ -76,7 +76,7 @@ def test_offset_width_and_sign_conventions():
     m = lanes.measure(left, right, H, 640.0, xm, ym)
     assert m.offset_m == pytest.approx(20 * xm) and m.offset_m > 0
     assert m.lane_width_m == pytest.approx(3.7)
-    assert m.curvature_1pm == 0 and m.radius_m == lanes.RADIUS_MAX_M
+    assert m.curvature_per_m == 0 and m.radius_m == lanes.RADIUS_MAX_M
 
 
 def test_missing_line_is_reported_not_raised():
@@ -86,7 +86,7 @@ def test_missing_line_is_reported_not_raised():
     assert search.left.found and not search.right.found
     assert "no lane pixels right of the car" in search.right.reason
     meas = lanes.measure(search.left, search.right, H, 640.0, 0.005, 0.03)
-    assert math.isnan(meas.offset_m) and math.isnan(meas.radius_m) and not math.isnan(meas.left_curvature_1pm)
+    assert math.isnan(meas.offset_m) and math.isnan(meas.radius_m) and not math.isnan(meas.left_curvature_per_m)
 
 
 def test_too_few_pixels_and_short_span_are_not_found():
@@ -133,8 +133,8 @@ def test_lane_curvature_follows_the_better_supported_line():
     strong = LineFit((2e-4, -0.3, 300.0), 20000, 719.0)
     weak = LineFit((-6e-4, 0.5, 700.0), 200, 90.0)  # one dash, fitted with the wrong bend
     m = lanes.measure(strong, weak, H, 640.0, xm, ym)
-    assert m.curvature_1pm == pytest.approx(m.left_curvature_1pm, rel=0.02)
-    assert np.sign(m.curvature_1pm) == np.sign(m.left_curvature_1pm) != np.sign(m.right_curvature_1pm)
+    assert m.curvature_per_m == pytest.approx(m.left_curvature_per_m, rel=0.02)
+    assert np.sign(m.curvature_per_m) == np.sign(m.left_curvature_per_m) != np.sign(m.right_curvature_per_m)
 
 
 def test_a_line_with_no_pixels_in_the_lower_half_is_searched_from_the_whole_histogram():

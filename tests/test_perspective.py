@@ -11,8 +11,9 @@ import pytest
 from lanelib import io
 from lanelib.errors import ConfigError, InputError
 from lanelib.lanes import SearchConfig
-from lanelib.perspective import (Perspective, PerspectiveConfig, StraightLineCheck, scaled,
-                                 straight_line_check, trapezoid_src)
+from lanelib.camera import Calibration, Lens, distort_points, undistort_points
+from lanelib.perspective import (Chain, Homography, Perspective, PerspectiveConfig, StraightLineCheck,
+                                 scaled, straight_line_check, trapezoid_src)
 from lanelib.pipeline import LanePipeline
 
 
@@ -23,6 +24,51 @@ def test_points_round_trip_within_a_pixel():
     np.testing.assert_allclose(p.unwarp_points(p.warp_points(pts)), pts, atol=1e-6)
     # the src corners land on the dst corners
     np.testing.assert_allclose(p.warp_points(np.array(p.config.src_px)), np.array(p.config.dst_px), atol=1e-3)
+
+
+def test_perspective_is_a_homography_with_an_inverse():
+    p = Perspective()
+    rng = np.random.default_rng(2)
+    pts = np.column_stack([rng.uniform(0, 1279, 500), rng.uniform(300, 719, 500)])
+    np.testing.assert_allclose(p.inverse(p(pts)), pts, rtol=1e-9, atol=0)
+    bird = np.column_stack([rng.uniform(-500, 1800, 500), rng.uniform(-200, 900, 500)])
+    np.testing.assert_allclose(p(p.inverse(bird)), bird, rtol=1e-9, atol=0)
+    assert np.array_equal(p(pts), p.warp_points(pts))
+    assert np.array_equal(p.inverse(bird), p.unwarp_points(bird))
+    # scikit-image's names: params is the matrix; the inverse holds Minv, and its inverse M again
+    assert p.params is p.M and p.inverse.params is p.Minv and p.inverse.inverse.params is p.M
+    # the same numbers as OpenCV's point transform with the two matrices
+    assert np.array_equal(p(pts), cv2.perspectiveTransform(pts.reshape(-1, 1, 2), p.M).reshape(-1, 2))
+    h = Homography(p.M)  # no matrix back given: the matrix inverse (the same map up to scale)
+    np.testing.assert_allclose(h.inverse.params / h.inverse.params[2, 2], p.Minv, rtol=1e-9, atol=1e-12)
+    assert p(np.empty((0, 2))).shape == (0, 2)
+    assert p.valid([(1.0, np.nan), (3.0, 4.0)]).tolist() == [False, True]
+    with pytest.raises(ConfigError, match="3x3"):
+        Homography(np.eye(2))
+
+
+K = np.array([[1156.0, 0, 671.0], [0, 1151.0, 389.0], [0, 0, 1]])
+DIST = np.array([-0.2467, -0.0254, -0.00067, 0.00013, 0.0107])
+
+
+def test_composition_applies_in_order_and_inverts_in_reverse():
+    lens, p = Lens(Calibration(K, DIST, (1280, 720))), Perspective()
+    rng = np.random.default_rng(3)
+    raw = np.column_stack([rng.uniform(0, 1279, 300), rng.uniform(430, 719, 300)])
+    to_bird = lens.inverse + p
+    assert isinstance(to_bird, Chain) and to_bird.transforms == (to_bird.transforms[0], p)
+    assert np.array_equal(to_bird(raw), p(undistort_points(lens.calibration, raw, exact=True)))
+    bird = to_bird(raw)
+    to_raw = to_bird.inverse
+    assert np.array_equal(to_raw(bird), distort_points(lens.calibration, p.inverse(bird)))
+    np.testing.assert_allclose(to_raw(bird), raw, rtol=0, atol=1e-6)
+    # chains flatten, and a chain of homographies is the product of their matrices
+    shift = Homography(np.array([[1.0, 0, 5], [0, 1, -7], [0, 0, 1]]))
+    three = p + shift + p.inverse
+    assert len(three.transforms) == 3 and len((three + three).transforms) == 6
+    product = Homography(p.Minv @ shift.params @ p.M)
+    np.testing.assert_allclose(three(raw), product(raw), rtol=1e-9)
+    np.testing.assert_allclose(three.inverse(three(raw)), raw, rtol=1e-9)
 
 
 def test_image_round_trip_keeps_a_marked_point_within_a_pixel():

@@ -13,7 +13,8 @@ from hypothesis.extra.numpy import arrays
 
 from lanelib import io
 from lanelib.errors import InputError, LaneLibError
-from lanelib.pipeline import LanePipeline, process_images
+from lanelib.pipeline import LanePipeline
+from lanelib.runs import process_images
 
 
 def straight_lane_frame(pipe: LanePipeline, offset_px: float = 0.0) -> np.ndarray:
@@ -147,7 +148,7 @@ def test_udacity_radius(udacity_results):
 def test_lane_drawn_on_the_raw_frame_lands_where_the_undistorted_drawing_does():
     from lanelib.camera import Calibration
     from lanelib.lanes import LineFit
-    from lanelib.pipeline import FrameResult
+    from lanelib.result import FrameResult
 
     K = np.array([[1000.0, 0, 640.0], [0, 1000.0, 360.0], [0, 0, 1]])
     pipe = LanePipeline(calibration=Calibration(K, np.array([-0.25, 0.05, 0.0, 0.0, 0.0]), (1280, 720)))

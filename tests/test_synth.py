@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from lanelib import InputError
+from lanelib.camera import Calibration
 from lanelib.cli import main
 from lanelib.io import VideoReader, encode_image, read_image
 from lanelib.perspective import DEFAULT_SRC_1280x720, Perspective, PerspectiveConfig
@@ -202,6 +203,22 @@ def test_bundled_videos_have_truth_for_every_frame():
     rows = np.asarray(harder[0].h_samples_px)
     mid = (rows >= 440) & (rows <= 680)    # lines leaving the view, not hidden by the hood
     assert any(NOT_VISIBLE in np.asarray(f.left_x_px + f.right_x_px)[np.tile(mid, 2)] for f in harder)
+
+
+def test_camera_truth_gives_its_calibration():
+    from_camera = camera_truth(Camera())
+    from_file = load_image_truth(IMAGE_DIR / "straight_1.jpg").camera
+    for cam in (from_camera, from_file):
+        cal = cam.calibration()
+        # what evaluate.truth_calibration computed before the method existed
+        K = np.asarray(cam.camera_matrix, np.float64)
+        d = np.asarray(cam.dist_coeffs, np.float64)
+        size = tuple(int(v) for v in cam.size_px)
+        assert np.array_equal(cal.camera_matrix, K) and cal.camera_matrix.dtype == np.float64
+        assert np.array_equal(cal.dist_coeffs, d) and cal.dist_coeffs.dtype == np.float64
+        assert cal.image_size == size == (1280, 720) and cal.rms_px == 0.0
+        assert cal.to_dict() == Calibration(K, d, size, 0.0).to_dict()
+    np.testing.assert_allclose(from_file.calibration().camera_matrix, Camera().camera_matrix, atol=1e-6)
 
 
 # --------------------------------------------------------------------------- loaders and CLI

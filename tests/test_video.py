@@ -19,7 +19,8 @@ from lanelib import io, thresholds
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config_or_preset, preset
 from lanelib.errors import ConfigError, DecodeStoppedError
-from lanelib.pipeline import VIDEO_LOG_COLUMNS, LanePipeline, process_video
+from lanelib.pipeline import LanePipeline
+from lanelib.runs import VIDEO_LOG_COLUMNS, process_video
 
 COLUMNS = ["frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
            "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c"]
@@ -381,7 +382,8 @@ def test_the_overlay_blended_in_its_box_equals_the_whole_frame_blend():
     from lanelib.perspective import Perspective
 
     image = textured_frame(11)
-    minv = Perspective().Minv
+    persp = Perspective()
+    minv = persp.Minv
     cfg = draw.DrawConfig()
     for left, right in [((0, 0, 320), (0, 0, 960)), ((4e-4, -0.5, 420), (4e-4, -0.5, 1060)),
                         ((0, 0, -3000), (0, 0, 5000)), ((1e-3, 0, 100), (1e-3, 0, 1200))]:
@@ -393,7 +395,7 @@ def test_the_overlay_blended_in_its_box_equals_the_whole_frame_blend():
         expected = cv2.addWeighted(fill, cfg.lane_alpha, image, 1 - cfg.lane_alpha, 0)
         for p, color in zip(pts, (cfg.left_color, cfg.right_color)):
             cv2.polylines(expected, [draw._to_int(p)], False, color, cfg.line_thickness_px, cv2.LINE_AA)
-        assert np.array_equal(draw.lane_overlay(image, left, right, minv, cfg), expected)
+        assert np.array_equal(draw.lane_overlay(image, left, right, persp.inverse, cfg), expected)
 
 
 def test_distort_points_is_opencvs_projection():

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..camera import Calibration
 from ..errors import InputError
 from ..io import read_json, write_json, write_text
 from ..perspective import DEFAULT_DST_1280x720, DEFAULT_LANE_WIDTH_M, DEFAULT_SRC_1280x720, PerspectiveConfig
@@ -75,6 +76,12 @@ class CameraTruth:
     pitch_deg: float
     yaw_deg: float
     perspective: PerspectiveTruth
+
+    def calibration(self) -> Calibration:
+        """Return this camera as a ``camera.Calibration`` (exact: RMS reprojection error 0 px)."""
+        return Calibration(np.asarray(self.camera_matrix, np.float64),
+                           np.asarray(self.dist_coeffs, np.float64),
+                           tuple(int(v) for v in self.size_px), 0.0)
 
 
 @dataclass(frozen=True)

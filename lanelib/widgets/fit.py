@@ -68,7 +68,7 @@ class FitTuner(Tuner):
         """Return the windows and fits, the search around the fits, and the lane on the road."""
         dc = self.config.draw
         overlay = draw.lane_overlay(self.undistorted, self.windows.left.coeffs_px,
-                                    self.windows.right.coeffs_px, self.pipeline.perspective.Minv, dc)
+                                    self.windows.right.coeffs_px, self.pipeline.perspective.inverse, dc)
         return {"sliding windows": draw.search_view(self.binary, self.windows, dc),
                 "search around the fits": draw.search_view(self.binary, self.around, dc,
                                                            self.config.search.prior_margin_px),

@@ -146,7 +146,7 @@ class HoughTuner(Tuner):
     # ---- the pipeline ---------------------------------------------------------------------
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
-        self.frame = hough.check_rgb(raw)
+        self.frame = io.check_rgb(raw)
         self._small = shrink(self.frame, self._tile_size())
 
     def _update(self, key: str | None) -> None:

@@ -78,7 +78,7 @@ class PerspectiveTuner(Tuner):
         undistorter = self._cached("undistorter", (id(calibration), size),
                                    lambda: Undistorter(calibration, size))
         self._canvas = self._cached("canvas", (id(calibration), size),
-                                    lambda: FastBirdseye(undistorter.calibration, size))
+                                    lambda: FastBirdseye(undistorter.lens))
         self.undistorted = undistorter.undistort(raw)
         self._focal_px = implied_focal_px(self.config.perspective)
         self._small = shrink(self.undistorted, self._tile_size())
@@ -99,10 +99,10 @@ class PerspectiveTuner(Tuner):
     def _update(self, key: str | None) -> None:
         """Warp, threshold and check the picked frame under the current perspective."""
         self.perspective = Perspective(self.config.perspective)
-        self.birdseye = self._canvas.birdseye(self._raw, self.perspective.Minv)
+        self.birdseye = self._canvas.birdseye(self._raw, self.perspective)
         self.binary = thresholds.combine(self.birdseye, self.config.thresholds)
         w, h = self.config.perspective.size_px
-        car_x = float(self.perspective.warp_points([(w / 2, h - 1)])[0, 0])
+        car_x = float(self.perspective([(w / 2, h - 1)])[0, 0])
         self.check = straight_line_check(self.binary, self.perspective.xm_per_px,
                                          self.config.search, car_x)
 

@@ -1,0 +1,178 @@
+"""lanelib's import graph, read from the source with ``ast``: no cycles, no late imports, layers.
+
+The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; io; the stages
+on arrays (thresholds, lanes, result, draw); geometry (camera, perspective, geometry); data;
+the basic pipeline and the tracker; config; the one-frame engine (pipeline); runs, evaluate,
+bench, synth, benchmarks; widgets; cli. A module imports only from its own layer or below,
+never from above, and every import is at module level (a function-level
+import hides a cycle instead of removing it).
+"""
+from __future__ import annotations
+
+import ast
+import functools
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "lanelib"
+
+
+def module_name(path: Path) -> str:
+    rel = path.relative_to(PACKAGE.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def resolve(node: ast.ImportFrom, current: str, is_package: bool) -> list[str]:
+    """Return the lanelib modules an ``import from`` names (absolute names)."""
+    if node.level:
+        base = current.split(".") if is_package else current.split(".")[:-1]
+        base = base[:len(base) - (node.level - 1)]
+        prefix = ".".join(base + ([node.module] if node.module else []))
+    else:
+        prefix = node.module or ""
+    if not prefix.startswith("lanelib"):
+        return []
+    # the bare package (``from . import io`` names lanelib itself) is imported first in any case
+    return [f"{prefix}.{a.name}" for a in node.names] + ([prefix] if prefix != "lanelib" else [])
+
+
+@functools.lru_cache(maxsize=1)
+def graph() -> tuple[dict[str, set[str]], list[str]]:
+    """Return {module: lanelib modules it imports at module level} and the late imports found."""
+    files = {module_name(p): p for p in PACKAGE.rglob("*.py")}
+    edges: dict[str, set[str]] = {m: set() for m in files}
+    late = []
+    for mod, path in files.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        is_package = path.name == "__init__.py"
+        toplevel = {id(n) for n in _module_level(tree.body)}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                targets = resolve(node, mod, is_package)
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names if a.name.startswith("lanelib")]
+            else:
+                continue
+            targets = [t for t in targets if t in files]
+            if not targets:
+                continue
+            if id(node) not in toplevel:
+                if not _under_type_checking(tree, node):
+                    late.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} imports "
+                                f"{', '.join(sorted(set(targets)))} inside a function")
+                continue
+            edges[mod].update(t for t in targets if t != mod)
+    return edges, late
+
+
+def _module_level(body: list[ast.stmt]):
+    """Yield the import statements run when the module is imported (not inside a function)."""
+    for node in body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        elif isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            continue  # only for type checkers: not an import at run time
+        else:
+            for field in ("body", "orelse", "finalbody", "handlers"):
+                inner = getattr(node, field, None)
+                if isinstance(inner, list):
+                    yield from _module_level([n for n in inner if isinstance(n, ast.AST)])
+
+
+def _under_type_checking(tree: ast.Module, target: ast.AST) -> bool:
+    for node in tree.body:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            if any(n is target for n in ast.walk(node)):
+                return True
+    return False
+
+
+def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """Return one import cycle as a list of modules (first == last), or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(edges.get(m, ())):
+            if state.get(n) == 1:
+                return stack[stack.index(n):] + [n]
+            if n not in state:
+                found = visit(n)
+                if found:
+                    return found
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(edges):
+        if m not in state:
+            found = visit(m)
+            if found:
+                return found
+    return None
+
+
+def test_find_cycle_finds_a_cycle_and_only_a_cycle():
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": set()}) is None
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"a2"}, "a2": set(), "b": {"c"}, "c": {"b"}}) == ["b", "c", "b"]
+
+
+def test_resolve_relative_imports():
+    node = ast.parse("from ..camera import Calibration").body[0]
+    assert "lanelib.camera" in resolve(node, "lanelib.synth.truth", False)
+    node = ast.parse("from . import io, draw").body[0]
+    assert {"lanelib.io", "lanelib.draw"} <= set(resolve(node, "lanelib.pipeline", False))
+    node = ast.parse("from .base import Tuner").body[0]
+    assert "lanelib.widgets.base" in resolve(node, "lanelib.widgets", True)
+
+
+def test_lanelib_has_no_import_cycle():
+    edges, _ = graph()
+    assert len(edges) > 15
+    cycle = find_cycle(edges)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_lanelib_has_no_function_level_imports():
+    _, late = graph()
+    assert not late, "late imports (move them to the top of the module):\n" + "\n".join(late)
+
+
+LAYERS = [
+    {"lanelib.errors"},
+    {"lanelib.io"},
+    {"lanelib.thresholds", "lanelib.lanes", "lanelib.result", "lanelib.draw"},  # stages: functions on arrays
+    {"lanelib.camera", "lanelib.perspective", "lanelib.geometry"},
+    {"lanelib.data"},
+    {"lanelib.hough", "lanelib.tracking"},  # the basic pipeline; the tracker (takes a pipeline object)
+    {"lanelib.config"},                     # nests every stage's config
+    {"lanelib.pipeline"},
+    {"lanelib.runs", "lanelib.evaluate", "lanelib.bench", "lanelib.synth", "lanelib.benchmarks"},
+    {"lanelib.widgets"},
+    {"lanelib.cli", "lanelib.__main__", "lanelib"},
+]
+
+
+def layer_of(module: str) -> int:
+    """Return the layer index of a module (a subpackage's modules share its layer)."""
+    for i, layer in enumerate(LAYERS):
+        for name in layer:
+            if module == name or (name != "lanelib" and module.startswith(name + ".")):
+                return i
+    raise AssertionError(f"{module}: not in any layer; add it to LAYERS and docs/architecture.md")
+
+
+@pytest.mark.parametrize("module", sorted(graph()[0]))
+def test_imports_go_down_the_layers(module):
+    edges = graph()[0]
+    up = sorted(t for t in edges[module] if layer_of(t) > layer_of(module))
+    assert not up, f"{module} (layer {layer_of(module)}) imports from a layer above it: {up}"
