@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import re
 import sys
@@ -435,6 +436,102 @@ class VideoReader:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def video_info(path: str | os.PathLike) -> VideoInfo:
+    """Return the size, frame rate and frame count of the video at ``path`` (nothing is decoded).
+
+    Raises
+    ------
+    InputError
+        If the file is missing, empty, or not a video ffmpeg can read (see ``VideoReader``).
+    """
+    with VideoReader(path) as reader:
+        return reader.info
+
+
+# read_frame's index -> time: a frame's index is floor(t * fps + this), so a time that float
+# rounding puts a hair before a frame's start still picks that frame
+_TIME_EPS_FRAMES = 1e-6
+_NTSC_RATES = (24, 30, 48, 60, 120)  # n * 1000 / 1001 fps, which ffmpeg prints as 23.98, 29.97, ...
+
+
+def exact_fps(fps: float) -> float:
+    """Return the frame rate ``fps`` stands for: an NTSC rate printed rounded (29.97) as n*1000/1001.
+
+    ffmpeg prints (and imageio-ffmpeg reports) 30000/1001 fps as ``29.97``; at frame 30 that
+    rounding already moves ``t * fps`` by 3e-5 of a frame, enough to pick the frame before.
+    """
+    n = round(fps * 1.001)
+    return n * 1000 / 1001 if n in _NTSC_RATES and abs(fps - n * 1000 / 1001) < 0.006 else fps
+
+
+def read_frame(path: str | os.PathLike, index: int | None = None, time_s: float | None = None,
+               info: VideoInfo | None = None) -> np.ndarray:
+    """Return one frame of the video at ``path`` as an RGB uint8 array (H x W x 3), found by seeking.
+
+    The frame is chosen by ``index`` (0 .. n_frames - 1) or by ``time_s`` (seconds from the
+    start; frame ``floor(time_s * fps + 1e-6)``), exactly one of them. ffmpeg seeks to the key
+    frame before it (``-ss`` before ``-i``) and decodes from there, so frame 240 costs a few
+    frames' decoding, not 240; the frame is the very one a ``VideoReader`` yields at that index
+    (frame-accurate seek, checked by ``tests/test_io.py``).
+
+    Parameters
+    ----------
+    path : the video file.
+    index : the frame's index, counted from 0.
+    time_s : the frame's time in seconds from the video's start.
+    info : the video's ``VideoInfo`` when the caller has it (``video_info(path)``); saves
+        opening the file twice when reading many frames.
+
+    Raises
+    ------
+    InputError
+        If the file is missing or not a readable video, if neither or both of ``index`` and
+        ``time_s`` are given, if the frame is outside the video, or if it cannot be decoded. The
+        message names the file, the valid range and the fix.
+    """
+    p = Path(path)
+    if (index is None) == (time_s is None):
+        got = "both" if index is not None else "neither"
+        raise InputError(f"{p}: read_frame needs a frame index or a time in seconds (got {got}); "
+                         "pass index=N or time_s=T")
+    info = info if info is not None else video_info(p)
+    n, fps = info.n_frames, exact_fps(info.fps)
+    if time_s is not None:
+        t = float(time_s)
+        end_s = n / fps
+        if not (math.isfinite(t) and 0.0 <= t < end_s):
+            raise InputError(f"{p}: time {time_s} s is outside the video (0 to {end_s:.3f} s, "
+                             f"{n} frames at {info.fps:g} fps); pass a time in that range")
+        index = min(math.floor(t * fps + _TIME_EPS_FRAMES), n - 1)
+    if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)):
+        raise InputError(f"{p}: frame index {index!r} is not an integer; pass an index 0..{n - 1}")
+    index = int(index)
+    if not 0 <= index < n:
+        raise InputError(f"{p}: frame {index} is outside the video (frames 0..{n - 1}, "
+                         f"{n} frames at {info.fps:g} fps); pass an index in that range")
+    # seek half a frame before the frame's time: ffmpeg drops the frames decoded before that
+    # time and the first one it keeps is ``index``, whatever the rounding of its timestamp
+    seek_s = max(0.0, (index - 0.5) / fps)
+    w, h = info.size
+    gen = imageio_ffmpeg.read_frames(str(p), pix_fmt="rgb24", input_params=["-ss", f"{seek_s:.6f}"],
+                                     output_params=["-frames:v", "1"])
+    try:
+        next(gen)  # the meta data
+        raw = next(gen, b"")
+    except (RuntimeError, OSError, StopIteration) as e:
+        raise InputError(f"{p}: frame {index} could not be decoded ({ffmpeg_cause(str(e))}); "
+                         f"{_VIDEO_FIX}") from None
+    finally:
+        with contextlib.suppress(Exception):
+            gen.close()
+    if len(raw) != w * h * 3:
+        got = "no frame" if not raw else f"a partial frame ({len(raw)} of {w * h * 3} bytes)"
+        raise InputError(f"{p}: frame {index} could not be decoded ({got}: the file ends before "
+                         f"the {n} frames its container announces?); pass an earlier frame or "
+                         f"{_VIDEO_FIX}")
+    return np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()
 
 
 # The H.264 settings every lanelib video is written with (the codec benchmark uses the same).

@@ -257,3 +257,92 @@ def test_a_jpegs_exif_orientation_is_applied_as_before(tmp_path):
     rgb = io.read_image(tmp_path / "rot.jpg")
     assert rgb.shape == (40, 20, 3)
     assert rgb[:10].mean() > 200 and rgb[-10:].mean() < 50  # the band is now on top
+
+
+# --------------------------------------------------------------------------- one frame by seeking
+
+PROJECT = Path(__file__).resolve().parents[1] / "videos" / "project.mp4"
+SEEK_INDICES = (0, 1, 17, 120, 249)  # 249: the last frame of the 250
+
+
+@pytest.fixture(scope="module")
+def project_frames() -> dict[int, np.ndarray]:
+    """The frames SEEK_INDICES of videos/project.mp4, decoded one after another from the start."""
+    with io.VideoReader(PROJECT) as reader:
+        return {i: f.copy() for i, f in enumerate(reader) if i in SEEK_INDICES}
+
+
+def test_a_seeked_frame_is_the_frame_sequential_decoding_gives(project_frames):
+    info = io.video_info(PROJECT)
+    assert (info.n_frames, info.fps) == (250, 25.0)
+    assert sorted(project_frames) == list(SEEK_INDICES)
+    for i, expected in project_frames.items():
+        frame = io.read_frame(PROJECT, i, info=info)
+        assert frame.dtype == np.uint8 and frame.shape == (720, 1280, 3), i
+        assert np.array_equal(frame, expected), i
+    frame = io.read_frame(PROJECT, 17)  # without info: the file's info is read first
+    assert np.array_equal(frame, project_frames[17]) and frame.flags.writeable
+
+
+def test_time_s_picks_the_frame_that_shows_at_that_time(project_frames):
+    info = io.video_info(PROJECT)
+    for t, i in [(0.0, 0), (0.039, 0), (0.04, 1), (17 / 25, 17), (17 / 25 - 1e-9, 17),
+                 (17.9 / 25, 17), (4.8, 120), (9.999, 249)]:
+        assert np.array_equal(io.read_frame(PROJECT, time_s=t, info=info), project_frames[i]), t
+
+
+def test_seeking_is_frame_accurate_at_an_ntsc_frame_rate(tmp_path):
+    # 29.97 fps: frame times are not round numbers, so a seek to the exact time could land a
+    # hair after a frame's timestamp; each frame is a different grey level, to tell them apart
+    path = tmp_path / "ntsc.mp4"
+    with io.VideoWriter(path, fps=30000 / 1001) as w:
+        for i in range(40):
+            w.write(np.full((48, 64, 3), 6 * i, np.uint8))
+    with io.VideoReader(path) as reader:
+        frames = [f.copy() for f in reader]
+    info = io.video_info(path)
+    assert info.n_frames == len(frames) == 40
+    for i in (0, 1, 2, 13, 29, 30, 38, 39):
+        assert np.array_equal(io.read_frame(path, i, info=info), frames[i]), i
+    assert np.array_equal(io.read_frame(path, time_s=30 * 1001 / 30000, info=info), frames[30])
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    (dict(index=250), r"frame 250 is outside the video \(frames 0\.\.249, 250 frames at 25 fps\); "
+                      "pass an index in that range"),
+    (dict(index=-1), r"frame -1 is outside the video \(frames 0\.\.249"),
+    (dict(index=1.5), r"frame index 1\.5 is not an integer; pass an index 0\.\.249"),
+    (dict(time_s=10.0), r"time 10\.0 s is outside the video \(0 to 10\.000 s, 250 frames at 25 fps\); "
+                        "pass a time in that range"),
+    (dict(time_s=-0.1), "time -0.1 s is outside the video"),
+    (dict(), r"read_frame needs a frame index or a time in seconds \(got neither\); "
+             "pass index=N or time_s=T"),
+    (dict(index=3, time_s=0.1), r"read_frame needs .* \(got both\)"),
+])
+def test_a_frame_outside_the_video_is_an_input_error_with_the_range(kwargs, message):
+    with pytest.raises(InputError, match=f"^{re.escape(str(PROJECT))}: {message}"):
+        io.read_frame(PROJECT, **kwargs)
+
+
+def test_read_frame_on_a_missing_corrupt_or_cut_video_names_the_file(tmp_path, faststart):
+    with pytest.raises(InputError, match="none.mp4: no such video file; check the path"):
+        io.read_frame(tmp_path / "none.mp4", 0)
+    bad = tmp_path / "bad.mp4"
+    bad.write_bytes(b"\x00" * 5000)
+    with pytest.raises(InputError, match=r"bad.mp4: not a readable video \(.*\); pass a valid video"):
+        io.read_frame(bad, 0)
+    # a file cut after a tenth of its bytes still announces 250 frames: the late ones are gone
+    cut = tmp_path / "cut.mp4"
+    data = faststart.read_bytes()
+    cut.write_bytes(data[:len(data) // 10])
+    assert io.video_info(cut).n_frames == 250
+    assert io.read_frame(cut, 0).shape == (720, 1280, 3)
+    with pytest.raises(InputError, match=r"cut.mp4: frame 240 could not be decoded \(no frame: the "
+                                         "file ends before the 250 frames its container announces"):
+        io.read_frame(cut, 240)
+
+
+def test_exact_fps_reads_a_rounded_ntsc_rate_as_n_times_1000_over_1001():
+    assert io.exact_fps(29.97) == 30000 / 1001 and io.exact_fps(23.98) == 24000 / 1001
+    assert io.exact_fps(59.94) == 60000 / 1001
+    assert io.exact_fps(25.0) == 25.0 and io.exact_fps(30.0) == 30.0 and io.exact_fps(29.5) == 29.5

@@ -10,9 +10,11 @@ frame, the bird's-eye view, colour conversions, the lane mask) is computed once 
 - ``ThresholdTuner`` (``widgets/thresholds.py``): every mask of ``ThresholdConfig`` on the
   bird's-eye view (on/off, colour space and channel, low/high range, Sobel kernel, top-hat width)
   and the rule that combines them.
-- ``PerspectiveTuner`` (``widgets/perspective.py``): the src trapezoid (top y, top width, bottom
-  width, centre x) and the dst margin; the trapezoid on the undistorted frame, the bird's-eye view
-  and the straight-line check.
+- ``PerspectiveTuner`` (``widgets/perspective.py``): each src corner and the dst rectangle
+  (``src.tl.x``, ..., ``dst.left_x``, ...; ``set_points``), the symmetric shortcut (top y, top
+  width, bottom width, centre x, dst margin) and clicks on the preview (``ipyevents``) that place
+  the four src corners; the points on the undistorted frame, the bird's-eye view and the
+  straight-line check.
 - ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels) and the
   search around a fit.
 - ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's Canny thresholds, Hough parameters
@@ -37,6 +39,11 @@ carries ``lanelib-preview``, the picker ``lanelib-picker`` and the readout ``lan
 A new tuner subclasses ``Tuner`` (``widgets/base.py``), sets ``parts`` and ``shows`` and
 implements ``_build``, ``_prepare``, ``_update``, ``_apply``, ``_sync``, ``render`` and
 ``readout`` (see ``Tuner``).
+
+Any tuner also takes videos among its picker's items (``{"clip": "videos/project.mp4"}``, or
+``image_choices(videos=True)`` / ``video_choices()`` for the bundled ones as ``"videos/<name>"``):
+picking one shows a frame slider (``tuner.frame_slider``, ``tuner.frame``), and the frame it stops
+on is read by seeking (``io.read_frame``) and tuned like an image.
 """
 from __future__ import annotations
 
@@ -44,11 +51,12 @@ from __future__ import annotations
 # lanelib.perspective; they are re-exported here for code that imported them from widgets
 from ..draw import sheet, shrink
 from ..perspective import StraightLineCheck, straight_line_check
-from .base import Tuner, image_choices
+from .base import Tuner, image_choices, video_choices
 from .fit import FitTuner
 from .hough import HoughTuner, hough_image_choices
 from .perspective import PerspectiveTuner
 from .thresholds import ThresholdTuner
 
 __all__ = ["ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "Tuner", "image_choices",
+           "video_choices",
            "hough_image_choices", "sheet", "shrink", "straight_line_check", "StraightLineCheck"]

@@ -8,6 +8,10 @@ debounce): a change builds the new config (``_apply``), recomputes what that con
 (``_update``) and replaces the preview's bytes. What does not depend on the controls (the
 undistorted frame, the bird's-eye view, colour conversions, the lane mask) is computed once per
 picked image (``_prepare``).
+
+The picker's items may be videos (``io.VIDEO_SUFFIXES``) as well as images: a video shows a frame
+slider (``frame_slider``, ``tuner.frame``) under the picker, and each frame it stops on is read by
+seeking (``io.read_frame``) and goes through the same ``_prepare`` and ``_update`` as an image.
 """
 from __future__ import annotations
 
@@ -30,22 +34,42 @@ from ..draw import sheet
 from ..errors import ConfigError, InputError, LaneLibError
 
 UDACITY_PREFIX = "udacity/"
+VIDEO_PREFIX = "videos/"
 PARTS = tuple(f.name for f in fields(PipelineConfig))  # the parts of a PipelineConfig file
 T = TypeVar("T")
 
 
 def image_choices(root: str | os.PathLike | None = None,
-                  data: str | os.PathLike | None = None) -> dict[str, Path]:
+                  data: str | os.PathLike | None = None, videos: bool = False) -> dict[str, Path]:
     """Return the picker's images: label -> path, bundled ``test_images/`` first.
 
     Bundled images are labelled by file name; the Udacity test images, when ``data`` (default
-    ``data_root()``) holds ``udacity-advanced/test_images``, follow as ``"udacity/<name>"``.
+    ``data_root()``) holds ``udacity-advanced/test_images``, follow as ``"udacity/<name>"``; with
+    ``videos``, the bundled videos come last as ``"videos/<name>"`` (``video_choices``).
     """
     out = {p.name: p for p in io.list_images(bundled("test_images", root))}
     extra = Path(data if data is not None else data_root()) / UDACITY_ADVANCED / "test_images"
     if extra.is_dir():
         out.update({UDACITY_PREFIX + p.name: p for p in io.list_images(extra)})
+    if videos:
+        out.update(video_choices(root))
     return out
+
+
+def video_choices(root: str | os.PathLike | None = None) -> dict[str, Path]:
+    """Return the bundled videos (``videos/*.mp4``) as picker items: ``"videos/<name>"`` -> path.
+
+    Give them to a tuner with the images (``{**image_choices(), **video_choices()}``, or
+    ``image_choices(videos=True)``): picking one shows a frame slider.
+    """
+    folder = bundled("videos", root)
+    files = sorted(folder.glob("*.mp4")) if folder.is_dir() else []
+    return {VIDEO_PREFIX + p.name: p for p in files}
+
+
+def is_video(path: str | os.PathLike) -> bool:
+    """Return True if ``path`` is named like a video (``io.VIDEO_SUFFIXES``)."""
+    return Path(path).suffix.lower() in io.VIDEO_SUFFIXES
 
 
 class Tuner:
@@ -53,7 +77,9 @@ class Tuner:
 
     Parameters
     ----------
-    images : label -> image path for the picker (default: ``image_choices()``).
+    images : label -> image or video path for the picker (default: ``image_choices()``). A video
+        (``io.VIDEO_SUFFIXES``) shows the frame slider ``frame_slider`` (0 .. n_frames - 1, taken
+        when released); the preview follows it. For an image the slider is hidden.
     config : the PipelineConfig to start from.
     calibration : the camera of the bundled images (None: frames are taken as undistorted).
         Images labelled ``"udacity/..."`` use the Udacity camera, calibrated from its
@@ -113,10 +139,16 @@ class Tuner:
         self._syncing = False
         self._widget: widgets.Widget | None = None
         self._raw = np.zeros((0, 0, 3), np.uint8)
+        self._video_infos: dict[Path, io.VideoInfo] = {}
         self.error = ""
         self.picker = widgets.Dropdown(options=list(self.images), value=image, description="image",
                                        layout=widgets.Layout(width="420px"))
         self.picker.add_class("lanelib-picker")
+        self.frame_slider = widgets.IntSlider(value=0, min=0, max=0, description="frame",
+                                              continuous_update=False,
+                                              layout=widgets.Layout(width="640px", display="none"),
+                                              style={"description_width": "50px"})
+        self.frame_slider.add_class("lanelib-slider-frame")
         self.preview = widgets.Image(format="jpeg", layout=widgets.Layout(max_width="100%"))
         self.preview.add_class("lanelib-preview")
         self.message = widgets.HTML()
@@ -125,6 +157,7 @@ class Tuner:
         self._rows = self._build()
         self._pick(image)
         self.picker.observe(self._on_pick, names="value")
+        self.frame_slider.observe(self._on_frame, names="value")
 
     # ---- public ---------------------------------------------------------------------------
 
@@ -139,10 +172,38 @@ class Tuner:
         return self.picker.value
 
     @property
+    def is_video(self) -> bool:
+        """True when the picked item is a video (the frame slider shows)."""
+        return is_video(self.images[self.image])
+
+    @property
+    def frame(self) -> int:
+        """Index of the video frame shown (0 for an image); setting it shows that frame."""
+        return int(self.frame_slider.value) if self.is_video else 0
+
+    @frame.setter
+    def frame(self, index: int) -> None:
+        path = self.images[self.image]
+        if not self.is_video:
+            raise InputError(f"{path}: the picked item is an image, it has no frames; "
+                             "pick a video to choose a frame")
+        n = self._video_info(path).n_frames
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
+            raise InputError(f"{path}: frame {index!r} is outside the video (frames 0..{n - 1}); "
+                             "pass an index in that range")
+        self.frame_slider.value = int(index)
+
+    @property
+    def raw(self) -> np.ndarray:
+        """The picked image, or the video frame shown, as the file holds it (RGB uint8)."""
+        return self._raw
+
+    @property
     def widget(self) -> widgets.VBox:
-        """The tuner's widget: picker, controls, preview and readout (made once)."""
+        """The tuner's widget: picker, frame slider, controls, preview and readout (made once)."""
         if self._widget is None:
-            self._widget = widgets.VBox([self.picker, *self._rows, self.preview, self.message])
+            self._widget = widgets.VBox([self.picker, self.frame_slider, *self._rows, self.preview,
+                                         self.message])
             self._widget.add_class("lanelib-tuner")
         return self._widget
 
@@ -292,8 +353,30 @@ class Tuner:
     def _on_pick(self, change) -> None:
         self._pick(change["new"])
 
-    def _pick(self, label: str) -> None:
-        self._raw = io.read_image(self.images[label])
+    def _on_frame(self, change) -> None:
+        if not self._syncing and self.is_video:
+            self._pick(self.image, int(change["new"]))
+
+    def _video_info(self, path: Path) -> io.VideoInfo:
+        """Return the VideoInfo of ``path``, read once per tuner."""
+        if path not in self._video_infos:
+            self._video_infos[path] = io.video_info(path)
+        return self._video_infos[path]
+
+    def _pick(self, label: str, frame: int = 0) -> None:
+        """Show item ``label`` (at video frame ``frame``): read it, ``_prepare``, ``_update(None)``."""
+        path = self.images[label]
+        if is_video(path):
+            info = self._video_info(path)
+            frame = min(max(int(frame), 0), info.n_frames - 1)
+            self._raw = io.read_frame(path, frame, info=info)
+            with self._quiet():
+                self.frame_slider.max = info.n_frames - 1
+                self.frame_slider.value = frame
+            self.frame_slider.layout.display = None
+        else:
+            self._raw = io.read_image(path)
+            self.frame_slider.layout.display = "none"
         self._prepare(self._raw, self._calibration_for(label))
         self._update(None)
         self._refresh()

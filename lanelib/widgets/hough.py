@@ -146,14 +146,14 @@ class HoughTuner(Tuner):
     # ---- the pipeline ---------------------------------------------------------------------
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
-        self.frame = io.check_rgb(raw)
-        self._small = shrink(self.frame, self._tile_size())
+        self.rgb = io.check_rgb(raw)
+        self._small = shrink(self.rgb, self._tile_size())
 
     def _update(self, key: str | None) -> None:
         """Run the Hough pipeline on the picked frame with the current config, keeping the stages."""
         finder = self._cached("finder", self.config.hough,
                               lambda: hough.HoughLaneFinder(self.config.hough))
-        self.result = finder.process(self.frame, keep_stages=True)
+        self.result = finder.process(self.rgb, keep_stages=True)
         self.stages = self.result.stages
 
     # ---- views ----------------------------------------------------------------------------
@@ -161,7 +161,7 @@ class HoughTuner(Tuner):
     def render(self) -> dict[str, np.ndarray | None]:
         """Return the Canny edges, the edges in the region, the Hough segments and the lines."""
         tw, th = self._tile_size()
-        h, w = self.frame.shape[:2]
+        h, w = self.rgb.shape[:2]
         scale = np.array([tw / w, th / h, tw / w, th / h])
         st = self.stages
         roi_view = cv2.cvtColor(shrink(st.roi_edges, (tw, th)), cv2.COLOR_GRAY2RGB)
@@ -173,7 +173,7 @@ class HoughTuner(Tuner):
                              (st.right_segments, hough.RIGHT_COLOR_RGB)):
             if len(group):  # every segment yellow, then the kept ones in their side's colour
                 segs = hough.draw_lines(segs, np.rint(group * scale).astype(np.int32), color, 2)
-        lines = shrink(hough.annotate(self.frame, self.result), (tw, th))
+        lines = shrink(hough.annotate(self.rgb, self.result), (tw, th))
         return {"Canny edges": st.edges, "edges in the region": roi_view,
                 "Hough segments (left red, right blue)": segs, "lane lines": lines}
 

@@ -1,10 +1,13 @@
-"""``PerspectiveTuner``: the src trapezoid and the dst margin of the bird's-eye transform, with the
-straight-line check (``perspective.straight_line_check``) as the measure of a good one."""
+"""``PerspectiveTuner``: the bird's-eye transform's four src corners and dst rectangle, set one by
+one, by symmetric shortcuts or by clicks on the preview, with the straight-line check
+(``perspective.straight_line_check``) as the measure of a good one."""
 from __future__ import annotations
 
+import html
 from dataclasses import replace
 
 import cv2
+import ipyevents
 import ipywidgets as widgets
 import numpy as np
 
@@ -12,18 +15,47 @@ from .. import thresholds
 from ..camera import Calibration, FastBirdseye, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
+from ..errors import LaneLibError
 from ..perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
                            straight_line_check, trapezoid_src)
 from .base import Tuner, row, sized
 
-KEYS = ("top_y", "top_width", "bottom_width", "centre_x", "dst_margin")
+SRC_KEYS = ("top_y", "top_width", "bottom_width", "centre_x")  # the symmetric src shortcut
+KEYS = SRC_KEYS + ("dst_margin",)
+CORNERS = ("tl", "bl", "br", "tr")  # the order of PerspectiveConfig.src_px and dst_px
+CORNER_NAMES = {"tl": "top left", "bl": "bottom left", "br": "bottom right", "tr": "top right"}
+SRC_POINT_KEYS = tuple(f"src.{c}.{a}" for c in CORNERS for a in ("x", "y"))
+DST_KEYS = ("dst.left_x", "dst.right_x", "dst.top_y", "dst.bottom_y")
+PLACE = "place_points"
 
 
 def _trapezoid_of(src_px) -> dict[str, float]:
-    """Return top_y, bottom_y, top_width, bottom_width, centre_x of src points (tl, bl, br, tr)."""
+    """Return the least-squares symmetric summary of src points (tl, bl, br, tr).
+
+    The symmetric trapezoid (``trapezoid_src``) nearest to the points in the sum of squared
+    coordinate errors: each row's mean y, each row's width, and the mean of the two rows'
+    centres. For a symmetric trapezoid these are its own values.
+    """
     (tlx, tly), (blx, bly), (brx, bry), (trx, try_) = src_px
     return {"top_y": (tly + try_) / 2, "bottom_y": (bly + bry) / 2, "top_width": trx - tlx,
-            "bottom_width": brx - blx, "centre_x": (blx + brx) / 2}
+            "bottom_width": brx - blx, "centre_x": (tlx + trx + blx + brx) / 4}
+
+
+def _rectangle_of(dst_px, width_px: float) -> dict[str, float]:
+    """Return left_x, right_x, top_y, bottom_y and the symmetric dst_margin of dst points.
+
+    Each value is the mean of the two corners on that side; ``dst_margin`` is the mean of the
+    left line's and the right line's distance from their image edge (``width_px`` wide).
+    """
+    (tlx, tly), (blx, bly), (brx, bry), (trx, try_) = dst_px
+    left, right = (tlx + blx) / 2, (trx + brx) / 2
+    return {"left_x": left, "right_x": right, "top_y": (tly + try_) / 2, "bottom_y": (bly + bry) / 2,
+            "dst_margin": (left + width_px - right) / 2}
+
+
+def _rectangle(left_x: float, right_x: float, top_y: float, bottom_y: float) -> tuple:
+    """Return the dst points (tl, bl, br, tr) of an upright rectangle; all arguments in px."""
+    return ((left_x, top_y), (left_x, bottom_y), (right_x, bottom_y), (right_x, top_y))
 
 
 def _limits(pc: PerspectiveConfig) -> dict[str, float]:
@@ -32,20 +64,85 @@ def _limits(pc: PerspectiveConfig) -> dict[str, float]:
     return {"top_y": h - 1, "centre_x": w, "top_width": w, "bottom_width": 2 * w, "dst_margin": w / 2 - 1}
 
 
+def _values(pc: PerspectiveConfig) -> dict[str, float]:
+    """Return the value of every point control (symmetric and per corner) for ``pc``, in px."""
+    w = pc.size_px[0]
+    rect = _rectangle_of(pc.dst_px, w)
+    out = {k: round(v, 2) for k, v in _trapezoid_of(pc.src_px).items() if k in SRC_KEYS}
+    out["dst_margin"] = round(rect["dst_margin"], 2)
+    for corner, (x, y) in zip(CORNERS, pc.src_px):
+        out[f"src.{corner}.x"], out[f"src.{corner}.y"] = float(x), float(y)
+    for side in ("left_x", "right_x", "top_y", "bottom_y"):
+        out[f"dst.{side}"] = float(rect[side])
+    return out
+
+
+def _bounds(key: str, size_px: tuple[int, int]) -> tuple[float, float]:
+    """Return (min, max) of the per-corner control ``key``: one image size beyond each edge."""
+    w, h = size_px
+    span = w if key.endswith("x") else h
+    return -float(span), 2.0 * span
+
+
+def click_to_frame(event: dict, tile_px: tuple[int, int], columns: int,
+                   frame_px: tuple[int, int]) -> tuple[float, float] | None:
+    """Return the frame pixel (x, y) of a click on the preview's first tile, or None elsewhere.
+
+    Parameters
+    ----------
+    event : an ``ipyevents`` click: ``dataX``/``dataY`` are the clicked pixel of the preview
+        image's own (natural) pixels, whatever size the browser shows it at. Without them,
+        ``relativeX``/``relativeY`` scaled by ``boundingRectWidth``/``boundingRectHeight`` to
+        the sheet's size (``columns`` tiles wide) are used.
+    tile_px : (w, h) of one preview tile; the first tile (top left) is the undistorted frame.
+    columns : the tiles per row of the preview sheet.
+    frame_px : (w, h) of the undistorted frame the tile shows.
+    """
+    tw, th = tile_px
+    if event.get("dataX") is not None and event.get("dataY") is not None:
+        sx, sy = float(event["dataX"]), float(event["dataY"])
+    elif event.get("boundingRectWidth") and event.get("boundingRectHeight"):
+        sx = float(event["relativeX"]) * columns * tw / float(event["boundingRectWidth"])
+        sy = float(event["relativeY"]) * th / float(event["boundingRectHeight"])
+    else:
+        return None
+    if not (0 <= sx < tw and 0 <= sy < th):
+        return None
+    return round(sx * frame_px[0] / tw, 2), round(sy * frame_px[1] / th, 2)
+
+
 class PerspectiveTuner(Tuner):
-    """Tune the bird's-eye transform: the src trapezoid and the dst margin.
+    """Tune the bird's-eye transform: the four src corners and the dst rectangle.
 
-    Sliders ``top_y``, ``top_width``, ``bottom_width``, ``centre_x`` (the symmetric src
-    trapezoid; its bottom row stays where the config has it) and ``dst_margin`` (the dst lines'
-    distance from the left and right edges). The preview shows the trapezoid on the undistorted
-    frame, the bird's-eye view with the dst lines, and the bird's-eye lane mask with the
-    straight fits of the straight-line check; the readout gives the check as numbers.
+    Three ways to set the points, all kept in step:
 
-    Moving the trapezoid keeps the lane width in metres and updates the visible road length to
-    the same camera (``perspective.road_length_m`` with the focal length the starting config
-    implies), so the metric scale stays right. A config whose src is not a symmetric
-    trapezoid is kept as it is until a slider moves. ``save`` writes the ``perspective`` part;
-    ``load`` reads it and the ``thresholds`` and ``search`` parts the check uses.
+    - the symmetric shortcut, sliders ``top_y``, ``top_width``, ``bottom_width``, ``centre_x``
+      (a symmetric src trapezoid; its bottom row stays where the config has it) and
+      ``dst_margin`` (the dst lines' distance from the left and right edges). Moving a src
+      slider rewrites the four src corners as the symmetric trapezoid the four src sliders
+      show; ``dst_margin`` rewrites the dst lines' x and keeps the dst rows;
+    - the per-corner controls in the "all four points" section: ``src.tl.x``, ``src.tl.y``, ...
+      (corners tl, bl, br, tr, the order of ``PerspectiveConfig.src_px``) and ``dst.left_x``,
+      ``dst.right_x``, ``dst.top_y``, ``dst.bottom_y``; each moves only its own corner or side.
+      ``set_points`` sets all of them at once;
+    - clicks on the undistorted frame (the preview's first tile): the ``place_points`` toggle
+      arms it, the next four clicks give the corners tl, bl, br, tr, and after the fourth the
+      four are set together (one corner at a time could pass through shapes that are no
+      trapezoid) and the toggle disarms (``click_to_frame`` maps a click to frame pixels).
+
+    Whatever set the points, every control then shows them: the per-corner controls the exact
+    points, the symmetric sliders the least-squares symmetric summary of the corners (each
+    row's mean y and width, the mean of the two rows' centres, the mean dst margin; the very
+    values for a symmetric config). A config whose points are not symmetric is kept exactly
+    as it is until a symmetric slider moves.
+
+    The preview shows the src quadrilateral on the undistorted frame, the bird's-eye view with
+    the dst lines, and the bird's-eye lane mask with the straight fits of the straight-line
+    check; the readout gives the check as numbers. Moving the src corners keeps the lane width
+    in metres and updates the visible road length to the same camera
+    (``perspective.road_length_m`` from the rows' widths, with the focal length the starting
+    config implies), so the metric scale stays right. ``save`` writes the ``perspective``
+    part; ``load`` reads it and the ``thresholds`` and ``search`` parts the check uses.
     """
 
     columns = 3
@@ -53,23 +150,67 @@ class PerspectiveTuner(Tuner):
     parts = ("perspective",)
     shows = ("perspective", "thresholds", "search")
 
+    # ---- public ---------------------------------------------------------------------------
+
+    def set_points(self, src_px, dst_px, visible_length_m: float | None = None) -> PipelineConfig:
+        """Set exactly these src and dst points; return the new config.
+
+        Parameters
+        ----------
+        src_px : four (x, y) points (tl, bl, br, tr) in px of the picked undistorted frame.
+        dst_px : the same four corners in the bird's-eye view, in px.
+        visible_length_m : the real road length between the dst rows; None: computed for the
+            tuner's camera from the src rows' widths (``perspective.road_length_m``).
+
+        Raises ``ConfigError`` for points that are no trapezoid of road ahead (collinear or
+        repeated points, a top row not narrower than the bottom one).
+        """
+        new = self._points_config(src_px, dst_px, visible_length_m)
+        self.error = ""
+        self._pending = []
+        self._show(replace(self.config, perspective=new))
+        self._update(None)
+        self._refresh()
+        return self.config
+
+    # ---- hooks ----------------------------------------------------------------------------
+
     def _build(self) -> list[widgets.Widget]:
         pc = self.config.perspective
-        values = dict(_trapezoid_of(pc.src_px), dst_margin=float(pc.dst_px[0][0]))
-        top = _limits(pc)
+        values, top = _values(pc), _limits(pc)
+        self._pending: list[tuple[float, float]] = []
         sl = lambda key, desc: self._control(key, widgets.FloatSlider(  # noqa: E731
             value=values[key], min=0.0, max=float(top[key]), step=0.1, description=desc,
             readout_format=".1f", **sized(460, 150)))
+
+        def box(key: str, desc: str) -> widgets.Widget:
+            low, high = _bounds(key, pc.size_px)
+            return self._control(key, widgets.BoundedFloatText(
+                value=values[key], min=low, max=high, step=0.1, description=desc, **sized(200, 110)))
+
+        src_rows = [row(box(f"src.{c}.x", f"{CORNER_NAMES[c]} x"), box(f"src.{c}.y", "y"))
+                    for c in CORNERS]
+        dst_rows = [row(box("dst.left_x", "dst left x"), box("dst.right_x", "right x")),
+                    row(box("dst.top_y", "dst top y"), box("dst.bottom_y", "bottom y"))]
+        points = widgets.Accordion(
+            children=[widgets.VBox([widgets.HTML("src corners (undistorted frame, px):"), *src_rows,
+                                    widgets.HTML("dst rectangle (bird's-eye view, px):"), *dst_rows])],
+            titles=("all four points",), selected_index=None)
+        points.add_class("lanelib-points")
+        self.place = widgets.ToggleButton(value=False, description="place points", icon="crosshairs",
+                                          tooltip="then click tl, bl, br, tr on the undistorted frame")
+        self.place.add_class(f"lanelib-control-{PLACE}")
+        self.place.observe(self._on_place, names="value")
+        self._events = ipyevents.Event(source=self.preview, watched_events=["click"],
+                                       prevent_default_action=True)
+        self._events.on_dom_event(self._on_click)
         return [row(sl("top_y", "top y (px)"), sl("centre_x", "centre x (px)")),
                 row(sl("top_width", "top width (px)"), sl("bottom_width", "bottom width (px)")),
-                row(sl("dst_margin", "dst margin (px)"))]
+                row(sl("dst_margin", "dst margin (px)"), self.place),
+                points]
 
     def _sync(self) -> None:
-        pc = self.config.perspective
-        values = dict(_trapezoid_of(pc.src_px), dst_margin=float(pc.dst_px[0][0]))
-        for key, top in _limits(pc).items():
-            self.controls[key].max = float(top)
-            self.controls[key].value = float(values[key])
+        self._set_controls(self.config.perspective, skip=None)
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
         size = (raw.shape[1], raw.shape[0])
@@ -82,22 +223,35 @@ class PerspectiveTuner(Tuner):
         self.undistorted = undistorter.undistort(raw)
         self._focal_px = implied_focal_px(self.config.perspective)
         self._small = shrink(self.undistorted, self._tile_size())
+        self._pending = []
 
     def _apply(self, key: str) -> PipelineConfig:
         pc = self.config.perspective
-        v = {k: float(self.controls[k].value) for k in KEYS}
-        w, h = pc.size_px
-        bottom_y = _trapezoid_of(pc.src_px)["bottom_y"]
-        src = trapezoid_src(v["top_y"], bottom_y, v["top_width"], v["bottom_width"], v["centre_x"])
-        dst = trapezoid_src(0.0, float(h), w - 2 * v["dst_margin"], w - 2 * v["dst_margin"], w / 2)
-        src = tuple((round(x, 2), round(y, 2)) for x, y in src)
-        length = round(road_length_m(src, pc.lane_width_m, self._focal_px), 3)
-        new = PerspectiveConfig(src, dst, pc.size_px, pc.lane_width_m, length)
-        Perspective(new)  # refuses collinear points with a ConfigError
-        return replace(self.config, perspective=new)
+        v = {k: float(self.controls[k].value) for k in self.controls}
+        w, _ = pc.size_px
+        src, dst = pc.src_px, pc.dst_px
+        if key in SRC_KEYS:
+            bottom_y = _trapezoid_of(pc.src_px)["bottom_y"]
+            src = trapezoid_src(v["top_y"], bottom_y, v["top_width"], v["bottom_width"], v["centre_x"])
+            src = tuple((round(x, 2), round(y, 2)) for x, y in src)
+        elif key == "dst_margin":
+            rect = _rectangle_of(dst, w)
+            dst = _rectangle(v["dst_margin"], w - v["dst_margin"], rect["top_y"], rect["bottom_y"])
+        elif key in SRC_POINT_KEYS:
+            _, corner, axis = key.split(".")
+            i = CORNERS.index(corner)
+            point = list(src[i])
+            point["xy".index(axis)] = v[key]
+            src = tuple(tuple(point) if j == i else p for j, p in enumerate(src))
+        elif key in DST_KEYS:
+            dst = _rectangle(*(v[k] for k in DST_KEYS))
+        length = pc.visible_length_m if src == pc.src_px else None
+        return replace(self.config, perspective=self._points_config(src, dst, length))
 
     def _update(self, key: str | None) -> None:
-        """Warp, threshold and check the picked frame under the current perspective."""
+        """Warp, threshold and check the picked frame; show the new points in the other controls."""
+        if key is not None:
+            self._set_controls(self.config.perspective, skip=key)
         self.perspective = Perspective(self.config.perspective)
         self.birdseye = self._canvas.birdseye(self._raw, self.perspective)
         self.binary = thresholds.combine(self.birdseye, self.config.thresholds)
@@ -107,13 +261,15 @@ class PerspectiveTuner(Tuner):
                                          self.config.search, car_x)
 
     def render(self) -> dict[str, np.ndarray | None]:
-        """Return the undistorted frame with the src trapezoid, the bird's-eye view, and its mask."""
+        """Return the undistorted frame with the src corners, the bird's-eye view, and its mask."""
         tw, th = self._tile_size()
         h, w = self.undistorted.shape[:2]
         s = np.array([tw / w, th / h])
         road = self._small.copy()
         src = np.round(np.asarray(self.config.perspective.src_px) * s).astype(np.int32)
         cv2.polylines(road, [src.reshape(-1, 1, 2)], True, (255, 0, 0), 2, cv2.LINE_AA)
+        for x, y in self._pending:
+            cv2.circle(road, (round(x * s[0]), round(y * s[1])), 4, (255, 255, 0), -1, cv2.LINE_AA)
         bird = shrink(self.birdseye, (tw, th))
         mask = cv2.cvtColor(shrink(self.binary, (tw, th)), cv2.COLOR_GRAY2RGB)
         dst = np.asarray(self.config.perspective.dst_px) * s
@@ -127,6 +283,66 @@ class PerspectiveTuner(Tuner):
 
     def readout(self) -> str:
         c, pc = self.check, self.config.perspective
-        return (f"straight-line check: {c}\n"
+        text = (f"straight-line check: {c}\n"
                 f"scale: {pc.xm_per_px * 1000:.3f} mm/px across, {pc.ym_per_px * 1000:.1f} mm/px "
                 f"along; visible road {pc.visible_length_m:.1f} m")
+        if self.place.value:
+            corner = CORNERS[len(self._pending)]
+            text += (f"\nplacing points: click the {CORNER_NAMES[corner]} corner on the undistorted "
+                     f"frame ({len(self._pending) + 1} of 4)")
+        return text
+
+    # ---- points and clicks ----------------------------------------------------------------
+
+    def _points_config(self, src_px, dst_px, visible_length_m: float | None) -> PerspectiveConfig:
+        """Return the perspective with these points (length None: from the camera); refuse bad ones."""
+        pc = self.config.perspective
+        src = tuple((float(x), float(y)) for x, y in src_px)
+        dst = tuple((float(x), float(y)) for x, y in dst_px)
+        if visible_length_m is None:
+            visible_length_m = round(road_length_m(src, pc.lane_width_m, self._focal_px), 3)
+        new = PerspectiveConfig(src, dst, pc.size_px, pc.lane_width_m, visible_length_m)
+        Perspective(new)  # refuses collinear points with a ConfigError
+        return new
+
+    def _set_controls(self, pc: PerspectiveConfig, skip: str | None) -> None:
+        """Show ``pc`` in every point control but ``skip`` (the one the user moved), quietly."""
+        values = _values(pc)
+        with self._quiet():
+            for key, top in _limits(pc).items():
+                self.controls[key].max = float(top)
+            for key in SRC_POINT_KEYS + DST_KEYS:
+                self.controls[key].min, self.controls[key].max = _bounds(key, pc.size_px)
+            for key, value in values.items():
+                if key != skip and abs(float(self.controls[key].value) - value) > 1e-9:
+                    self.controls[key].value = value
+
+    def _on_place(self, change) -> None:
+        self._pending = []
+        self._refresh()
+
+    def _on_click(self, event: dict) -> None:
+        """Take a click on the preview (an ``ipyevents`` event dict) as the next src corner.
+
+        Ignored unless ``place_points`` is armed and the click falls on the undistorted frame
+        (the first tile). The fourth click sets the four collected corners (the dst stays) and
+        disarms the toggle; points that are no trapezoid are refused with the reason in the
+        readout.
+        """
+        if not self.place.value:
+            return
+        h, w = self.undistorted.shape[:2]
+        point = click_to_frame(event, self._tile_size(), self.columns, (w, h))
+        if point is None:
+            return
+        self._pending.append(point)
+        if len(self._pending) < len(CORNERS):
+            self._refresh()
+            return
+        src = self._pending
+        self.place.value = False  # disarms: _on_place drops the collected clicks and refreshes
+        try:
+            self.set_points(src, self.config.perspective.dst_px)
+        except LaneLibError as e:
+            self.error = f"placed points {src}: {e}"
+            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'

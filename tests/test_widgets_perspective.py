@@ -1,0 +1,164 @@
+"""``PerspectiveTuner``'s four points: per-corner controls, the symmetric shortcut, ``set_points``
+and clicks on the preview (synthetic ``ipyevents`` event dicts, as the browser sends them)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import ipyevents
+import pytest
+
+from lanelib import widgets
+from lanelib.camera import calibrate
+from lanelib.perspective import PerspectiveConfig, trapezoid_src
+from lanelib.widgets.perspective import click_to_frame
+
+REPO = Path(__file__).resolve().parents[1]
+STRAIGHT = "straight_1.jpg"
+
+# published point sets for the 1280x720 Udacity camera, in lanelib's order (tl, bl, br, tr),
+# with their dst lines' x (dst rows 0..720); both are off-centre
+PUBLISHED = [
+    (((595, 450), (216, 720), (1115, 720), (690, 450)), (450, 830)),
+    (((579, 460), (203, 720), (1127, 720), (711, 460)), (350, 940)),
+]
+
+
+def _dst(left_x: float, right_x: float) -> tuple:
+    return ((left_x, 0), (left_x, 720), (right_x, 720), (right_x, 0))
+
+
+@pytest.fixture(scope="module")
+def camera():
+    """The calibration of the bundled (synthetic) camera."""
+    return calibrate(REPO / "camera_cal")
+
+
+@pytest.fixture()
+def tuner(camera):
+    return widgets.PerspectiveTuner({STRAIGHT: REPO / "test_images" / STRAIGHT}, calibration=camera)
+
+
+def _click(x: int, y: int) -> dict:
+    """An ipyevents click at pixel (x, y) of the preview image (400 px tiles, shown at half size)."""
+    return {"type": "click", "dataX": x, "dataY": y, "relativeX": x / 2, "relativeY": y / 2,
+            "boundingRectWidth": 600, "boundingRectHeight": 112.5}
+
+
+@pytest.mark.parametrize("src, dst_x", PUBLISHED)
+def test_published_points_are_taken_exactly_and_checked(tuner, src, dst_x):
+    bird0 = tuner.birdseye.copy()
+    tuner.set_points(src, _dst(*dst_x))
+    pc = tuner.config.perspective
+    assert pc.src_px == src and pc.dst_px == _dst(*dst_x)
+    assert pc.size_px == (1280, 720) and pc.lane_width_m == 3.7
+    assert not (tuner.birdseye == bird0).all()
+    # the check reads these points: both lines found (the numbers are off for the synthetic camera)
+    c = tuner.check
+    assert all(math.isfinite(v) for v in (c.left_slope, c.right_slope, c.lane_width_m))
+    assert c.left_fit is not None and c.right_fit is not None
+    assert "not found" not in tuner.readout()
+    # every per-corner control shows the exact points
+    for corner, (x, y) in zip(("tl", "bl", "br", "tr"), src):
+        assert (tuner.controls[f"src.{corner}.x"].value, tuner.controls[f"src.{corner}.y"].value) == (x, y)
+    assert tuner.controls["dst.left_x"].value == dst_x[0]
+    assert tuner.controls["dst.right_x"].value == dst_x[1]
+    assert (tuner.controls["dst.top_y"].value, tuner.controls["dst.bottom_y"].value) == (0, 720)
+
+
+def test_the_symmetric_sliders_show_the_least_squares_summary(tuner):
+    tuner.set_points(PUBLISHED[0][0], _dst(450, 830))
+    v = {k: tuner.controls[k].value for k in ("top_y", "top_width", "bottom_width", "centre_x", "dst_margin")}
+    assert v == {"top_y": 450.0, "top_width": 95.0, "bottom_width": 899.0,
+                 "centre_x": (595 + 690 + 216 + 1115) / 4, "dst_margin": 450.0}
+    # points kept exactly: showing the summary changed nothing
+    assert tuner.config.perspective.src_px == PUBLISHED[0][0]
+
+
+def test_a_per_corner_control_moves_only_its_corner(tuner):
+    before = tuner.config.perspective
+    tuner.controls["src.tl.x"].value = 570.0
+    pc = tuner.config.perspective
+    assert pc.src_px == ((570.0, 470.0),) + before.src_px[1:]
+    assert pc.dst_px == before.dst_px
+    assert tuner.error == ""
+    tuner.controls["src.br.y"].value = 710.0
+    assert tuner.config.perspective.src_px == ((570.0, 470.0), before.src_px[1], (1087.0, 710.0),
+                                               before.src_px[3])
+    # the symmetric sliders follow as the summary
+    assert tuner.controls["top_width"].value == pytest.approx(715.7 - 570.0)
+    assert tuner.controls["centre_x"].value == pytest.approx((570.0 + 715.7 + 193.0 + 1087.0) / 4, abs=0.005)
+    # a dst side moves that side only
+    tuner.controls["dst.left_x"].value = 300.0
+    assert tuner.config.perspective.dst_px == ((300.0, 0.0), (300.0, 720.0), (960.0, 720.0), (960.0, 0.0))
+    tuner.controls["dst.top_y"].value = 20.0
+    assert tuner.config.perspective.dst_px == ((300.0, 20.0), (300.0, 720.0), (960.0, 720.0), (960.0, 20.0))
+    assert tuner.controls["dst_margin"].value == 310.0
+
+
+def test_a_symmetric_slider_rewrites_all_four_corners(tuner):
+    tuner.set_points(PUBLISHED[1][0], _dst(350, 940))
+    tuner.controls["top_y"].value = 470.0
+    src = tuner.config.perspective.src_px
+    assert src == trapezoid_src(470.0, 720.0, 132.0, 924.0, 655.0)
+    for corner, (x, y) in zip(("tl", "bl", "br", "tr"), src):
+        assert (tuner.controls[f"src.{corner}.x"].value, tuner.controls[f"src.{corner}.y"].value) == (x, y)
+    assert tuner.config.perspective.dst_px == _dst(350, 940)  # a src slider leaves the dst alone
+    tuner.controls["dst_margin"].value = 320.0
+    assert tuner.config.perspective.dst_px == _dst(320, 960)
+    assert tuner.config.perspective.src_px == src
+    assert (tuner.controls["dst.left_x"].value, tuner.controls["dst.right_x"].value) == (320.0, 960.0)
+
+
+def test_four_clicks_place_the_four_corners(tuner):
+    assert isinstance(tuner._events, ipyevents.Event)
+    assert tuner._events.source is tuner.preview and tuner._events.watched_events == ["click"]
+    before = tuner.config
+    tuner._on_click(_click(181, 144))  # not armed: ignored
+    assert tuner.config == before
+    tuner.place.value = True
+    assert "top left corner" in tuner.readout()
+    # preview tiles are 400x225 for a 1280x720 frame: 3.2 frame px per preview px
+    tuner._on_click(_click(181, 144))
+    tuner._on_click(_click(650, 100))  # on the bird's-eye tile: ignored
+    tuner._on_click(_click(63, 224))
+    tuner._on_click(_click(352, 224))
+    assert tuner.config == before and "top right corner" in tuner.readout()
+    tuner._on_click(_click(222, 144))
+    assert tuner.config.perspective.src_px == ((579.2, 460.8), (201.6, 716.8), (1126.4, 716.8),
+                                               (710.4, 460.8))
+    assert tuner.config.perspective.dst_px == before.perspective.dst_px
+    assert tuner.place.value is False and "placing" not in tuner.readout()
+    assert tuner.controls["src.tr.x"].value == 710.4
+
+
+def test_clicks_that_make_no_trapezoid_are_refused(tuner):
+    before = tuner.config
+    tuner.place.value = True
+    for x, y in ((50, 100), (150, 200), (250, 200), (350, 100)):  # top wider than the bottom
+        tuner._on_click(_click(x, y))
+    assert tuner.config == before
+    assert "narrower than the bottom" in tuner.error and tuner.place.value is False
+
+
+def test_click_to_frame_maps_the_first_tile_only():
+    tile, frame = (400, 225), (1280, 720)
+    assert click_to_frame({"dataX": 100, "dataY": 50}, tile, 3, frame) == (320.0, 160.0)
+    # without dataX/dataY: the position in the displayed box, scaled to the sheet (3 tiles wide)
+    event = {"relativeX": 50, "relativeY": 25, "boundingRectWidth": 600, "boundingRectHeight": 112.5}
+    assert click_to_frame(event, tile, 3, frame) == (320.0, 160.0)
+    assert click_to_frame({"dataX": 400, "dataY": 10}, tile, 3, frame) is None
+    assert click_to_frame({"type": "click"}, tile, 3, frame) is None
+
+
+def test_save_and_load_round_trip_the_asymmetric_points(tuner, camera, tmp_path):
+    src, dst_x = PUBLISHED[0]
+    tuner.set_points(src, _dst(*dst_x))
+    path = tuner.save(tmp_path / "config.json")
+    fresh = widgets.PerspectiveTuner({STRAIGHT: REPO / "test_images" / STRAIGHT}, calibration=camera)
+    assert fresh.config.perspective == PerspectiveConfig()
+    fresh.load(path)
+    assert fresh.config.perspective == tuner.config.perspective
+    assert fresh.config.perspective.src_px == src
+    assert fresh.controls["src.tr.x"].value == 690.0 and fresh.controls["dst.right_x"].value == 830.0
+    assert fresh.check == tuner.check
