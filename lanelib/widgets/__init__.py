@@ -20,9 +20,14 @@ frame, the bird's-eye view, colour conversions, the lane mask) is computed once 
 - ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's Canny thresholds, Hough parameters
   and region of interest (``PipelineConfig.hough``), on the raw frame; its picker adds the
   960x540 Udacity P1 images.
+- ``VideoTuner`` (``widgets/video.py``): the tracker's parameters (``PipelineConfig.tracking``:
+  smoothing, recency, hold frames, jump limit) and the lane-width bounds of ``checks`` on a
+  clip; the debug composite of the tracked frame under the frame slider, a strip of the
+  per-frame confidence and offset, and ``play()``, the tuned clip as an inline video.
 
 Each tuner holds its ``PipelineConfig`` in ``tuner.config`` and declares the parts of it that it
-tunes (``parts``: ``("thresholds",)``, ``("perspective",)``, ``("search",)``, ``("hough",)``).
+tunes (``parts``: ``("thresholds",)``, ``("perspective",)``, ``("search",)``, ``("hough",)``,
+``("tracking", "checks")``).
 ``tuner.save(path)`` writes those parts into the JSON that ``python -m lanelib images|video
 --config`` reads, keeping every other part the file already holds (so thresholds tuned in notebook
 03 and the perspective tuned in 04 end up in one file); a new file gets the whole config.
@@ -56,7 +61,9 @@ from .fit import FitTuner
 from .hough import HoughTuner, hough_image_choices
 from .perspective import PerspectiveTuner
 from .thresholds import ThresholdTuner
+from .video import TunedVideo, VideoTuner
 
-__all__ = ["ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "Tuner", "image_choices",
+__all__ = ["ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "VideoTuner", "TunedVideo",
+           "Tuner", "image_choices",
            "video_choices",
            "hough_image_choices", "sheet", "shrink", "straight_line_check", "StraightLineCheck"]

@@ -1,0 +1,390 @@
+"""``VideoTuner``: the lane tracker's parameters on a clip, with the debug composite of the tracked
+frame, a strip of the per-frame confidence and offset, and the tuned video played inline."""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Mapping
+
+import cv2
+import ipywidgets as widgets
+import numpy as np
+
+from .. import io
+from ..camera import Calibration
+from ..config import PipelineConfig
+from ..data import repo_root
+from ..draw import sheet
+from ..errors import InputError
+from ..pipeline import LanePipeline
+from ..result import FrameResult
+from ..tracking import LaneTracker
+from .base import Tuner, fmt, is_video, row, sized, video_choices
+
+DEFAULT_MAX_FRAMES = 125  # 5 s at 25 fps
+STRIP_SIZE_PX = (1200, 160)  # (w, h) of the strip of confidences and offsets
+STRIP_OFFSET_M = 1.0  # the strip's offset axis spans -1 .. +1 m
+# strip colours (RGB)
+_BG, _GRID, _TEXT = (24, 24, 24), (70, 70, 70), (200, 200, 200)
+_LOST, _HELD = (110, 30, 30), (100, 80, 20)
+_LEFT, _RIGHT, _OFFSET, _MARKER = (80, 220, 80), (80, 160, 255), (255, 170, 40), (255, 255, 255)
+
+
+@dataclass(frozen=True)
+class ClipSeries:
+    """Per-frame series of a tracker run: confidences, offset (NaN where no lane), method."""
+
+    left_conf: np.ndarray
+    right_conf: np.ndarray
+    offset_m: np.ndarray
+    found: np.ndarray
+    method: tuple[str, ...]
+
+    @classmethod
+    def of(cls, results: list[FrameResult]) -> "ClipSeries":
+        return cls(np.array([r.left_conf for r in results], float),
+                   np.array([r.right_conf for r in results], float),
+                   np.array([r.offset_m if r.found else math.nan for r in results], float),
+                   np.array([r.found for r in results], bool),
+                   tuple(r.method for r in results))
+
+
+class TunedVideo(widgets.Video):
+    """An ``ipywidgets.Video`` of a written clip whose text form is short and stable (for nbval)."""
+
+    def __init__(self, path: Path, frames: int, **kwargs):
+        super().__init__(**kwargs)
+        self.path = Path(path)
+        self.frames = int(frames)
+
+    def __repr__(self) -> str:
+        return f"TunedVideo({self.path.name!r}, frames={self.frames})"
+
+    def _repr_mimebundle_(self, **kwargs) -> dict:
+        bundle = dict(super()._repr_mimebundle_(**kwargs) or {})
+        bundle["text/plain"] = repr(self)
+        return bundle
+
+
+class VideoTuner(Tuner):
+    """Tune the lane tracker on a clip: its parameters, the tracked frame and the clip at a glance.
+
+    Parameters
+    ----------
+    images : label -> video path for the picker (default: ``video_choices()``, the bundled
+        videos); every item must be a video (an image raises ``InputError``).
+    max_frames : frames tracked from the start of the clip (the ``max_frames`` slider; default
+        125, 5 s at 25 fps). They are decoded once per clip and kept in memory (2.8 MB a
+        1280x720 frame).
+    config, calibration, image, tile_width_px, jpeg_quality : as for ``Tuner``.
+
+    Sliders ``tracking.smooth_frames``, ``tracking.recency_decay``, ``tracking.hold_frames``,
+    ``tracking.max_jump_m`` (``TrackerConfig``), ``checks.width_m`` (``min_width_m`` ..
+    ``max_width_m`` of ``LaneChecks``) and ``max_frames``. A change re-runs ``LaneTracker`` over
+    the cached frames (``results``: one ``FrameResult`` per frame); the frame slider only picks
+    which tracked frame is shown, without re-running it (``runs`` counts the runs). The preview
+    is the debug composite of the tracked frame (its mask is thresholded again for the view: the
+    search saw the same pixels) above a strip of the per-frame confidences and offset
+    (``strip``). ``play()`` writes the tracked frames as an annotated video and returns it as a
+    playable widget. ``save`` writes the ``tracking`` and ``checks`` parts.
+    """
+
+    columns = 1
+    default_tile_width_px = 800
+    parts = ("tracking", "checks")
+    shows = ("tracking", "checks")
+
+    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+                 config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                 image: str | None = None, max_frames: int = DEFAULT_MAX_FRAMES,
+                 tile_width_px: int | None = None, jpeg_quality: int = 80):
+        items = dict(images if images is not None else video_choices())
+        not_videos = [f"{k} ({Path(v).name})" for k, v in items.items() if not is_video(v)]
+        if not_videos:
+            raise InputError(f"VideoTuner: {', '.join(not_videos)} not a video; the tracker needs a "
+                             f"clip: pass video files ({', '.join(io.VIDEO_SUFFIXES)}), e.g. "
+                             "video_choices()")
+        if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
+            raise InputError(f"VideoTuner: max_frames={max_frames!r}; pass a whole number of frames >= 1")
+        self._max_frames = int(max_frames)
+        self._clip: tuple[Path | None, list[np.ndarray], bool] = (None, [], False)  # path, frames, whole clip
+        self._calibration: Calibration | None = None
+        self.results: list[FrameResult] = []
+        self.series: ClipSeries | None = None
+        self.runs = 0
+        self.composite = np.zeros((0, 0, 3), np.uint8)
+        super().__init__(items, config, calibration, image, tile_width_px, jpeg_quality)
+
+    # ---- public ---------------------------------------------------------------------------
+
+    @property
+    def max_frames(self) -> int:
+        """Frames tracked from the start of the clip (what the ``max_frames`` slider says)."""
+        return int(self.controls["max_frames"].value)
+
+    @property
+    def frames(self) -> list[np.ndarray]:
+        """The tracked frames of the picked clip (RGB, decoded once)."""
+        return self._clip[1][:len(self.results)]
+
+    @property
+    def frame(self) -> int:
+        """Index of the tracked frame shown; setting it shows that frame (no new tracker run)."""
+        return int(self.frame_slider.value)
+
+    @frame.setter
+    def frame(self, index: int) -> None:
+        n = len(self.results)
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
+            raise InputError(f"{self.images[self.image]}: frame {index!r} is outside the tracked "
+                             f"frames (0..{n - 1}); pass an index in that range, or raise max_frames")
+        self.frame_slider.value = int(index)
+
+    def strip(self, size_px: tuple[int, int] = STRIP_SIZE_PX) -> np.ndarray:
+        """Return the strip of the run: confidences and offset per frame, the shown frame marked.
+
+        Left (green) and right (blue) confidence on 0..1, the offset (orange) on -1..+1 m around
+        the dashed centre line; frames with no lane are shaded red, held frames amber; the white
+        line marks the frame shown. RGB uint8 of ``size_px`` (w, h).
+        """
+        w, h = size_px
+        s = self.series
+        out = np.full((h, w, 3), _BG, np.uint8)
+        top, bottom = 22, h - 7  # labels above the plot
+        x_of = self._strip_x(w)
+        n = len(s.method)
+        half = max(1, int(np.ceil((x_of(1) - x_of(0)) / 2))) if n > 1 else w // 2
+        for i in range(n):
+            shade = _HELD if s.method[i] == "hold" else (None if s.found[i] else _LOST)
+            if shade is not None:
+                cv2.rectangle(out, (x_of(i) - half, top), (x_of(i) + half, bottom), shade, -1)
+        mid = (top + bottom) // 2
+        for y in (top, bottom):
+            cv2.line(out, (0, y), (w - 1, y), _GRID, 1)
+        for x in range(0, w, 12):
+            cv2.line(out, (x, mid), (min(w - 1, x + 5), mid), _GRID, 1)
+
+        def y_conf(c):
+            return bottom - c * (bottom - top)
+
+        def y_off(o):
+            return mid - np.clip(o / STRIP_OFFSET_M, -1, 1) * (bottom - top) / 2
+
+        xs = np.array([x_of(i) for i in range(n)], float)
+        for values, colour, to_y in ((s.left_conf, _LEFT, y_conf), (s.right_conf, _RIGHT, y_conf),
+                                     (s.offset_m, _OFFSET, y_off)):
+            ok = np.isfinite(values)
+            # one polyline per run of frames with a value
+            breaks = np.flatnonzero(np.diff(ok.astype(int))) + 1
+            for seg in np.split(np.arange(n), breaks):
+                if seg.size and ok[seg[0]]:
+                    pts = np.stack([xs[seg], to_y(values[seg])], 1).round().astype(np.int32)
+                    if len(pts) == 1:
+                        cv2.circle(out, tuple(int(v) for v in pts[0]), 1, colour, -1)
+                    else:
+                        cv2.polylines(out, [pts], False, colour, 1, cv2.LINE_AA)
+        x = x_of(min(self.frame, n - 1))
+        cv2.line(out, (x, 0), (x, h - 1), _MARKER, 1)
+        font, scale = cv2.FONT_HERSHEY_SIMPLEX, 0.4
+        labels = (("confidence 0-1: left", _LEFT), ("right", _RIGHT),
+                  (f"offset -{STRIP_OFFSET_M:g}..+{STRIP_OFFSET_M:g} m", _OFFSET),
+                  ("no lane", (220, 90, 90)), ("held", (230, 190, 60)))
+        tx = 8
+        for text, colour in labels:
+            cv2.putText(out, text, (tx, 15), font, scale, colour, 1, cv2.LINE_AA)
+            tx += cv2.getTextSize(text, font, scale, 1)[0][0] + 14
+        return out
+
+    def strip_x(self, frame: int, width_px: int = STRIP_SIZE_PX[0]) -> int:
+        """Return the x (px) of ``frame`` in a strip ``width_px`` wide."""
+        return self._strip_x(width_px)(frame)
+
+    def preview_sheet(self) -> np.ndarray:
+        """Return the preview: the tracked frame's debug composite above the strip, one width."""
+        views = self.render()
+        name = next(iter(views))
+        top = sheet({name: views[name]}, self.tile_width_px, 1)
+        strip = views["over the clip"]
+        w = top.shape[1]
+        strip = cv2.resize(strip, (w, max(1, round(w * strip.shape[0] / strip.shape[1]))),
+                           interpolation=cv2.INTER_AREA)
+        return np.vstack([top, strip])
+
+    def play(self, path: str | os.PathLike | None = None) -> TunedVideo:
+        """Write the tracked frames annotated with the tuned lane; return the video as a widget.
+
+        The frames and lanes are those of the last run (``results``), drawn as ``python -m
+        lanelib video`` draws them (``LanePipeline.annotate`` on the RAW frame, or on the
+        undistorted one with ``config.draw.video_undistorted``), at the clip's frame rate.
+        ``path`` defaults to ``out/<clip>_tuned.mp4`` in the repository; it is written
+        atomically and never over the clip. Returns an ``ipywidgets.Video`` that plays inline.
+        """
+        clip = self.images[self.image]
+        target = Path(path) if path is not None else repo_root() / "out" / f"{clip.stem}_tuned.mp4"
+        if target.suffix.lower() not in io.VIDEO_SUFFIXES:
+            raise InputError(f"{target}: the output video needs a video suffix "
+                             f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. tuned.mp4")
+        pipe = self.pipeline
+        undistorted = self.config.draw.video_undistorted
+        with io.VideoWriter(target, self._video_info(clip).fps, inputs=[clip]) as writer:
+            for frame, result in zip(self.frames, self.results):
+                writer.write(pipe.annotate(pipe.undistort(frame), result) if undistorted
+                             else pipe.annotate(frame, result, raw=True))
+        return TunedVideo(target, len(self.results), value=target.read_bytes(), format="mp4",
+                          autoplay=False, loop=False, controls=True,
+                          layout=widgets.Layout(max_width="100%"))
+
+    # ---- hooks ----------------------------------------------------------------------------
+
+    def _build(self) -> list[widgets.Widget]:
+        tc, cc = self.config.tracking, self.config.checks
+        c = self._control
+        made = [
+            c("tracking.smooth_frames", widgets.IntSlider(value=tc.smooth_frames, min=1, max=30,
+                                                           description="smooth_frames", **sized(380, 130))),
+            c("tracking.recency_decay", widgets.FloatSlider(value=tc.recency_decay, min=0.05, max=1.0,
+                                                             step=0.05, description="recency_decay",
+                                                             **sized(380, 130))),
+            c("tracking.hold_frames", widgets.IntSlider(value=tc.hold_frames, min=0, max=60,
+                                                         description="hold_frames", **sized(380, 130))),
+            c("tracking.max_jump_m", widgets.FloatSlider(value=tc.max_jump_m, min=0.05, max=2.0, step=0.05,
+                                                          description="max_jump_m", **sized(380, 130))),
+            c("checks.width_m", widgets.FloatRangeSlider(value=(cc.min_width_m, cc.max_width_m), min=1.0,
+                                                          max=6.0, step=0.05, description="width_m",
+                                                          **sized(380, 130))),
+            c("max_frames", widgets.IntSlider(value=self._max_frames, min=1, max=self._max_frames,
+                                              description="max_frames", continuous_update=False,
+                                              **sized(380, 130))),
+        ]
+        for w in made:
+            w.continuous_update = False
+        return [row(*made[:2]), row(*made[2:4]), row(*made[4:])]
+
+    def _sync(self) -> None:
+        tc, cc = self.config.tracking, self.config.checks
+        for k in ("smooth_frames", "recency_decay", "hold_frames", "max_jump_m"):
+            self.controls[f"tracking.{k}"].value = getattr(tc, k)
+        self.controls["checks.width_m"].value = (cc.min_width_m, cc.max_width_m)
+
+    def _apply(self, key: str) -> PipelineConfig:
+        cfg = self.config
+        ctl = self.controls
+        tracking = replace(cfg.tracking,
+                           smooth_frames=int(ctl["tracking.smooth_frames"].value),
+                           recency_decay=round(float(ctl["tracking.recency_decay"].value), 3),
+                           hold_frames=int(ctl["tracking.hold_frames"].value),
+                           max_jump_m=round(float(ctl["tracking.max_jump_m"].value), 3))
+        lo, hi = ctl["checks.width_m"].value
+        checks = replace(cfg.checks, min_width_m=round(float(lo), 3), max_width_m=round(float(hi), 3))
+        return replace(cfg, tracking=tracking, checks=checks)
+
+    def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
+        self._calibration = calibration
+        n = self._video_info(self.images[self.image]).n_frames
+        with self._quiet():  # the clip's length bounds max_frames
+            self.controls["max_frames"].max = max(1, n)
+
+    def _update(self, key: str | None) -> None:
+        """Re-run the tracker over the cached frames when its inputs changed; show the frame."""
+        path = self.images[self.image]
+        frames = self._decode(path, self.max_frames)
+        size = (frames[0].shape[1], frames[0].shape[0])
+        cfg = self.config
+        pkey = (id(self._calibration), size, cfg.perspective, cfg.thresholds, cfg.search, cfg.draw)
+        self.pipeline = self._cached("pipeline", pkey,
+                                     lambda: LanePipeline(cfg, self._calibration, size=size))
+        run_key = (pkey, cfg.tracking, cfg.checks, path, len(frames))
+        self.results = self._cached("run", run_key, lambda: self._track(frames))
+        self.series = self._cached("series", run_key, lambda: ClipSeries.of(self.results))
+        with self._quiet():
+            self.frame_slider.max = len(self.results) - 1
+        self._show_frame()
+
+    def render(self) -> dict[str, np.ndarray | None]:
+        """Return the debug composite of the tracked frame shown and the strip over the clip."""
+        r = self.results[self.frame]
+        return {f"frame {self.frame}: tracked ({r.method})": self.composite,
+                "over the clip": self.strip()}
+
+    def readout(self) -> str:
+        s = self.series
+        if s is None or not self.results:
+            return ""
+        n = len(self.results)
+        fps = self._video_info(self.images[self.image]).fps
+        held = s.method.count("hold")
+        inferred = sum("inferred" in r.reason for r in self.results if r.found)
+        offs = np.abs(s.offset_m[np.isfinite(s.offset_m)])
+        med_off = fmt(float(np.median(offs)), 2, " m") if offs.size else "not found"
+        found_conf = np.concatenate([s.left_conf[s.found], s.right_conf[s.found]])
+        med_conf = fmt(float(np.median(found_conf)), 2) if found_conf.size else "none"
+        i = self.frame
+        r = self.results[i]
+        if r.found:
+            now = (f"lane found, offset {fmt(r.offset_m, 2, ' m', True)}, width "
+                   f"{fmt(r.lane_width_m, 2, ' m')}, confidence {r.left_conf:.2f} / {r.right_conf:.2f}")
+        else:
+            now = "no lane"
+        lines = [f"tracked {n} frames ({n / fps:.1f} s): lane found in {int(s.found.sum())} of {n}, "
+                 f"held {held}, a line inferred in {inferred}",
+                 f"median |offset| {med_off}, median line confidence {med_conf}",
+                 f"frame {i}: {r.method}, {now}"]
+        if r.reason:
+            lines.append(f"  why: {r.reason}")
+        return "\n".join(lines)
+
+    # ---- wiring ---------------------------------------------------------------------------
+
+    def _on_frame(self, change) -> None:
+        # a frame is not a setting: show the tracked frame, the tracker is not re-run
+        if not self._syncing and self.results:
+            self._show_frame()
+            self._refresh()
+
+    def _decode(self, path: Path, n: int) -> list[np.ndarray]:
+        """Return the first ``n`` frames of ``path`` (fewer if the clip is shorter), decoded once.
+
+        One clip is kept: picking another drops the frames of the last. Asking for more frames
+        than were decoded reads the clip again from its start.
+        """
+        held_path, frames, whole = self._clip
+        if held_path != path or (len(frames) < n and not whole):
+            frames = []
+            with io.VideoReader(path) as reader:
+                for frame in reader:
+                    frames.append(frame)
+                    if len(frames) == n:
+                        break
+            whole = len(frames) < n  # the clip ended first
+            self._clip = (path, frames, whole)
+        return frames[:n]
+
+    def _track(self, frames: list[np.ndarray]) -> list[FrameResult]:
+        """Return the tracker's result for each frame, in order, from a fresh tracker."""
+        tracker = LaneTracker(self.pipeline, self.config.tracking, self.config.checks)
+        results = [tracker.update(f) for f in frames]
+        self.runs += 1
+        return results
+
+    def _show_frame(self) -> None:
+        """Make the debug composite of the tracked frame the slider shows."""
+        i = min(self.frame, len(self.results) - 1)
+        raw = self._clip[1][i]
+        self._raw = raw
+        pipe = self.pipeline
+        bird = pipe.birdseye(raw)
+        # the whole view's mask: the band-only search of a tracked frame saw the same pixels
+        result = replace(self.results[i], images={"birdseye": bird, "binary": pipe.binary(bird)})
+        self.composite = pipe.debug_composite(result, raw=raw)
+
+    @staticmethod
+    def _strip_x_of(n: int, w: int):
+        pad = 4
+        if n <= 1:
+            return lambda i: w // 2
+        return lambda i: int(round(pad + i * (w - 1 - 2 * pad) / (n - 1)))
+
+    def _strip_x(self, w: int):
+        return self._strip_x_of(len(self.results), w)
