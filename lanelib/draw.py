@@ -128,6 +128,29 @@ def mask_to_rgb(mask: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(mask, cv2.COLOR_GRAY2RGB)
 
 
+def stacked_masks(masks: Mapping[str, "np.ndarray | None"], names: Sequence[str]) -> np.ndarray:
+    """Return up to three masks stacked as one RGB view: ``names[0]`` red, ``[1]`` green, ``[2]`` blue.
+
+    Where masks overlap the colours mix (red + green = yellow ...); a name whose mask is None
+    (a disabled mask) leaves its channel black. All masks are 0/255 uint8 of one size.
+    """
+    if not 1 <= len(names) <= 3:
+        raise InputError(f"stacked_masks: give one to three mask names, got {len(names)}")
+    missing = [n for n in names if n not in masks]
+    if missing:
+        raise InputError(f"stacked_masks: no mask {missing[0]!r}; masks given: {', '.join(masks)}")
+    shapes = {masks[n].shape for n in names if masks[n] is not None}
+    if len(shapes) != 1:
+        raise InputError("stacked_masks: the masks need one common size (and at least one mask)")
+    shape = shapes.pop()
+    if len(shape) != 2:
+        raise InputError(f"stacked_masks: masks are single-channel (H x W), got shape {shape}")
+    zero = np.zeros(shape, np.uint8)
+    planes = [masks[n] if masks[n] is not None else zero for n in names]
+    planes += [zero] * (3 - len(planes))
+    return cv2.merge([np.ascontiguousarray(p, dtype=np.uint8) for p in planes])
+
+
 def search_view(binary: np.ndarray, search, config: DrawConfig = DrawConfig(),
                 prior_margin_px: int = 60) -> np.ndarray:
     """Return the bird's-eye mask with the line pixels coloured, windows (or bands) and fits drawn."""

@@ -50,6 +50,18 @@ class SearchConfig:
     min_span_fraction : pixels must span this share of the image height for a 2nd-order fit;
         below it the line is fitted as a straight line (a = 0).
     min_found_span_fraction : below this share of the height the line is "not found".
+    trim_outliers_pct : 0 (off), or the share (%) of a line's pixels kept for its fit: after a
+        first fit, the pixels with the smallest |x residual| (e.g. 95: the nearest 95 %), then a
+        refit on them (``fit_line``).
+    window_histogram : False: a window recentres the next one on the mean x of its pixels;
+        True: on the peak of the column histogram of its pixels (the fullest column).
+    centre_first : False: a window takes all its pixels; True: it looks at the lane-centre side
+        first: its pixels are cut into clusters of columns (split at empty columns) and it takes
+        the cluster nearest the lane centre that holds ``minpix`` pixels (all its pixels when
+        none does), so a verge or kerb beyond the line does not pull the window out.
+    grow_margin_px : 0 (off), or px added to a window's half width for each empty window (fewer
+        than ``minpix`` pixels) in a row below it; the margin is back to ``margin_px`` after a
+        window with pixels. A line lost over a gap (a missing dash, a shadow) is caught again.
     """
 
     n_windows: int = 9
@@ -60,6 +72,16 @@ class SearchConfig:
     min_line_pixels: int = 150
     min_span_fraction: float = 0.3
     min_found_span_fraction: float = 0.08
+    trim_outliers_pct: float = 0.0
+    window_histogram: bool = False
+    centre_first: bool = False
+    grow_margin_px: int = 0
+
+    def __post_init__(self):
+        if not 0 <= self.trim_outliers_pct <= 100:
+            raise ConfigError(f"search: trim_outliers_pct {self.trim_outliers_pct} must lie in 0-100 (0: off)")
+        if self.grow_margin_px < 0:
+            raise ConfigError(f"search: grow_margin_px {self.grow_margin_px} must be 0 (off) or more")
 
 
 @dataclass(frozen=True)
@@ -169,6 +191,9 @@ class LaneSearch:
     right_pixels: tuple[np.ndarray, np.ndarray] = field(repr=False)
     windows: tuple[Window, ...] = ()
     bases_px: tuple[float | None, float | None] = (None, None)
+    # (peak - mean) / mean of the histogram at each base (``base_peak_confidence``); None where
+    # the bases were given or not found
+    base_confidence: tuple[float | None, float | None] = (None, None)
 
 
 @dataclass(frozen=True)
@@ -209,16 +234,44 @@ def find_bases(hist: np.ndarray, car_x: float | None = None) -> tuple[float | No
     return (None if left is None else float(left), None if right is None else float(right))
 
 
+def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
+    """Return how much the histogram's peak at column ``x`` stands out: (peak - mean) / mean.
+
+    0 for a flat histogram, large for one strong line on an empty view; None for no base, 0.0
+    for an empty histogram.
+    """
+    if x is None:
+        return None
+    mean = float(np.mean(hist)) if len(hist) else 0.0
+    if mean <= 0:
+        return 0.0
+    return (float(hist[int(x)]) - mean) / mean
+
+
+def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
+    """Return the indices into ``xs`` of each run of occupied columns (split at empty columns)."""
+    order = np.argsort(xs, kind="stable")
+    sx = xs[order]
+    cuts = np.nonzero(np.diff(sx) > 1)[0] + 1
+    return np.split(order, cuts)
+
+
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     bases: tuple[float | None, float | None] | None = None,
                     car_x: float | None = None) -> LaneSearch:
     """Return the lane pixels found by sliding windows from the histogram bases, and their fits."""
     h = binary.shape[0]
     ys, xs = lane_pixels(binary)
+    confidence: tuple[float | None, float | None] = (None, None)
     if bases is None:
-        bases = find_bases(histogram(binary, config.histogram_fraction), car_x)
+        hist = histogram(binary, config.histogram_fraction)
+        bases = find_bases(hist, car_x)
+        confidence = tuple(base_peak_confidence(hist, b) for b in bases)
         if None in bases:  # a dashed line may have no dash in the lower part: look at all rows
-            whole = find_bases(histogram(binary, 1.0), car_x)
+            whole_hist = histogram(binary, 1.0)
+            whole = find_bases(whole_hist, car_x)
+            confidence = tuple(c if b is not None else base_peak_confidence(whole_hist, w)
+                               for b, c, w in zip(bases, confidence, whole))
             bases = tuple(b if b is not None else w for b, w in zip(bases, whole))
     win_h = h / config.n_windows
     windows: list[Window] = []
@@ -226,6 +279,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
     for side, base in zip(("left", "right"), bases):
         chosen = []
         x = base
+        margin = config.margin_px
+        toward_centre = 1 if side == "left" else -1  # the lane centre lies right of the left line
         for i in range(config.n_windows):
             if x is None:
                 break
@@ -233,16 +288,30 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
             y_low = int(round(h - (i + 1) * win_h))
             lo, hi = np.searchsorted(ys, [y_low, y_high])
             row_xs = xs[lo:hi]
-            inside = np.nonzero((row_xs >= x - config.margin_px) & (row_xs < x + config.margin_px))[0]
-            windows.append(Window(side, int(x - config.margin_px), int(x + config.margin_px), y_low, y_high))
+            inside = np.nonzero((row_xs >= x - margin) & (row_xs < x + margin))[0]
+            windows.append(Window(side, int(x - margin), int(x + margin), y_low, y_high))
+            if config.centre_first and len(inside) >= config.minpix:
+                full = [c for c in _window_clusters(row_xs[inside]) if len(c) >= config.minpix]
+                if full:
+                    near = max(full, key=lambda c: toward_centre * float(row_xs[inside[c[0]]]))
+                    inside = np.sort(inside[near])
             chosen.append(inside + lo)
             if len(inside) >= config.minpix:
-                x = float(row_xs[inside].mean())
+                if config.window_histogram:
+                    wx = row_xs[inside]
+                    x0 = int(wx.min())
+                    x = float(x0 + int(np.argmax(np.bincount(wx - x0))))
+                else:
+                    x = float(row_xs[inside].mean())
+                margin = config.margin_px
+            elif config.grow_margin_px:
+                margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
     left = fit_line(*picked["left"], h, config, missing="no lane pixels left of the car")
     right = fit_line(*picked["right"], h, config, missing="no lane pixels right of the car")
-    return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases)
+    return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
+                      confidence)
 
 
 def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
@@ -279,6 +348,14 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
         return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height")
     degree = 1 if span < config.min_span_fraction * height_px else 2
     a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    if 0 < config.trim_outliers_pct < 100:
+        keep = max(degree + 1, int(round(n * config.trim_outliers_pct / 100)))
+        if keep < n:
+            residual = np.abs(xs - np.polyval((a, b, c), ys))
+            idx = np.sort(np.argpartition(residual, keep - 1)[:keep])
+            ys, xs, n = ys[idx], xs[idx], keep
+            span = float(ys.max() - ys.min())
+            a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n))
 
 

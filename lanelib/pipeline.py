@@ -53,6 +53,7 @@ class LanePipeline:
         self.birdseye_to_raw = self.raw_to_birdseye.inverse
         self._birdseye_maps = self.raw_to_birdseye.remap_maps(self.size)
         self._context_px = thresholds.context_px(config.thresholds)
+        self._clahe = thresholds.make_clahe(config.thresholds, self.size)  # None when off
         self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
         w, h = self.size
@@ -71,7 +72,7 @@ class LanePipeline:
 
     def binary(self, birdseye: np.ndarray) -> np.ndarray:
         """Return the combined 0/255 lane-pixel mask of a bird's-eye image."""
-        return thresholds.combine(birdseye, self.config.thresholds)
+        return thresholds.combine(birdseye, self.config.thresholds, clahe=self._clahe)
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                bases: tuple[float, float] | None = None) -> LaneSearch:
@@ -107,13 +108,16 @@ class LanePipeline:
         ``BAND_STRIPS`` horizontal strips; in each, the pieces of band, grown by the border
         ``thresholds.context_px`` asks for, are laid side by side (in x order, so a piece cut by
         the image's edge keeps that edge) and remapped and thresholded in one call each. On a
-        tracked video frame that is about 40 % of the bird's-eye view.
+        tracked video frame that is about 40 % of the bird's-eye view. With
+        ``thresholds.clahe`` on (CLAHE depends on the whole view) the whole view is thresholded
+        and the bands are cut from it.
         """
         self.undistorter.check(raw)
         w, h = self.size
         margin = self.config.search.prior_margin_px
         cx, cy = self._context_px
         m1, m2 = self._birdseye_maps
+        whole = self.binary(self.birdseye(raw)) if self._clahe is not None else None
         mask = np.zeros((h, w), np.uint8)
         edges = np.linspace(0, h, BAND_STRIPS + 1).round().astype(int)
         for y0, y1 in zip(edges[:-1], edges[1:]):
@@ -133,6 +137,10 @@ class LanePipeline:
                 else:
                     pieces.append([lo, hi])
             if not pieces:
+                continue
+            if whole is not None:
+                for lo, hi in pieces:
+                    mask[y0:y1, lo:hi] = whole[y0:y1, lo:hi]
                 continue
             b0, b1 = max(0, y0 - cy), min(h, y1 + cy)
             boxes = [(max(0, lo - cx), min(w, hi + cx)) for lo, hi in pieces]

@@ -40,30 +40,47 @@ def _check_channel(space: str, channel: str, where: str) -> None:
                           f"use one of {', '.join(SPACES[space][1])}")
 
 
+def _check_open(open_px: int, where: str) -> None:
+    if open_px < 0:
+        raise ConfigError(f"{where}: open_px {open_px} must be 0 (off) or more")
+
+
 @dataclass(frozen=True)
 class ChannelMask:
-    """Pixels whose value in one channel lies in [low, high] (channel units, 0-255; hue 0-179)."""
+    """Pixels whose value in one channel lies in [low, high] (channel units, 0-255; hue 0-179).
+
+    ``open_px`` opens this mask alone with a square kernel of that size (px; 0: off), which drops
+    specks smaller than it before the rule combines the masks.
+    """
 
     space: str = "hls"
     channel: str = "s"
     low: int = 170
     high: int = 255
     enabled: bool = True
+    open_px: int = 0
 
     def __post_init__(self):
         _check_channel(self.space, self.channel, "ChannelMask")
+        _check_open(self.open_px, "ChannelMask")
 
 
 @dataclass(frozen=True)
 class ColorRange:
-    """Pixels inside a box in one colour space (``cv2.inRange``), bounds per channel."""
+    """Pixels inside a box in one colour space (``cv2.inRange``), bounds per channel.
+
+    ``open_px`` opens this mask alone with a square kernel of that size (px; 0: off), e.g. to
+    drop yellow specks (leaves, sand) smaller than a line before the rule combines the masks.
+    """
 
     space: str = "hsv"
     low: tuple[int, int, int] = (15, 80, 120)
     high: tuple[int, int, int] = (35, 255, 255)
     enabled: bool = True
+    open_px: int = 0
 
     def __post_init__(self):
+        _check_open(self.open_px, "ColorRange")
         if self.space == "gray" or self.space not in SPACES:
             raise ConfigError(f"ColorRange: colour space {self.space!r} must be one of "
                               "rgb, hls, hsv, luv, lab")
@@ -132,6 +149,12 @@ class ThresholdConfig:
 
     ``close_px`` closes gaps in the combined mask with a square kernel of that size (0: off);
     ``open_px`` removes specks smaller than that (0: off).
+
+    ``clahe`` (off by default) equalises the image's lightness before any mask looks at it:
+    CLAHE (``cv2.createCLAHE``) on the L channel of LAB, with clip limit ``clahe_clip_limit``
+    and tiles of about ``clahe_tile_px`` px square, then back to RGB, so every mask sees the
+    equalised image. CLAHE depends on the whole image (its tiles), so the video's band path
+    thresholds the whole view when it is on (``LanePipeline.band_binary``).
     """
 
     yellow: ColorRange = ColorRange("hsv", (15, 80, 120), (35, 255, 255))
@@ -146,14 +169,54 @@ class ThresholdConfig:
     rule: str = "yellow | (white & line_tophat)"
     close_px: int = 0
     open_px: int = 0
+    clahe: bool = False
+    clahe_clip_limit: float = 2.0
+    clahe_tile_px: int = 160
 
     def __post_init__(self):
         compile_rule(self.rule, mask_names(self))
+        if self.clahe_clip_limit <= 0:
+            raise ConfigError(f"thresholds: clahe_clip_limit {self.clahe_clip_limit} must be positive")
+        if self.clahe_tile_px < 8:
+            raise ConfigError(f"thresholds: clahe_tile_px {self.clahe_tile_px} must be 8 or more")
 
 
 def mask_names(config: ThresholdConfig) -> tuple[str, ...]:
     """Return the names of the masks a ThresholdConfig holds (the names a rule may use)."""
-    return tuple(f.name for f in fields(config) if f.name not in ("rule", "close_px", "open_px"))
+    return tuple(f.name for f in fields(config) if isinstance(getattr(config, f.name), MASK_TYPES))
+
+
+MASK_TYPES = (ChannelMask, ColorRange, SobelMask, TopHatMask)
+
+
+def make_clahe(config: ThresholdConfig, size: tuple[int, int]) -> cv2.CLAHE | None:
+    """Return the CLAHE of ``config`` for images of ``size`` (w, h) px, or None when it is off.
+
+    The tile grid is the image cut into tiles of about ``clahe_tile_px`` px (at least one each
+    way). Make it once per configuration and image size (``LanePipeline`` does) and pass it to
+    ``combine`` and ``masks``.
+    """
+    if not config.clahe:
+        return None
+    w, h = size
+    grid = (max(1, round(w / config.clahe_tile_px)), max(1, round(h / config.clahe_tile_px)))
+    return cv2.createCLAHE(clipLimit=float(config.clahe_clip_limit), tileGridSize=grid)
+
+
+def equalize_lightness(rgb: np.ndarray, clahe: cv2.CLAHE) -> np.ndarray:
+    """Return ``rgb`` with ``clahe`` applied to its lightness (L of LAB), as RGB uint8."""
+    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2Lab)
+    lab[..., 0] = clahe.apply(np.ascontiguousarray(lab[..., 0]))
+    return cv2.cvtColor(lab, cv2.COLOR_Lab2RGB)
+
+
+def _prepared(rgb: np.ndarray, config: ThresholdConfig, clahe: cv2.CLAHE | None) -> np.ndarray:
+    """Return the image the masks of ``config`` look at: ``rgb``, or its equalised lightness."""
+    if not config.clahe:
+        return rgb
+    if clahe is None:
+        clahe = make_clahe(config, (rgb.shape[1], rgb.shape[0]))
+    return equalize_lightness(rgb, clahe)
 
 
 # --------------------------------------------------------------------------- channels
@@ -195,13 +258,21 @@ def in_range(values: np.ndarray, low: float, high: float) -> np.ndarray:
 def channel_mask(rgb: np.ndarray | Channels, spec: ChannelMask) -> np.ndarray:
     """Return the 0/255 mask of ``spec`` on an RGB image."""
     ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
-    return in_range(ch.channel(spec.space, spec.channel), spec.low, spec.high)
+    return _open(in_range(ch.channel(spec.space, spec.channel), spec.low, spec.high), spec.open_px)
 
 
 def color_range_mask(rgb: np.ndarray | Channels, spec: ColorRange) -> np.ndarray:
     """Return the 0/255 mask of pixels inside the colour box ``spec``."""
     ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
-    return cv2.inRange(ch.space(spec.space), np.array(spec.low, np.uint8), np.array(spec.high, np.uint8))
+    m = cv2.inRange(ch.space(spec.space), np.array(spec.low, np.uint8), np.array(spec.high, np.uint8))
+    return _open(m, spec.open_px)
+
+
+def _open(m: np.ndarray, size: int) -> np.ndarray:
+    """Return mask ``m`` opened with a square kernel of ``size`` px (unchanged for size 0 or 1)."""
+    if size <= 1:
+        return m
+    return cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((size, size), np.uint8))
 
 
 def _sobel_step_scale(kernel_px: int) -> float:
@@ -320,14 +391,18 @@ def rule_masks(config: ThresholdConfig) -> tuple[str, ...]:
 def mask_context_px(spec) -> tuple[int, int]:
     """Return the border (x, y) in px around a pixel that one mask record looks at.
 
-    A colour mask looks at the pixel alone (0, 0); a Sobel kernel of size k at max(1, k // 2)
-    pixels each way; the top-hat's opening (erosion, then dilation) at 2 * (width_px // 2) across.
+    A colour mask looks at the pixel alone (0, 0), or with its own ``open_px`` of size k
+    (erosion, then dilation) at 2 * (k // 2) each way; a Sobel kernel of size k at
+    max(1, k // 2) pixels each way; the top-hat's opening at 2 * (width_px // 2) across.
     """
     if isinstance(spec, SobelMask):
         r = max(1, spec.kernel_px // 2)
         return r, r
     if isinstance(spec, TopHatMask):
         return 2 * (spec.width_px // 2), 0
+    if isinstance(spec, (ChannelMask, ColorRange)) and spec.open_px > 1:
+        r = 2 * (spec.open_px // 2)
+        return r, r
     return 0, 0
 
 
@@ -350,21 +425,27 @@ def context_px(config: ThresholdConfig) -> tuple[int, int]:
 
 
 def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
-          names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
-    """Return the 0/255 mask of each enabled mask (all of them, or those in ``names``)."""
-    ch = Channels(rgb)
+          names: tuple[str, ...] | None = None, clahe: cv2.CLAHE | None = None) -> dict[str, np.ndarray]:
+    """Return the 0/255 mask of each enabled mask (all of them, or those in ``names``).
+
+    With ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made
+    once by ``make_clahe`` (else one is made for this image).
+    """
+    ch = Channels(_prepared(rgb, config, clahe))
     wanted = names if names is not None else mask_names(config)
     return {n: mask(ch, getattr(config, n)) for n in wanted if getattr(config, n).enabled}
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
-            computed: dict[str, np.ndarray] | None = None) -> np.ndarray:
+            computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None) -> np.ndarray:
     """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule``.
 
     Only masks that the rule names and that are enabled are computed; ``computed`` may pass
-    masks already made (e.g. by ``masks``) so the tuner does not compute them twice.
+    masks already made (e.g. by ``masks``) so the tuner does not compute them twice. With
+    ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
+    ``make_clahe`` (else one is made for this image).
     """
-    ch = Channels(rgb)
+    ch = Channels(_prepared(rgb, config, clahe))
     cache = dict(computed or {})
 
     def get(name: str) -> np.ndarray | None:

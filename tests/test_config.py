@@ -29,6 +29,30 @@ def test_changed_config_round_trips(tmp_path):
     assert isinstance(back.perspective.src_px[0], tuple)
 
 
+def test_the_seeds_switches_round_trip(tmp_path):
+    import dataclasses
+
+    from lanelib.thresholds import ColorRange
+
+    cfg = PipelineConfig()
+    cfg = dataclasses.replace(
+        cfg, search=SearchConfig(trim_outliers_pct=95.0, window_histogram=True, centre_first=True,
+                                 grow_margin_px=30),
+        thresholds=dataclasses.replace(cfg.thresholds, clahe=True, clahe_clip_limit=3.0, clahe_tile_px=100,
+                                       yellow=ColorRange("hsv", (15, 80, 120), (35, 255, 255), open_px=3),
+                                       s_channel=ChannelMask("hls", "s", 170, 255, open_px=5)))
+    back = load_config(save_config(cfg, tmp_path / "c.json"))
+    assert back == cfg
+    saved = json.loads((tmp_path / "c.json").read_text())
+    assert saved["search"]["trim_outliers_pct"] == 95.0 and saved["search"]["grow_margin_px"] == 30
+    assert saved["thresholds"]["clahe"] is True and saved["thresholds"]["yellow"]["open_px"] == 3
+    # the defaults: every switch off
+    d = to_dict(PipelineConfig())
+    assert (d["search"]["trim_outliers_pct"], d["search"]["window_histogram"], d["search"]["centre_first"],
+            d["search"]["grow_margin_px"]) == (0.0, False, False, 0)
+    assert d["thresholds"]["clahe"] is False and d["thresholds"]["white"]["open_px"] == 0
+
+
 def test_partial_file_keeps_defaults(tmp_path):
     p = tmp_path / "c.json"
     p.write_text(json.dumps({"search": {"margin_px": 50}, "thresholds": {"white": {"low": [0, 190, 0]}}}))

@@ -199,3 +199,27 @@ def test_the_overlay_wants_a_transform_not_a_matrix():
         draw.lane_overlay(textured(64, 36, 1), (0, 0, 10.0), (0, 0, 50.0), np.eye(3))
     plain = draw.lane_overlay(textured(64, 36, 1), (0, 0, 10.0), (0, 0, 50.0), None)  # the bird's-eye view
     assert plain[20, 30].tolist() != textured(64, 36, 1)[20, 30].tolist()
+
+
+def test_stacked_masks_put_each_mask_in_its_own_colour_channel():
+    a = np.zeros((20, 30), np.uint8)
+    a[:, 5:10] = 255
+    b = np.zeros((20, 30), np.uint8)
+    b[:, 8:15] = 255
+    view = draw.stacked_masks({"a": a, "b": b, "c": None}, ("a", "b"))
+    assert view.shape == (20, 30, 3) and view.dtype == np.uint8
+    assert np.array_equal(view[..., 0], a) and np.array_equal(view[..., 1], b) and not view[..., 2].any()
+    assert tuple(view[0, 6]) == (255, 0, 0) and tuple(view[0, 12]) == (0, 255, 0)
+    assert tuple(view[0, 9]) == (255, 255, 0)  # both: yellow
+    three = draw.stacked_masks({"a": a, "b": b, "c": None}, ("b", "c", "a"))
+    assert np.array_equal(three[..., 0], b) and not three[..., 1].any() and np.array_equal(three[..., 2], a)
+
+
+def test_stacked_masks_say_what_is_wrong():
+    a = np.zeros((20, 30), np.uint8)
+    with pytest.raises(InputError, match="one to three"):
+        draw.stacked_masks({"a": a}, ("a", "a", "a", "a"))
+    with pytest.raises(InputError, match="no mask 'z'"):
+        draw.stacked_masks({"a": a}, ("a", "z"))
+    with pytest.raises(InputError, match="common size"):
+        draw.stacked_masks({"a": a, "b": np.zeros((5, 5), np.uint8)}, ("a", "b"))

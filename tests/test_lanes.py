@@ -144,3 +144,103 @@ def test_a_line_with_no_pixels_in_the_lower_half_is_searched_from_the_whole_hist
     search = lanes.sliding_windows(m)
     assert search.bases_px[1] == pytest.approx(960, abs=12)
     assert search.right.found and search.right.x_at(200) == pytest.approx(960, abs=2)
+
+
+# --------------------------------------------------------------------------- the seeds' switches
+
+def test_outlier_trimming_recovers_a_parabola_that_the_plain_fit_misses():
+    truth = (2e-4, -0.3, 500.0)
+    ys = np.repeat(np.arange(H), 2).astype(np.float64)
+    xs = np.polyval(truth, ys)
+    xs[::20] += 250.0  # 5 % far outliers, all on one side
+    plain = lanes.fit_line(ys, xs, H)
+    trimmed = lanes.fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=95))
+    assert abs(plain.coeffs_px[2] - truth[2]) > 5  # the plain fit is pulled 12 px aside
+    np.testing.assert_allclose(trimmed.coeffs_px, truth, rtol=1e-6, atol=1e-9)
+    assert trimmed.n_pixels == len(ys) - len(ys[::20]) and trimmed.scatter_px < 1e-6
+    # 0 and 100 keep every pixel: the plain fit
+    for pct in (0.0, 100.0):
+        assert lanes.fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=pct)) == plain
+
+
+def test_window_histogram_recentres_on_the_line_not_on_clutter_beside_it():
+    m = np.zeros((H, W), np.uint8)
+    m[:, 398:402] = 255          # a thin line
+    m[::4, 440:471] = 255        # sparse clutter beside it, more pixels than the line
+    m[:, 992:1008] = 255
+
+    def centres(cfg):
+        search = lanes.sliding_windows(m, cfg, bases=(400.0, 1000.0))
+        return [(w.x_low + w.x_high) // 2 for w in search.windows if w.side == "left"]
+
+    assert centres(SearchConfig())[1:] == [436] * 8                     # the mean x of line + clutter
+    assert centres(SearchConfig(window_histogram=True))[1:] == [398] * 8  # the fullest column
+
+
+def gap_mask():
+    """A slanted left line with 3 empty windows (rows 240-479), a kerb beyond it up the road."""
+    m = np.zeros((H, W), np.uint8)
+    for y in range(H):
+        if not 240 <= y < 480:
+            x = int(round(300 + 0.6 * (H - 1 - y)))
+            m[y, x - 8:x + 8] = 255
+    m[0:240, 196:206] = 255   # a kerb left of the line (away from the lane centre)
+    m[:, 992:1008] = 255      # the right line
+    return m
+
+
+def test_centre_first_and_a_growing_margin_recover_a_line_after_a_gap():
+    m = gap_mask()
+
+    def upper(cfg):  # the left line's pixels found above the gap
+        search = lanes.sliding_windows(m, cfg, bases=(300.0, 1000.0))
+        ys, xs = search.left_pixels
+        return search, ys[ys < 240], xs[ys < 240]
+
+    search, ys, xs = upper(SearchConfig())
+    assert len(ys) == 0  # the plain windows stay where the line left off and lose it
+    search, ys, xs = upper(SearchConfig(grow_margin_px=60))
+    assert np.any(xs < 250)  # a grown window alone takes the kerb with the line
+    search, ys, xs = upper(SearchConfig(centre_first=True))
+    assert len(ys) == 0
+    search, ys, xs = upper(SearchConfig(centre_first=True, grow_margin_px=60))
+    assert len(ys) > 2000 and np.all(np.abs(xs - (300 + 0.6 * (H - 1 - ys))) <= 9)
+    widths = [w.x_high - w.x_low for w in search.windows if w.side == "left"]
+    assert widths == [160, 160, 160, 160, 280, 400, 520, 160, 160]  # grows per empty window, then resets
+
+
+def test_centre_first_takes_the_cluster_nearest_the_lane_centre():
+    m = np.zeros((H, W), np.uint8)
+    m[:, 290:300] = 255        # left line
+    m[:, 240:250] = 255        # a kerb further out, inside the same windows
+    m[:, 980:990] = 255        # right line
+    m[:, 1030:1040] = 255      # a kerb further out
+    search = lanes.sliding_windows(m, SearchConfig(centre_first=True), bases=(280.0, 1000.0))
+    assert set(np.unique(search.left_pixels[1])) == set(range(290, 300))
+    assert set(np.unique(search.right_pixels[1])) == set(range(980, 990))
+    plain = lanes.sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
+    assert set(np.unique(plain.left_pixels[1])) == set(range(240, 250)) | set(range(290, 300))
+
+
+def test_base_peak_confidence():
+    hist = np.zeros(10, np.int32)
+    hist[2] = 10
+    assert lanes.base_peak_confidence(hist, 2.0) == pytest.approx(9.0)  # mean 1: (10 - 1) / 1
+    assert lanes.base_peak_confidence(hist, 5.0) == pytest.approx(-1.0)
+    assert lanes.base_peak_confidence(hist, None) is None
+    assert lanes.base_peak_confidence(np.zeros(10), 3.0) == 0.0
+    m = lane_mask((0, 0, 300.0), (0, 0, 1000.0), thickness=1)
+    search = lanes.sliding_windows(m)
+    # two one-pixel lines of 360 rows in the lower half: mean 720 / 1280
+    expected = (360 - 720 / W) / (720 / W)
+    assert search.base_confidence == pytest.approx((expected, expected))
+    assert lanes.sliding_windows(m, bases=(300.0, 1000.0)).base_confidence == (None, None)
+
+
+def test_bad_search_switches():
+    from lanelib.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="trim_outliers_pct"):
+        SearchConfig(trim_outliers_pct=120)
+    with pytest.raises(ConfigError, match="grow_margin_px"):
+        SearchConfig(grow_margin_px=-5)

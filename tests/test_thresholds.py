@@ -111,3 +111,80 @@ def test_bad_mask_parameters():
         th.ChannelMask("xyz", "x")
     with pytest.raises(ConfigError, match="kernel_px"):
         th.SobelMask(kernel_px=4)
+
+
+# --------------------------------------------------------------------------- the seeds' switches
+
+def test_per_mask_opening_removes_a_speck_and_keeps_the_line(road):
+    img = road.copy()
+    img[60, 50] = YELLOW  # a one-pixel yellow speck beside the yellow line
+    plain = th.ColorRange("hsv", (15, 80, 120), (35, 255, 255))
+    assert cols(th.color_range_mask(img, plain)) == {50} | set(range(100, 120))
+    opened = th.ColorRange("hsv", (15, 80, 120), (35, 255, 255), open_px=3)
+    m = th.color_range_mask(img, opened)
+    assert cols(m) == set(range(100, 120)) and np.all(m[:, 100:120] == 255)
+    # through the rule: only the yellow mask is opened
+    cfg = th.ThresholdConfig(yellow=opened, rule="yellow | white")
+    assert cols(th.combine(img, cfg)) == set(range(100, 120)) | set(range(300, 320))
+    # a channel mask opens the same way
+    s_plain, s_open = th.ChannelMask("hls", "s", 170, 255), th.ChannelMask("hls", "s", 170, 255, open_px=3)
+    assert 50 in cols(th.channel_mask(img, s_plain)) and 50 not in cols(th.channel_mask(img, s_open))
+
+
+def test_a_per_mask_opening_widens_the_context():
+    assert th.mask_context_px(th.ColorRange(open_px=0)) == (0, 0)
+    assert th.mask_context_px(th.ColorRange(open_px=1)) == (0, 0)
+    assert th.mask_context_px(th.ColorRange(open_px=5)) == (4, 4)
+    assert th.mask_context_px(th.ChannelMask(open_px=3)) == (2, 2)
+    cfg = th.ThresholdConfig(yellow=th.ColorRange("hsv", (15, 80, 120), (35, 255, 255), open_px=7),
+                             rule="yellow | white")
+    assert th.context_px(cfg) == (6, 6)
+    assert th.context_px(th.ThresholdConfig(rule="yellow | white")) == (0, 0)
+
+
+def test_clahe_raises_contrast_on_a_low_contrast_frame():
+    rng = np.random.default_rng(0)
+    grey = rng.integers(100, 116, (240, 320)).astype(np.uint8)      # road: grey 100-115
+    grey[:, 150:170] = rng.integers(120, 131, (240, 20))              # a faint line: 120-130
+    img = np.dstack([grey] * 3)
+    cfg = th.ThresholdConfig(clahe=True, clahe_clip_limit=4.0, clahe_tile_px=80)
+    clahe = th.make_clahe(cfg, (320, 240))
+    assert clahe.getTilesGridSize() == (4, 3) and clahe.getClipLimit() == 4.0
+    out = th.equalize_lightness(img, clahe)
+
+    def contrast(a):
+        a = a[..., 0].astype(float)
+        return a[:, 150:170].mean() - np.delete(a, range(150, 170), axis=1).mean()
+
+    assert contrast(img) == pytest.approx(17.5, abs=0.5)
+    assert contrast(out) > 2.5 * contrast(img)
+    assert np.allclose(out[..., 0], out[..., 1], atol=2)  # still grey: only the lightness changed
+    # the masks see the equalised image (the CLAHE passed, or one made for the image)
+    white = th.ColorRange("rgb", (140, 140, 140), (255, 255, 255))
+    cfg = th.ThresholdConfig(clahe=True, clahe_clip_limit=4.0, clahe_tile_px=80, white=white, rule="white")
+    expected = th.color_range_mask(out, white)
+    assert expected.any() and not th.color_range_mask(img, white).any()
+    assert np.array_equal(th.masks(img, cfg, ("white",), clahe)["white"], expected)
+    assert np.array_equal(th.combine(img, cfg), expected)
+    assert not th.combine(img, th.ThresholdConfig(white=white, rule="white")).any()
+
+
+def test_clahe_is_off_by_default_and_makes_no_object():
+    assert th.make_clahe(th.ThresholdConfig(), (1280, 720)) is None
+    assert th.make_clahe(th.ThresholdConfig(clahe=True), (1280, 720)).getTilesGridSize() == (8, 4)
+
+
+def test_bad_switch_parameters():
+    with pytest.raises(ConfigError, match="open_px"):
+        th.ColorRange(open_px=-1)
+    with pytest.raises(ConfigError, match="open_px"):
+        th.ChannelMask(open_px=-2)
+    with pytest.raises(ConfigError, match="clahe_clip_limit"):
+        th.ThresholdConfig(clahe_clip_limit=0.0)
+    with pytest.raises(ConfigError, match="clahe_tile_px"):
+        th.ThresholdConfig(clahe_tile_px=4)
+
+
+def test_the_switches_are_not_mask_names():
+    assert th.mask_names(th.ThresholdConfig()) == ("yellow", "white", "lab_b", "s_channel", "line_tophat",
+                                                   "sobel_x", "sobel_y", "sobel_mag", "sobel_dir")

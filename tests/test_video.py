@@ -289,6 +289,15 @@ BAND_CONFIGS = {
                                     "sobel_mag": {"enabled": True, "kernel_px": 5},
                                     "sobel_y": {"enabled": True, "kernel_px": 1},
                                     "line_tophat": {"width_px": 40}}},
+    "per-mask openings": {"thresholds": {"rule": "yellow | (white & line_tophat) | s_channel",
+                                         "yellow": {"open_px": 5}, "white": {"open_px": 3},
+                                         "s_channel": {"open_px": 4}}},
+}
+# configs whose masks depend on the whole view (CLAHE's tiles): the band path thresholds the
+# whole view and cuts the bands from it, so it is exact, but a crop grown by context_px is not
+BAND_WHOLE_VIEW_CONFIGS = {
+    "clahe": {"thresholds": {"clahe": True, "clahe_clip_limit": 3.0}},
+    "clahe and openings": {"thresholds": {"clahe": True, "yellow": {"open_px": 3}, "open_px": 3}},
 }
 PRIORS = {  # (left, right) bird's-eye fits: ordinary, curved, at the image's edges, one line only
     "ordinary": ((0.0, 0.0, 320.0), (0.0, 0.0, 960.0)),
@@ -299,12 +308,12 @@ PRIORS = {  # (left, right) bird's-eye fits: ordinary, curved, at the image's ed
 }
 
 
-@pytest.mark.parametrize("config_name", BAND_CONFIGS)
+@pytest.mark.parametrize("config_name", [*BAND_CONFIGS, *BAND_WHOLE_VIEW_CONFIGS])
 def test_band_detection_sees_the_same_pixels_as_the_full_view(config_name):
     from lanelib.config import from_dict
     from lanelib.lanes import LineFit
 
-    cfg = from_dict(PipelineConfig, BAND_CONFIGS[config_name])
+    cfg = from_dict(PipelineConfig, {**BAND_CONFIGS, **BAND_WHOLE_VIEW_CONFIGS}[config_name])
     pipe = LanePipeline(cfg)
     raw = textured_frame(len(config_name))
     for name, (left, right) in PRIORS.items():
