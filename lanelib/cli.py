@@ -18,6 +18,7 @@ from pathlib import Path
 from . import bench, data, evaluate, hough, runs, synth
 from .camera import Calibration, calibrate, parse_pattern
 from .config import PipelineConfig, load_config_or_preset
+from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
 from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
 from .pipeline import LanePipeline
@@ -127,7 +128,8 @@ def _run_images(args) -> int:
     for r in rows:
         if "error" in r:
             continue
-        status = (f"radius {r['radius_m']} m, offset {r['offset_m']} m, width {r['lane_width_m']} m"
+        radius = "straight" if r["found"] and r["radius_m"] >= STRAIGHT_M else f"{r['radius_m']} m"
+        status = (f"radius {radius}, offset {r['offset_m']} m, width {r['lane_width_m']} m"
                   if r["found"] else f"no lane found: {r['reason']}")
         print(f"{r['file']}: {status}" + (f" (note: {r['note']})" if r.get("note") else ""))
     failed = _print_failed(rows)

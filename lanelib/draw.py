@@ -111,13 +111,16 @@ def put_lines(image: np.ndarray, lines: list[str], config: DrawConfig = DrawConf
     return image
 
 
+STRAIGHT_M = 10_000.0  # a radius at least this long is reported as "straight"
+
+
 def measurement_lines(radius_m: float, offset_m: float, lane_width_m: float, found: bool,
                       reason: str = "") -> list[str]:
     """Return the text lines that report a lane's measurements ("no lane found" when not found)."""
     if not found or any(math.isnan(v) for v in (radius_m, offset_m, lane_width_m)):
         return ["No lane found" + (f": {reason}" if reason else "")]
     side = "right" if offset_m > 0 else "left"
-    rad = "straight" if radius_m >= 10_000 else f"{radius_m:,.0f} m"
+    rad = "straight" if radius_m >= STRAIGHT_M else f"{radius_m:,.0f} m"
     return [f"Radius of curvature: {rad}",
             f"Vehicle is {abs(offset_m):.2f} m {side} of centre",
             f"Lane width: {lane_width_m:.2f} m"]
