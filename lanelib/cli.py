@@ -17,7 +17,7 @@ from pathlib import Path
 
 from . import bench, data, evaluate, hough, runs, synth
 from .camera import Calibration, calibrate, parse_pattern
-from .config import PipelineConfig, load_config_or_preset
+from .config import PipelineConfig, load_config_or_preset, override
 from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
 from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
@@ -69,10 +69,23 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig JSON (e.g. saved by a notebook tuner) or the name of a "
                         "bundled preset (p1: the 960x540 Udacity P1 camera); default: built-in")
+    _set_arg(p)
+
+
+def _set_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--set", dest="settings", action="append", default=[], metavar="KEY=VALUE",
+                   help="set one config value over --config, dotted as in the JSON file, e.g. "
+                        "--set search.trim_outliers_pct=95 --set thresholds.clahe=true (repeatable)")
+
+
+def _load_config(args) -> PipelineConfig:
+    """Return the config of --config (file or preset; default built-in) with each --set applied."""
+    config = load_config_or_preset(args.config) if args.config else PipelineConfig()
+    return override(config, args.settings)
 
 
 def _load_pipeline_inputs(args):
-    config = load_config_or_preset(args.config) if args.config else PipelineConfig()
+    config = _load_config(args)
     calibration = Calibration.load(args.calibration) if args.calibration else None
     return config, calibration
 
@@ -194,6 +207,7 @@ def _add_hough(sub) -> None:
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig JSON (its `hough` part is used) or the name of a bundled "
                         "preset; default: built-in")
+    _set_arg(p)
     p.add_argument("--log", type=Path, metavar="CSV",
                    help="videos only: per-frame CSV: frame, time_s, left_found, right_found, "
                         "left_x_bottom, left_x_top, right_x_bottom, right_x_top, left_held, "
@@ -203,9 +217,7 @@ def _add_hough(sub) -> None:
 
 
 def _run_hough(args) -> int:
-    config = hough.HoughConfig()
-    if args.config:
-        config = load_config_or_preset(args.config).hough
+    config = _load_config(args).hough
     if args.input.is_dir():
         if args.log:
             raise InputError("--log is for videos; for images the rows are in OUT/results.json")
@@ -255,6 +267,7 @@ def _add_evaluate(sub) -> None:
     p.add_argument("path", type=Path, metavar="PATH", help="folder of images, or video file")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig, as for `images` (default: built-in)")
+    _set_arg(p)
     p.add_argument("--calibration", type=Path, metavar="FILE",
                    help="camera calibration JSON from `calibrate` (e.g. of camera_cal/); default: "
                         "the true camera recorded in the ground truth, so the score is the lane "

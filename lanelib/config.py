@@ -9,6 +9,7 @@ their defaults.
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import types
 import typing
@@ -163,7 +164,8 @@ def from_dict(cls, data: dict, prefix: str = ""):
     try:
         return dataclasses.replace(base, **kwargs)
     except ConfigError as e:
-        raise ConfigError(f"{prefix + ': ' if prefix else ''}{e}") from None
+        said = str(e)
+        raise ConfigError(f"{prefix}: {said}" if prefix and not said.startswith(prefix + ":") else said) from None
 
 
 def save_config(config: PipelineConfig, path: str | os.PathLike) -> Path:
@@ -213,3 +215,42 @@ def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
         return preset(str(spec))
     raise ConfigError(f"{spec}: no such config file and no bundled preset of that name; pass a "
                       f"PipelineConfig JSON file or a preset ({', '.join(preset_names())})")
+
+
+def override(config: PipelineConfig, settings: "typing.Iterable[str]") -> PipelineConfig:
+    """Return ``config`` with each ``"part.key=value"`` of ``settings`` set (the CLI's ``--set``).
+
+    The key is dotted as in the JSON file (``search.trim_outliers_pct``,
+    ``thresholds.yellow.open_px``); the value is read as JSON (``95``, ``true``, ``[3, 5]``),
+    else taken as text (``thresholds.rule=yellow | white``). Types are checked as for a file; a
+    malformed setting or an unknown key raises ``ConfigError`` naming it and the keys known there.
+    """
+    data = to_dict(config)
+    for setting in settings:
+        path, sep, text = setting.partition("=")
+        keys = path.strip().split(".")
+        if not sep or not all(keys):
+            raise ConfigError(f"--set {setting!r}: write it as part.key=value, e.g. "
+                              "search.trim_outliers_pct=95")
+        try:
+            value = json.loads(text)
+        except ValueError:
+            value = {"True": True, "False": False}.get(text.strip(), text)
+        node = data
+        for depth, key in enumerate(keys[:-1]):
+            child = node.get(key) if isinstance(node, dict) else None
+            if not isinstance(child, dict):
+                known = ", ".join(sorted(k for k, v in node.items() if isinstance(v, dict)))
+                where = ".".join(keys[:depth]) or "the config"
+                raise ConfigError(f"--set {setting!r}: {'.'.join(keys[:depth + 1])} is not a part of "
+                                  f"{where}; its parts: {known or 'none (a plain value)'}")
+            node = child
+        if keys[-1] not in node:
+            raise ConfigError(f"--set {setting!r}: {path.strip()} is not a key; known keys in "
+                              f"{'.'.join(keys[:-1]) or 'the config'}: {', '.join(sorted(node))}")
+        node[keys[-1]] = value
+        try:
+            data = to_dict(from_dict(PipelineConfig, data))
+        except ConfigError as e:
+            raise ConfigError(f"--set {setting!r}: {e}") from None
+    return from_dict(PipelineConfig, data)

@@ -62,6 +62,9 @@ class SearchConfig:
     grow_margin_px : 0 (off), or px added to a window's half width for each empty window (fewer
         than ``minpix`` pixels) in a row below it; the margin is back to ``margin_px`` after a
         window with pixels. A line lost over a gap (a missing dash, a shadow) is caught again.
+        On by default (15 px): notebook 09 measured it on every bundled set, and it is the one
+        switch that helps (the harder clip, +7 points of point accuracy for 10-20 px, less
+        beyond) and hurts none; every other switch is off by default.
     """
 
     n_windows: int = 9
@@ -75,7 +78,7 @@ class SearchConfig:
     trim_outliers_pct: float = 0.0
     window_histogram: bool = False
     centre_first: bool = False
-    grow_margin_px: int = 0
+    grow_margin_px: int = 15
 
     def __post_init__(self):
         if not 0 <= self.trim_outliers_pct <= 100:

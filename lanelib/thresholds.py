@@ -210,8 +210,9 @@ def equalize_lightness(rgb: np.ndarray, clahe: cv2.CLAHE) -> np.ndarray:
     return cv2.cvtColor(lab, cv2.COLOR_Lab2RGB)
 
 
-def _prepared(rgb: np.ndarray, config: ThresholdConfig, clahe: cv2.CLAHE | None) -> np.ndarray:
-    """Return the image the masks of ``config`` look at: ``rgb``, or its equalised lightness."""
+def mask_input(rgb: np.ndarray, config: ThresholdConfig, clahe: cv2.CLAHE | None = None) -> np.ndarray:
+    """Return the image the masks of ``config`` look at: ``rgb``, or (``config.clahe``) its
+    equalised lightness; ``clahe`` passes the CLAHE made once by ``make_clahe``."""
     if not config.clahe:
         return rgb
     if clahe is None:
@@ -431,7 +432,7 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     With ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made
     once by ``make_clahe`` (else one is made for this image).
     """
-    ch = Channels(_prepared(rgb, config, clahe))
+    ch = Channels(mask_input(rgb, config, clahe))
     wanted = names if names is not None else mask_names(config)
     return {n: mask(ch, getattr(config, n)) for n in wanted if getattr(config, n).enabled}
 
@@ -445,15 +446,17 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
     ``make_clahe`` (else one is made for this image).
     """
-    ch = Channels(_prepared(rgb, config, clahe))
     cache = dict(computed or {})
+    channels: list[Channels] = []  # made (and equalised) only if a mask is still to compute
 
     def get(name: str) -> np.ndarray | None:
         spec = getattr(config, name)
         if not spec.enabled:
             return None
         if name not in cache:
-            cache[name] = mask(ch, spec)
+            if not channels:
+                channels.append(Channels(mask_input(rgb, config, clahe)))
+            cache[name] = mask(channels[0], spec)
         return cache[name]
 
     out = _evaluate(compile_rule(config.rule, mask_names(config)), get)

@@ -36,6 +36,11 @@ debug composite work on it unchanged. Per frame:
 5. **Hold and reset.** With no acceptable line the last tracked lane is reported for up to
    ``hold_frames`` frames with a confidence falling linearly to zero; then the tracker resets
    and reports no lane until a pair passes the checks again.
+6. **History of bases** (``base_history_frames``, off by default). The lines' x on the bottom
+   row in the last accepted frames is kept, and survives a reset. When the windows start from
+   the histogram (no track) and a base's peak stands out less than ``min_base_peak``
+   ((peak - mean) / mean, ``lanes.base_peak_confidence``), the windows are run again from the
+   median of that history for the weak side, and the search that passes more lines is kept.
 
 Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
@@ -70,6 +75,9 @@ class TrackerConfig:
     smooth_frames : good frames averaged (weighted towards the newest) for the reported fit.
     recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
+    base_history_frames : 0 (off), or accepted frames whose line bases are remembered (step 6).
+    min_base_peak : a histogram base whose (peak - mean) / mean is below this is weak, and the
+        remembered base is tried instead (with ``base_history_frames``).
     """
 
     max_jump_m: float = 0.5
@@ -77,10 +85,14 @@ class TrackerConfig:
     smooth_frames: int = 5
     recency_decay: float = 0.6
     hold_frames: int = 12
+    base_history_frames: int = 0
+    min_base_peak: float = 3.0
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
             raise ConfigError("tracking: smooth_frames >= 1 and hold_frames >= 0")
+        if self.base_history_frames < 0:
+            raise ConfigError("tracking: base_history_frames must be 0 (off) or more")
         if not 0 < self.recency_decay <= 1:
             raise ConfigError("tracking: recency_decay must lie in (0, 1]")
         if min(self.max_jump_m, self.max_bend_m) <= 0:
@@ -125,10 +137,24 @@ class LaneTracker:
     # ---- state ----------------------------------------------------------------------------
 
     def reset(self) -> None:
-        """Forget the track: the next frame is searched with sliding windows."""
+        """Forget the track and the remembered bases (a new video): the next frame is searched
+        with sliding windows from the histogram."""
+        self._forget_track()
+        self._base_history: deque[tuple[float, float]] = deque(maxlen=self.config.base_history_frames)
+
+    def _forget_track(self) -> None:
+        """Forget the track (the lane was lost too long); the remembered bases stay."""
         self._history: deque[_Accepted] = deque(maxlen=self.config.smooth_frames)
         self._lost = 0
         self._conf = (0.0, 0.0)
+
+    @property
+    def remembered_bases(self) -> tuple[float, float] | None:
+        """The median x (px, bottom row) of each line over the remembered frames, or None."""
+        if not self._base_history:
+            return None
+        left, right = np.median(np.array(self._base_history), axis=0)
+        return float(left), float(right)
 
     @property
     def lane(self) -> tuple[np.ndarray, np.ndarray] | None:
@@ -167,6 +193,14 @@ class LaneTracker:
             l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
                 search, left, right, why, failed = retry, l2, r2, why2, failed2
+        elif track is None and left is None and (bases := self._weak_bases(search)) is not None:
+            # no track and a weak histogram peak: start that side from the remembered base
+            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
+            retry = pipe.search(binary, bases=bases)
+            l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
+            if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
+                search, left, right, why, failed = retry, l2, r2, why2, failed2
+                why.append("windows started from the remembered bases (weak histogram peak)")
         images = det_images if keep_images else {}
         result = self._advance(search, left, right, why, track, images)
         if not failed:
@@ -249,6 +283,20 @@ class LaneTracker:
         """Return the tracked lines' x (px) on the bottom row, where windows start."""
         return (float(np.polyval(track[0], self._bottom)), float(np.polyval(track[1], self._bottom)))
 
+    def _weak_bases(self, search: LaneSearch) -> tuple[float, float] | None:
+        """Return the bases to search again from when a histogram base is weak (step 6), or None."""
+        remembered = self.remembered_bases
+        if remembered is None or search.method != "windows":
+            return None
+        out, weak = [], False
+        for base, conf, memory in zip(search.bases_px, search.base_confidence, remembered):
+            if base is None or conf is None or conf < self.config.min_base_peak:
+                out.append(memory)
+                weak = True
+            else:
+                out.append(base)
+        return (out[0], out[1]) if weak else None
+
     def _advance(self, search: LaneSearch, left: LineFit | None, right: LineFit | None,
                  why: list[str], track, images: dict) -> FrameResult:
         """Update the state with this frame's accepted lines and return the frame's result."""
@@ -266,6 +314,8 @@ class LaneTracker:
                     confs[side] = round(0.5 * confs[other], 3)
                     notes.append(f"{side} line inferred from the {other} line and the tracked width")
             self._history.append(_Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"]))
+            if self._base_history.maxlen:
+                self._base_history.append(self._bases((coeffs["left"], coeffs["right"])))
             self._lost = 0
             self._conf = (confs["left"], confs["right"])
             method = search.method
@@ -279,7 +329,7 @@ class LaneTracker:
         else:
             if track is not None:
                 notes.append(f"lane lost for more than {self.config.hold_frames} frames; tracker reset")
-                self.reset()
+                self._forget_track()
             else:
                 self._lost += 1
             return self._not_found(search, notes, images)

@@ -46,10 +46,10 @@ def test_the_seeds_switches_round_trip(tmp_path):
     saved = json.loads((tmp_path / "c.json").read_text())
     assert saved["search"]["trim_outliers_pct"] == 95.0 and saved["search"]["grow_margin_px"] == 30
     assert saved["thresholds"]["clahe"] is True and saved["thresholds"]["yellow"]["open_px"] == 3
-    # the defaults: every switch off
+    # the defaults: every switch off but the growing margin, which helps (notebook 09)
     d = to_dict(PipelineConfig())
     assert (d["search"]["trim_outliers_pct"], d["search"]["window_histogram"], d["search"]["centre_first"],
-            d["search"]["grow_margin_px"]) == (0.0, False, False, 0)
+            d["search"]["grow_margin_px"]) == (0.0, False, False, 15)
     assert d["thresholds"]["clahe"] is False and d["thresholds"]["white"]["open_px"] == 0
 
 
@@ -128,3 +128,34 @@ def test_an_old_key_may_not_contradict_its_new_key(tmp_path):
     cfg = load_config(p)
     assert cfg.checks.min_width_m == 3.1 and cfg.checks.max_width_spread_m == 0.9
     assert cfg.tracking.max_bend_m == 0.5  # set in the file: not overwritten by the old key
+
+
+def test_override_sets_dotted_keys_with_their_types():
+    from lanelib.config import override
+    cfg = override(PipelineConfig(), ["search.trim_outliers_pct=95", "thresholds.clahe=true",
+                                      "thresholds.yellow.open_px=3", "thresholds.rule=yellow | white",
+                                      "checks.min_width_m=2.8", "tracking.base_history_frames=25"])
+    assert cfg.search.trim_outliers_pct == 95.0 and isinstance(cfg.search.trim_outliers_pct, float)
+    assert cfg.thresholds.clahe is True and cfg.thresholds.yellow.open_px == 3
+    assert cfg.thresholds.rule == "yellow | white"
+    assert cfg.checks.min_width_m == 2.8 and cfg.tracking.base_history_frames == 25
+    # everything else stays as it was, and the later setting wins
+    assert cfg.search.margin_px == PipelineConfig().search.margin_px
+    assert override(cfg, ["search.margin_px=40", "search.margin_px=50"]).search.margin_px == 50
+    assert override(PipelineConfig(), []) == PipelineConfig()
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("search.trim_outliers_pct", "write it as part.key=value"),
+    ("search.trim=95", "search.trim is not a key; known keys in search: centre_first"),
+    ("serch.margin_px=3", "serch is not a part of the config; its parts: checks, draw"),
+    ("search.margin_px.x=3", "search.margin_px is not a part of search"),
+    ("search.margin_px=wide", "search.margin_px: expected a whole number, got 'wide'"),
+    ("search.trim_outliers_pct=200", "trim_outliers_pct 200.0 must lie in 0-100"),
+])
+def test_a_bad_override_names_the_setting_and_the_fix(setting, message):
+    from lanelib.config import override
+    with pytest.raises(ConfigError) as e:
+        override(PipelineConfig(), [setting])
+    assert message in str(e.value) and repr(setting) in str(e.value)
+    assert "search: search:" not in str(e.value)

@@ -375,3 +375,19 @@ def test_table_counts_failed_files_only_when_there_are_some():
     text = _report(failed=(("x.jpg", "x.jpg: broken"),)).table()
     assert text.splitlines()[-1] == "1 of 6 files failed and are left out of the scores"
     assert _report(failed=(("x.jpg", "x.jpg: broken"),)).to_dict()["files_failed"] == 1
+
+
+def test_cli_set_overrides_the_config_of_a_run(tmp_path, capsys):
+    _need(TEST_IMAGES)
+    outs = {}
+    for name, extra in (("plain", []), ("narrow", ["--set", "checks.max_width_m=3.2"])):
+        outs[name] = tmp_path / f"{name}.json"
+        code = cli.main(["evaluate", "images", str(TEST_IMAGES), "--max-frames", "2",
+                         "--json", str(outs[name]), *extra])
+        assert code == 0
+    capsys.readouterr()
+    # the bundled lanes are 3.7 m wide: a 3.2 m upper bound refuses every one of them
+    assert json.loads(outs["plain"].read_text())["found_rate"] == 1.0
+    assert json.loads(outs["narrow"].read_text())["found_rate"] == 0.0
+    assert cli.main(["evaluate", "images", str(TEST_IMAGES), "--set", "checks.max_width=3"]) == 2
+    assert "checks.max_width is not a key" in capsys.readouterr().err

@@ -197,11 +197,11 @@ def test_centre_first_and_a_growing_margin_recover_a_line_after_a_gap():
         ys, xs = search.left_pixels
         return search, ys[ys < 240], xs[ys < 240]
 
-    search, ys, xs = upper(SearchConfig())
+    search, ys, xs = upper(SearchConfig(grow_margin_px=0))
     assert len(ys) == 0  # the plain windows stay where the line left off and lose it
     search, ys, xs = upper(SearchConfig(grow_margin_px=60))
     assert np.any(xs < 250)  # a grown window alone takes the kerb with the line
-    search, ys, xs = upper(SearchConfig(centre_first=True))
+    search, ys, xs = upper(SearchConfig(centre_first=True, grow_margin_px=0))
     assert len(ys) == 0
     search, ys, xs = upper(SearchConfig(centre_first=True, grow_margin_px=60))
     assert len(ys) > 2000 and np.all(np.abs(xs - (300 + 0.6 * (H - 1 - ys))) <= 9)

@@ -192,3 +192,45 @@ def test_smoothing_reduces_frame_to_frame_noise(pipe):
 def test_tracker_config_is_validated(kwargs, message):
     with pytest.raises(ConfigError, match=message):
         TrackerConfig(**kwargs)
+
+
+def _dash_gap_and_specks(pipe: LanePipeline, seed: int = 0) -> np.ndarray:
+    """A frame whose right line shows only in the top 40 % of the view (a gap in the paint) while
+    bright specks dot the lower right: the right histogram peak there is a speck."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    cv2.line(bird, (round(LEFT_X), 0), (round(LEFT_X), H - 1), (235, 235, 235), 24)
+    cv2.line(bird, (round(RIGHT_X), 0), (round(RIGHT_X), int(H * 0.4)), (235, 235, 235), 24)
+    rng = np.random.default_rng(seed)
+    for _ in range(70):
+        x, y = int(rng.integers(700, W - 10)), int(rng.integers(H // 2, H - 10))
+        if abs(x - RIGHT_X) > 60:
+            cv2.rectangle(bird, (x, y), (x + 5, y + 5), (235, 235, 235), -1)
+    return pipe.perspective.unwarp(bird)
+
+
+@pytest.mark.parametrize("history", [0, 20])
+def test_remembered_bases_restart_the_windows_after_a_reset(pipe, history):
+    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=1, base_history_frames=history))
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    blank = frame(pipe, left_x=None, right_x=None)
+    tracker.update(blank)
+    assert "tracker reset" in tracker.update(blank).reason and tracker.lane is None
+    hard = _dash_gap_and_specks(pipe)
+    r = tracker.update(hard)
+    if history == 0:  # the windows start from a speck: the right line is texture, no lane
+        assert not r.found and "right line is texture" in r.reason
+        assert r.search.base_confidence[1] < TrackerConfig().min_base_peak
+        assert tracker.remembered_bases is None
+        return
+    assert tracker.remembered_bases == pytest.approx((LEFT_X, RIGHT_X), abs=12)
+    assert r.found and "remembered bases" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=6)
+    assert r.lane_width_m == pytest.approx(3.7, abs=0.1)
+    tracker.reset()  # a new video forgets the bases too
+    assert tracker.remembered_bases is None
+
+
+def test_a_base_history_needs_a_count():
+    with pytest.raises(ConfigError, match="base_history_frames must be 0"):
+        TrackerConfig(base_history_frames=-1)

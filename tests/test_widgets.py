@@ -279,6 +279,8 @@ def test_fit_controls_change_the_windows_and_the_preview(road):
     assert t.preview.value != bytes0
     t.controls["margin_px"].value = 50
     assert t.config.search.margin_px == 50
+    assert {w.x_high - w.x_low for w in t.windows.windows} > {100}  # wider over a gap in the dashes
+    t.controls["grow_margin_px"].value = 0  # no growing margin: every window is 2 x margin_px wide
     assert {w.x_high - w.x_low for w in t.windows.windows} == {100}
     t.controls["minpix"].value = 5000  # more line pixels than any window holds on this image
     # with minpix that high no window recentres: each side's windows stay over its base
@@ -286,7 +288,7 @@ def test_fit_controls_change_the_windows_and_the_preview(road):
         assert {w.x_low for w in t.windows.windows if w.side == side} == {int(base - 50)}
     t.controls["prior_margin_px"].value = 30
     assert t.config.search == replace(SearchConfig(), n_windows=12, margin_px=50, minpix=5000,
-                                      prior_margin_px=30)
+                                      prior_margin_px=30, grow_margin_px=0)
 
 
 def test_fit_tuner_fits_are_what_the_pipeline_finds(road):
@@ -297,6 +299,63 @@ def test_fit_tuner_fits_are_what_the_pipeline_finds(road):
     assert t.windows.right.coeffs_px == result.right.coeffs_px
     assert t.measurement == result.measurement
     assert "radius" in t.readout()
+
+
+def test_fit_tuner_switches_are_the_search_configs_tricks(road):
+    t = widgets.FitTuner(road, image=CURVED)
+    peaks = t.windows.base_confidence
+    assert all(c is not None and c > 1 for c in peaks)  # two clear lines: peaks stand out
+    assert f"left {peaks[0]:.1f}, right {peaks[1]:.1f}" in t.readout()
+    t.controls["trim_outliers_pct"].value = 90.0
+    t.controls["centre_first"].value = True
+    t.controls["window_histogram"].value = True
+    t.controls["grow_margin_px"].value = 20
+    want = replace(SearchConfig(), trim_outliers_pct=90.0, centre_first=True, window_histogram=True,
+                   grow_margin_px=20)
+    assert t.config.search == want
+    result = LanePipeline(t.config).detect(io.read_image(road[CURVED]))
+    assert t.windows.left.coeffs_px == result.left.coeffs_px  # the preview is the pipeline's search
+    assert t.windows.right.coeffs_px == result.right.coeffs_px
+    # trimming keeps 90 % of each line's pixels for the fit
+    plain = LanePipeline(PipelineConfig()).detect(io.read_image(road[CURVED]))
+    assert 0 < t.windows.left.n_pixels < plain.search.left.n_pixels
+
+
+def test_threshold_tuner_clahe_and_per_mask_opening_match_the_pipeline(road):
+    t = widgets.ThresholdTuner(road, image=STRAIGHT)
+    view0 = t.mask_view
+    t.controls["clahe"].value = True
+    t.controls["clahe_clip_limit"].value = 3.0
+    t.controls["clahe_tile_px"].value = 96
+    t.controls["yellow.open_px"].value = 5
+    t.controls["lab_b.open_px"].value = 3
+    cfg = t.config.thresholds
+    assert (cfg.clahe, cfg.clahe_clip_limit, cfg.clahe_tile_px) == (True, 3.0, 96)
+    assert (cfg.yellow.open_px, cfg.lab_b.open_px, cfg.white.open_px) == (5, 3, 0)
+    assert not np.array_equal(t.mask_view, view0)  # the masks see the equalised view
+    assert "bird's-eye (CLAHE)" in t.render() and "CLAHE clip 3" in t.readout()
+    pipe = LanePipeline(t.config)
+    bird = pipe.birdseye(io.read_image(road[STRAIGHT]))
+    np.testing.assert_array_equal(t.combined(), pipe.binary(bird))
+    np.testing.assert_array_equal(t.mask("yellow"), thresholds.masks(bird, cfg, ("yellow",))["yellow"])
+    t.controls["clahe"].value = False  # back off: the plain view again
+    np.testing.assert_array_equal(t.mask_view, view0)
+
+
+def test_threshold_tuner_stacked_view_puts_the_picked_masks_in_red_green_blue(road):
+    t = widgets.ThresholdTuner(road, image=STRAIGHT)
+    assert t.stacked_names() == thresholds.rule_masks(t.config.thresholds)[:3]
+    t.controls["stack.r"].value = "yellow"
+    t.controls["stack.g"].value = "(none)"
+    t.controls["stack.b"].value = "sobel_y"  # off: its channel stays black
+    view = t.stacked()
+    np.testing.assert_array_equal(view[..., 0], t.mask("yellow"))
+    assert not view[..., 1:].any()
+    assert "stacked yellow - sobel_y" in t.render()
+    config = t.config
+    t.controls["stack.g"].value = "white"  # a view choice, not part of the config
+    assert t.config == config
+    np.testing.assert_array_equal(t.stacked()[..., 1], t.mask("white"))
 
 
 # --------------------------------------------------------------------------- shared machinery

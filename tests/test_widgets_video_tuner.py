@@ -36,7 +36,10 @@ def test_the_controls_exist_and_show_the_config(tuner):
     tc, cc = tuner.config.tracking, tuner.config.checks
     c = tuner.controls
     assert set(c) == {"tracking.smooth_frames", "tracking.recency_decay", "tracking.hold_frames",
-                      "tracking.max_jump_m", "checks.width_m", "max_frames"}
+                      "tracking.max_jump_m", "tracking.base_history_frames", "tracking.min_base_peak",
+                      "checks.width_m", "max_frames"}
+    assert c["tracking.base_history_frames"].value == tc.base_history_frames == 0  # off by default
+    assert c["tracking.min_base_peak"].value == tc.min_base_peak
     assert (c["tracking.smooth_frames"].value, c["tracking.hold_frames"].value) == (tc.smooth_frames,
                                                                                     tc.hold_frames)
     assert c["tracking.recency_decay"].value == tc.recency_decay
@@ -69,6 +72,10 @@ def test_a_tracker_parameter_re_runs_the_tracker(tuner):
     tuner.controls["checks.width_m"].value = (3.2, 4.2)
     assert (tuner.config.checks.min_width_m, tuner.config.checks.max_width_m) == (3.2, 4.2)
     assert tuner.runs == 5
+    tuner.controls["tracking.base_history_frames"].value = 30
+    tuner.controls["tracking.min_base_peak"].value = 4.5
+    assert (tuner.config.tracking.base_history_frames, tuner.config.tracking.min_base_peak) == (30, 4.5)
+    assert tuner.runs == 7
 
 
 def test_narrow_width_bounds_lose_the_lane_and_say_why(tuner):

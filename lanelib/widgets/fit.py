@@ -15,6 +15,9 @@ from ..pipeline import LanePipeline
 from .base import Tuner, fmt, row, sized
 
 LIMITS = {"n_windows": (1, 30), "margin_px": (5, 300), "minpix": (0, 5000), "prior_margin_px": (5, 300)}
+# the published tricks (``lanes.SearchConfig``), all off by default: key -> (kind, low, high, step)
+SWITCHES = {"trim_outliers_pct": ("float", 0.0, 100.0, 0.5), "grow_margin_px": ("int", 0, 100, 5),
+            "window_histogram": ("bool",), "centre_first": ("bool",)}
 
 
 class FitTuner(Tuner):
@@ -22,8 +25,12 @@ class FitTuner(Tuner):
 
     Sliders ``n_windows``, ``margin_px``, ``minpix`` (the sliding windows) and
     ``prior_margin_px`` (the band searched around a previous fit; here the windows' own fits
-    stand in for the previous frame's). The preview shows the windows and fits, the band search
-    and the lane drawn back on the road; the bird's-eye lane mask is made once per image.
+    stand in for the previous frame's); the published tricks of ``lanes.SearchConfig`` as
+    switches (all off by default): ``trim_outliers_pct`` (0: off; else the share of each line's
+    pixels kept for the refit), ``grow_margin_px`` (0: off), ``window_histogram`` and
+    ``centre_first``. The preview shows the windows and fits, the band search and the lane drawn
+    back on the road; the readout gives each base's peak confidence ((peak - mean) / mean of the
+    histogram). The bird's-eye lane mask is made once per image.
     ``save`` writes the ``search`` part; ``load`` reads it and the ``perspective``,
     ``thresholds`` and ``draw`` parts the views use.
     """
@@ -32,14 +39,24 @@ class FitTuner(Tuner):
     default_tile_width_px = 400
     parts = ("search",)
     shows = ("perspective", "thresholds", "search", "draw")
-    KEYS = tuple(LIMITS)
+    KEYS = tuple(LIMITS) + tuple(SWITCHES)
 
     def _build(self) -> list[widgets.Widget]:
         sc = self.config.search
         made = [self._control(k, widgets.IntSlider(value=getattr(sc, k), min=lo, max=hi,
                                                    description=k, **sized(460, 150)))
                 for k, (lo, hi) in LIMITS.items()]
-        return [row(*made[:2]), row(*made[2:])]
+        tricks = []
+        for k, spec in SWITCHES.items():
+            if spec[0] == "bool":
+                w = widgets.Checkbox(value=getattr(sc, k), description=k, indent=False,
+                                     layout=widgets.Layout(width="170px"))
+            else:
+                cls = widgets.FloatSlider if spec[0] == "float" else widgets.IntSlider
+                w = cls(value=getattr(sc, k), min=spec[1], max=spec[2], step=spec[3],
+                        description=k, **sized(360, 130))
+            tricks.append(self._control(k, w))
+        return [row(*made[:2]), row(*made[2:]), row(*tricks)]
 
     def _sync(self) -> None:
         for k in self.KEYS:
@@ -54,7 +71,7 @@ class FitTuner(Tuner):
         self.binary = thresholds.combine(self.pipeline.birdseye(raw), self.config.thresholds)
 
     def _apply(self, key: str) -> PipelineConfig:
-        search = replace(self.config.search, **{k: int(self.controls[k].value) for k in self.KEYS})
+        search = replace(self.config.search, **{k: _typed(k, self.controls[k].value) for k in self.KEYS})
         return replace(self.config, search=search)
 
     def _update(self, key: str | None) -> None:
@@ -76,6 +93,8 @@ class FitTuner(Tuner):
 
     def readout(self) -> str:
         lines = []
+        peaks = [("not found" if c is None else f"{c:.1f}") for c in self.windows.base_confidence]
+        lines.append(f"base peaks (peak - mean) / mean: left {peaks[0]}, right {peaks[1]}")
         for title, s in (("sliding windows", self.windows), ("search around", self.around)):
             parts = []
             for side, fit in (("left", s.left), ("right", s.right)):
@@ -87,3 +106,9 @@ class FitTuner(Tuner):
             lines.append(f"radius {rad}, offset {fmt(m.offset_m, 2, ' m', True)}, "
                          f"lane width {fmt(m.lane_width_m, 2, ' m')}")
         return "\n".join(lines)
+
+
+def _typed(key: str, value):
+    """Return a control's value as its ``SearchConfig`` field's type."""
+    kind = SWITCHES[key][0] if key in SWITCHES else "int"
+    return {"int": int, "float": float, "bool": bool}[kind](value)

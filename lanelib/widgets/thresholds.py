@@ -9,7 +9,7 @@ import cv2
 import ipywidgets as widgets
 import numpy as np
 
-from .. import thresholds
+from .. import draw, thresholds
 from ..camera import Calibration
 from ..config import PipelineConfig
 from ..pipeline import LanePipeline
@@ -17,6 +17,9 @@ from .base import Tuner, row, sized
 
 _COLOR_SPACES = tuple(s for s in thresholds.SPACES if s != "gray")
 _COMBINE_KEYS = ("rule", "open_px", "close_px")
+_CLAHE_KEYS = ("clahe", "clahe_clip_limit", "clahe_tile_px")
+_STACK_KEYS = ("stack.r", "stack.g", "stack.b")  # the stacked view's channels: a view, not config
+_NONE = "(none)"
 
 
 def _channel_max(space: str, channel: str) -> int:
@@ -30,10 +33,14 @@ class ThresholdTuner(Tuner):
     For each mask: an on/off box (``<mask>.enabled``), the colour space (``<mask>.space``) and
     channel (``<mask>.channel``), the low/high range (``<mask>.range``; a colour range has one
     per channel, ``<mask>.range0..2``), the Sobel kernel (``<mask>.kernel_px``) and the top-hat
-    width (``<mask>.width_px``); then the rule (``rule``) and the clean-up (``open_px``,
-    ``close_px``). The preview shows the bird's-eye view, every mask and the combination; only
-    the mask whose control moved is recomputed. ``save`` writes the ``thresholds`` part; ``load``
-    reads the ``perspective`` (the bird's-eye view) and ``thresholds`` parts.
+    width (``<mask>.width_px``), the opening of a colour or channel mask alone
+    (``<mask>.open_px``); then the rule (``rule``), the clean-up (``open_px``, ``close_px``) and
+    CLAHE on the lightness before every mask (``clahe`` on/off, ``clahe_clip_limit``,
+    ``clahe_tile_px``). The preview shows the bird's-eye view (equalised when CLAHE is on), every
+    mask, the combination and the stacked view (``stack.r``/``stack.g``/``stack.b`` pick the
+    masks shown in red, green and blue: ``draw.stacked_masks``); only the mask whose control
+    moved is recomputed. ``save`` writes the ``thresholds`` part; ``load`` reads the
+    ``perspective`` (the bird's-eye view) and ``thresholds`` parts.
     """
 
     columns = 4
@@ -60,6 +67,7 @@ class ThresholdTuner(Tuner):
                     parts.append(self._control(f"{name}.range{i}", widgets.IntRangeSlider(
                         value=(spec.low[i], spec.high[i]), min=0, max=top, description=letter,
                         **sized(250, 20))))
+                parts.append(self._open_control(name, spec))
             else:
                 parts.append(self._control(f"{name}.channel", widgets.Dropdown(
                     options=tuple(thresholds.SPACES[spec.space][1]), value=spec.channel,
@@ -82,6 +90,8 @@ class ThresholdTuner(Tuner):
                             value=spec.width_px, min=3, max=201, step=2, description="width px",
                             layout=widgets.Layout(width="260px"),
                             style={"description_width": "60px"})))
+                    else:
+                        parts.append(self._open_control(name, spec))
             rows.append(row(*parts))
         rows.append(row(
             self._control("rule", widgets.Text(value=cfg.rule, description="rule",
@@ -92,14 +102,45 @@ class ThresholdTuner(Tuner):
                                                        description="open px", **sized(240, 60))),
             self._control("close_px", widgets.IntSlider(value=cfg.close_px, min=0, max=15,
                                                         description="close px", **sized(240, 60)))))
+        rows.append(row(
+            self._control("clahe", widgets.Checkbox(value=cfg.clahe, description="CLAHE", indent=False,
+                                                    layout=widgets.Layout(width="80px"))),
+            self._control("clahe_clip_limit", widgets.FloatSlider(
+                value=cfg.clahe_clip_limit, min=0.5, max=10.0, step=0.5, description="clip limit",
+                **sized(260, 70))),
+            self._control("clahe_tile_px", widgets.IntSlider(
+                value=cfg.clahe_tile_px, min=16, max=640, step=16, description="tile px",
+                **sized(260, 70))),
+            *(self._control(key, widgets.Dropdown(
+                options=(_NONE, *thresholds.mask_names(cfg)), value=first, description=key[-1].upper(),
+                layout=widgets.Layout(width="160px"), style={"description_width": "15px"}))
+              for key, first in zip(_STACK_KEYS, self._stack_defaults(cfg)))))
         return rows
+
+    def _open_control(self, name: str, spec) -> widgets.Widget:
+        """Return the slider of one colour or channel mask's own opening (``open_px``)."""
+        return self._control(f"{name}.open_px", widgets.IntSlider(
+            value=spec.open_px, min=0, max=15, description="open", **sized(190, 40)))
+
+    @staticmethod
+    def _stack_defaults(cfg: thresholds.ThresholdConfig) -> tuple[str, str, str]:
+        """Return the stacked view's first masks: those the rule uses, in order, then none."""
+        used = thresholds.rule_masks(cfg)[:3]
+        return tuple(used) + (_NONE,) * (3 - len(used))
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
         size = (raw.shape[1], raw.shape[0])
         pipeline = self._cached("pipeline", (id(calibration), size, self.config.perspective),
                                 lambda: LanePipeline(self.config, calibration, size=size))
         self.birdseye = pipeline.birdseye(raw)
-        self._channels = thresholds.Channels(self.birdseye)
+        self._equalise()
+
+    def _equalise(self) -> None:
+        """Make the image the masks see (``thresholds.mask_input``) and forget the masks made."""
+        cfg = self.config.thresholds
+        self.mask_view = thresholds.mask_input(self.birdseye, cfg)
+        self._clahe_spec = tuple(getattr(cfg, k) for k in _CLAHE_KEYS)
+        self._channels = thresholds.Channels(self.mask_view)
         self._masks: dict[str, tuple[object, np.ndarray]] = {}
 
     # ---- config <-> controls --------------------------------------------------------------
@@ -118,7 +159,8 @@ class ThresholdTuner(Tuner):
             ranges = [c[f"{name}.range{i}"].value for i in range(3)]
             tops = [_channel_max(space, letter) for letter in letters]
             return thresholds.ColorRange(space, tuple(min(int(r[0]), t) for r, t in zip(ranges, tops)),
-                                         tuple(min(int(r[1]), t) for r, t in zip(ranges, tops)), enabled)
+                                         tuple(min(int(r[1]), t) for r, t in zip(ranges, tops)), enabled,
+                                         int(c[f"{name}.open_px"].value))
         channel = c[f"{name}.channel"].value
         channel = channel if channel in letters else letters[0]
         low, high = c[f"{name}.range"].value
@@ -130,11 +172,13 @@ class ThresholdTuner(Tuner):
         if isinstance(old, thresholds.TopHatMask):
             return thresholds.TopHatMask(space, channel, int(c[f"{name}.width_px"].value),
                                          low, high, enabled)
-        return thresholds.ChannelMask(space, channel, low, high, enabled)
+        return thresholds.ChannelMask(space, channel, low, high, enabled, int(c[f"{name}.open_px"].value))
 
     def _apply(self, key: str) -> PipelineConfig:
         tc = self.config.thresholds
-        if key in _COMBINE_KEYS:
+        if key in _STACK_KEYS:
+            return self.config
+        if key in _COMBINE_KEYS + _CLAHE_KEYS:
             tc = replace(tc, **{key: self.controls[key].value})
         else:
             name = key.partition(".")[0]
@@ -145,6 +189,8 @@ class ThresholdTuner(Tuner):
         # the masks are made when shown (``mask``), each kept while its spec stays the same;
         # a new colour space or channel changes the choices and ranges of that mask's controls
         name, _, part = (key or "").partition(".")
+        if tuple(getattr(self.config.thresholds, k) for k in _CLAHE_KEYS) != self._clahe_spec:
+            self._equalise()
         if part in ("space", "channel"):
             with self._quiet():
                 self._sync_mask(name)
@@ -152,7 +198,7 @@ class ThresholdTuner(Tuner):
     def _sync(self) -> None:
         for name in thresholds.mask_names(self.config.thresholds):
             self._sync_mask(name)
-        for key in _COMBINE_KEYS:
+        for key in _COMBINE_KEYS + _CLAHE_KEYS:
             self.controls[key].value = getattr(self.config.thresholds, key)
 
     def _sync_mask(self, name: str) -> None:
@@ -161,6 +207,8 @@ class ThresholdTuner(Tuner):
         c = self.controls
         c[f"{name}.enabled"].value = spec.enabled
         c[f"{name}.space"].value = spec.space
+        if f"{name}.open_px" in c:
+            c[f"{name}.open_px"].value = spec.open_px
         letters = thresholds.SPACES[spec.space][1]
         if isinstance(spec, thresholds.ColorRange):
             for i, letter in enumerate(letters):
@@ -197,7 +245,7 @@ class ThresholdTuner(Tuner):
         """Return the combined 0/255 bird's-eye lane mask under the current config."""
         cfg = self.config.thresholds
         made = {n: m for n in thresholds.mask_names(cfg) if (m := self.mask(n)) is not None}
-        return thresholds.combine(self.birdseye, cfg, computed=made)
+        return thresholds.combine(self.mask_view, replace(cfg, clahe=False), computed=made)
 
     def counts(self) -> dict[str, int]:
         """Return the pixels of each enabled mask and of the combination (key ``"combined"``)."""
@@ -209,14 +257,35 @@ class ThresholdTuner(Tuner):
     def render(self) -> dict[str, np.ndarray | None]:
         """Return the bird's-eye view, every mask (None if off) and the combination."""
         cfg = self.config.thresholds
-        views: dict[str, np.ndarray | None] = {"bird's-eye": self.birdseye}
+        views: dict[str, np.ndarray | None] = {
+            "bird's-eye (CLAHE)" if cfg.clahe else "bird's-eye": self.mask_view}
         views.update({n: self.mask(n) for n in thresholds.mask_names(cfg)})
         views["combined"] = self.combined()
+        views["stacked " + " ".join(self.stacked_names())] = self.stacked()
         return views
+
+    def stacked_names(self) -> tuple[str, ...]:
+        """Return the masks of the stacked view as red, green, blue ("-" for none)."""
+        return tuple(self.controls[k].value if self.controls[k].value != _NONE else "-"
+                     for k in _STACK_KEYS)
+
+    def stacked(self) -> np.ndarray | None:
+        """Return the stacked view: the picked masks as the red, green and blue channels (None if
+        no mask is picked or all picked are off)."""
+        names = [self.controls[k].value for k in _STACK_KEYS]
+        made = {n: self.mask(n) for n in names if n != _NONE}
+        if not any(m is not None for m in made.values()):
+            return None
+        h, w = self.birdseye.shape[:2]
+        made[_NONE] = None
+        made = {n: m if m is not None else np.zeros((h, w), np.uint8) for n, m in made.items()}
+        return draw.stacked_masks(made, names)
 
     def readout(self) -> str:
         counts = self.counts()
         total = self.birdseye.shape[0] * self.birdseye.shape[1]
         per = ", ".join(f"{n} {v / total:.1%}" for n, v in counts.items() if n != "combined")
+        clahe = (f"  CLAHE clip {self.config.thresholds.clahe_clip_limit:g}, "
+                 f"tiles {self.config.thresholds.clahe_tile_px} px" if self.config.thresholds.clahe else "")
         return (f"combined: {counts['combined']} px ({counts['combined'] / total:.1%} of the view)"
-                f"  rule: {self.config.thresholds.rule}\n{per}")
+                f"  rule: {self.config.thresholds.rule}{clahe}\n{per}")
