@@ -175,16 +175,41 @@ def _add_video(sub) -> None:
     p.add_argument("--log", type=Path, metavar="CSV",
                    help="per-frame CSV: frame, time_s, found, left_conf, right_conf, radius_m, "
                         "offset_m, lane_width_m, left_a..c, right_a..c (bird's-eye pixel fits)")
+    _range_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
     p.set_defaults(func=_run_video)
+
+
+def _range_args(p: argparse.ArgumentParser, videos_only: str = "") -> None:
+    p.add_argument("--start", type=float, metavar="S",
+                   help=f"{videos_only}run on part of the clip from S seconds: from the first frame "
+                        "at or after S (frame i shows from i / fps s); default: the clip's start. "
+                        "ffmpeg seeks there, the frames before are not decoded, and the tracking "
+                        "starts afresh on that frame. The output video "
+                        "holds only the part; the --log rows keep the source clip's frame index "
+                        "and time_s, so frame 50 of a 25 fps clip is logged as frame 50, 2.0 s")
+    p.add_argument("--end", type=float, metavar="E",
+                   help=f"{videos_only}run up to the last frame before E seconds (--start 2 --end 3 "
+                        "at 25 fps: frames 50..74, 25 frames); default: the clip's end. A "
+                        "negative time, a start not before the end or a start beyond the clip's "
+                        "last frame is an error (exit code 2)")
+
+
+def _part(args, run) -> str:
+    """Return the summary's note of the clip's part a --start/--end run covered ('' for all of it)."""
+    if args.start is None and args.end is None:
+        return ""
+    last = run.first_frame + run.frames - 1
+    return f" (frames {run.first_frame}..{last} of {args.input})"
 
 
 def _run_video(args) -> int:
     config, calibration = _load_pipeline_inputs(args)
     run = runs.process_video(args.input, args.output, config, calibration, debug=args.debug,
-                        log_path=args.log, progress=not args.no_progress)
-    print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
-          f"lane found in {run.found_frames} of {run.frames} frames"
+                             log_path=args.log, progress=not args.no_progress,
+                             start_s=args.start, end_s=args.end)
+    print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
+          f"({run.fps:.1f} fps); lane found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
     return 0
 
@@ -212,6 +237,7 @@ def _add_hough(sub) -> None:
                    help="videos only: per-frame CSV: frame, time_s, left_found, right_found, "
                         "left_x_bottom, left_x_top, right_x_bottom, right_x_top, left_held, "
                         "right_held, reason")
+    _range_args(p, "videos only: ")
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
     p.set_defaults(func=_run_hough)
 
@@ -221,6 +247,9 @@ def _run_hough(args) -> int:
     if args.input.is_dir():
         if args.log:
             raise InputError("--log is for videos; for images the rows are in OUT/results.json")
+        if args.start is not None or args.end is not None:
+            raise InputError(f"{args.input}: --start and --end are for videos; drop them for a "
+                             "folder of images")
         rows = runs.hough_images(list_images(args.input), args.output, config)
         for r in rows:
             if "error" in r:
@@ -239,9 +268,9 @@ def _run_hough(args) -> int:
         raise InputError(f"{args.input}: neither a folder of images nor a video "
                          f"({', '.join(VIDEO_SUFFIXES)}); pass one of those")
     run = runs.hough_video(args.input, args.output, config, log_path=args.log,
-                           progress=not args.no_progress)
-    print(f"{args.output}: {run.frames} frames in {run.seconds:.1f} s ({run.fps:.1f} fps); "
-          f"both lines found in {run.found_frames} of {run.frames} frames"
+                           progress=not args.no_progress, start_s=args.start, end_s=args.end)
+    print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
+          f"({run.fps:.1f} fps); both lines found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
     return 0
 

@@ -380,15 +380,44 @@ class VideoReader:
     ends well before the length its container announces: a truncated download) raises
     ``DecodeStoppedError`` after the frames it could decode; one with no frame at all raises
     ``InputError``.
+
+    ``start`` and ``stop`` (frame indices, as for ``range``) read part of the clip: frames
+    ``start .. stop - 1`` (to the end when ``stop`` is None). ffmpeg seeks to ``start`` as
+    ``read_frame`` does (``-ss`` before ``-i``: a few frames' decoding from the key frame before
+    it, not ``start``) and stops after ``stop - start`` frames, so the frames are the very ones
+    a reader from the start yields at those indices. ``info`` (``video_info(path)``) saves
+    opening the file twice when ``start`` > 0. A ``DecodeStoppedError`` then names the clip's
+    frame index where decoding stopped; its ``frames`` counts the frames this reader yielded.
     """
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, start: int = 0, stop: int | None = None,
+                 info: VideoInfo | None = None):
         self.path = Path(path)
         if not self.path.is_file():
             raise InputError(f"{self.path}: no such video file; check the path")
         if self.path.stat().st_size == 0:
             raise InputError(f"{self.path}: the video file is empty (0 bytes); {_VIDEO_FIX}")
-        self._gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
+        for name, value in (("start", start), ("stop", stop)):
+            if value is not None and (isinstance(value, (bool, np.bool_))
+                                      or not isinstance(value, (int, np.integer)) or value < 0):
+                raise InputError(f"{self.path}: {name} frame {value!r} is not a frame index; "
+                                 "pass a whole number >= 0")
+        self.start, self.stop = int(start), (None if stop is None else int(stop))
+        if self.stop is not None and self.stop <= self.start:
+            raise InputError(f"{self.path}: frames {self.start} to {self.stop} hold no frame; "
+                             "pass a stop frame after the start frame")
+        input_params = []
+        if self.start > 0:
+            info = info if info is not None else video_info(self.path)
+            if self.start >= info.n_frames:
+                raise InputError(f"{self.path}: frame {self.start} is outside the video (frames "
+                                 f"0..{info.n_frames - 1}, {info.n_frames} frames at {info.fps:g} "
+                                 "fps); pass a start frame in that range")
+            # half a frame before the start frame's time, as read_frame seeks
+            input_params = ["-ss", f"{max(0.0, (self.start - 0.5) / exact_fps(info.fps)):.6f}"]
+        output_params = ["-frames:v", str(self.stop - self.start)] if self.stop is not None else None
+        self._gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24",
+                                               input_params=input_params, output_params=output_params)
         try:
             meta = next(self._gen)
         except (RuntimeError, OSError, StopIteration) as e:
@@ -406,8 +435,10 @@ class VideoReader:
 
     def _stopped(self, n: int, cause: str) -> InputError:
         if n == 0:
-            return InputError(f"{self.path}: no frame could be decoded ({cause}); {_VIDEO_FIX}")
-        return DecodeStoppedError(f"{self.path}: decoding stopped at frame {n}: {cause}", n, cause)
+            at = f" from frame {self.start} on" if self.start else ""
+            return InputError(f"{self.path}: no frame could be decoded{at} ({cause}); {_VIDEO_FIX}")
+        return DecodeStoppedError(f"{self.path}: decoding stopped at frame {self.start + n}: {cause}",
+                                  n, cause)
 
     def __iter__(self) -> Iterator[np.ndarray]:
         w, h = self.info.size
@@ -420,12 +451,14 @@ class VideoReader:
                 yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)
         except RuntimeError as e:
             raise self._stopped(n, ffmpeg_cause(str(e))) from None
-        expected = self.info.n_frames
+        announced = self.info.n_frames
+        end = announced if self.stop is None else min(self.stop, announced)
         if n == 0:
-            raise InputError(f"{self.path}: the video holds no frames; {_VIDEO_FIX}")
-        if expected - n > max(SHORTFALL_FRAMES, SHORTFALL_SHARE * expected):
-            raise self._stopped(n, f"the file ends after {n} of the {expected} frames its container "
-                                   "announces (truncated?)")
+            at = f" from frame {self.start} on" if self.start else ""
+            raise InputError(f"{self.path}: the video holds no frames{at}; {_VIDEO_FIX}")
+        if end - self.start - n > max(SHORTFALL_FRAMES, SHORTFALL_SHARE * announced):
+            raise self._stopped(n, f"the file ends after {self.start + n} of the {announced} frames "
+                                   "its container announces (truncated?)")
 
     def close(self) -> None:
         with contextlib.suppress(Exception):

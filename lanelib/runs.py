@@ -117,13 +117,58 @@ class VideoRun:
 
     ``found_frames`` counts the frames whose ``process`` said found: for ``process_video`` a lane
     that passed the checks (tracked, held or inferred included), for ``hough_video`` both lines
-    (measured or held).
+    (measured or held). ``first_frame`` is the clip's index of the first frame processed (0
+    unless the run started later: ``start_s``); the frames run ``first_frame .. first_frame +
+    frames - 1`` of the clip.
     """
 
     frames: int
     seconds: float
     fps: float
     found_frames: int
+    first_frame: int = 0
+
+
+# a frame whose time is a hair (float rounding) before a bound counts as at the bound
+_BOUND_EPS_FRAMES = 1e-6
+
+
+def clip_frames(info: io.VideoInfo, start_s: float | None = None, end_s: float | None = None) -> range:
+    """Return the clip's frame indices from ``start_s`` to ``end_s`` (seconds; None: the clip's start, end).
+
+    Frame ``i`` shows from ``i / fps`` (``io.exact_fps``): the range holds the frames from the
+    first one at or after ``start_s`` to the last one before ``end_s`` (``--start 2 --end 3`` at
+    25 fps: frames 50..74). An ``end_s`` beyond the clip's end runs to its last frame.
+
+    Raises
+    ------
+    InputError
+        If a bound is negative or not a number, if ``start_s`` is not before ``end_s``, if
+        ``start_s`` is at or beyond the clip's end, or if no frame starts between the two; the
+        message names the clip, its duration and the fix.
+    """
+    n, fps = info.n_frames, io.exact_fps(info.fps)
+    duration = n / fps
+    clip = f"{info.path}: the clip is {duration:.3f} s long ({n} frames at {info.fps:g} fps)"
+    for name, value in (("start", start_s), ("end", end_s)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{clip}; --{name} {value:g} s is not a time in it; pass a time in "
+                             f"seconds from 0 to {duration:.3f}")
+    if start_s is not None and end_s is not None and start_s >= end_s:
+        raise InputError(f"{clip}; --start {start_s:g} s is not before --end {end_s:g} s; pass a "
+                         "start time before the end time")
+    last_s = (n - 1) / fps
+    if start_s is not None and start_s * fps > n - 1 + _BOUND_EPS_FRAMES:
+        where = ("is at or beyond its end" if start_s * fps >= n - _BOUND_EPS_FRAMES else
+                 f"is after its last frame, which starts at {last_s:.3f} s")
+        raise InputError(f"{clip}; --start {start_s:g} s {where}; pass a start time from 0 to "
+                         f"{last_s:.3f} s")
+    first = 0 if start_s is None else max(0, math.ceil(start_s * fps - _BOUND_EPS_FRAMES))
+    stop = n if end_s is None else min(n, math.ceil(end_s * fps - _BOUND_EPS_FRAMES))
+    if stop <= first:
+        raise InputError(f"{clip}; no frame starts from {start_s or 0:g} s to before --end "
+                         f"{end_s:g} s (frames are {1 / fps:.3f} s apart); pass a longer span")
+    return range(first, stop)
 
 
 class _CsvLog:
@@ -168,7 +213,8 @@ def _format_csv(v) -> str:
 
 def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: FrameFn,
               log_path: str | os.PathLike | None = None, progress: bool = True,
-              desc: str = "frames", threads: int | None = None) -> VideoRun:
+              desc: str = "frames", threads: int | None = None, start_s: float | None = None,
+              end_s: float | None = None) -> VideoRun:
     """Return what a run did after processing every frame and writing the output video (and log).
 
     ``process(frame, index, time_s)`` returns the output frame, the row of the per-frame CSV log
@@ -177,6 +223,14 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     ``progress`` is true. An empty, corrupt or missing input, or one in a codec ffmpeg cannot
     decode, raises ``InputError`` with nothing written; an exception or Ctrl-C mid-run removes the
     partial output and log.
+
+    ``start_s``, ``end_s`` (seconds, either may be None) run on part of the clip: the frames
+    ``clip_frames`` gives, from the first at or after ``start_s`` to the last before ``end_s``.
+    Decoding seeks to the first one (``io.VideoReader(start=...)``) and stops after the last.
+    ``index`` and ``time_s`` stay those of the source clip (``index / fps``: frame 50 of a 25 fps
+    clip is 2.0 s whatever the start), so a log row names the source frame it came from; the
+    output video holds only the part, from its own time 0. Bad bounds raise ``InputError``
+    (``clip_frames``) before anything is written.
 
     Raises
     ------
@@ -187,21 +241,29 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
         what was written.
     """
     in_path = Path(in_path)
-    reader = io.VideoReader(in_path)
+    if start_s is None and end_s is None:
+        reader = io.VideoReader(in_path)
+        frames = range(reader.info.n_frames)
+    else:
+        info = io.video_info(in_path)
+        frames = clip_frames(info, start_s, end_s)
+        reader = io.VideoReader(in_path, frames.start, frames.stop if end_s is not None else None, info)
     inputs = [in_path]
     log = _CsvLog(Path(log_path) if log_path else None, inputs)
     writer = io.VideoWriter(out_path, reader.info.fps, inputs=inputs, threads=threads)
     ok = False
     stopped: DecodeStoppedError | None = None
     n = found = 0
+    first = frames.start
     t0 = time.perf_counter()
     try:
-        bar = tqdm(total=reader.info.n_frames or None, desc=desc, unit="frame", disable=not progress,
+        bar = tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
                    dynamic_ncols=True)
         with bar:
             try:
                 for frame in reader:
-                    image, row, lane = process(frame, n, n / reader.info.fps)
+                    index = first + n
+                    image, row, lane = process(frame, index, index / reader.info.fps)
                     found += bool(lane)
                     writer.write(image)
                     log.write(row)
@@ -220,7 +282,7 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     if stopped is not None:
         wrote = f"wrote {n} frames to {writer.path}" + (f" and {n} rows to {log.path}" if log.path else "")
         raise PartialOutputError(f"{stopped}; {wrote}", n)
-    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found)
+    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, first)
 
 
 # --------------------------------------------------------------------------- the advanced pipeline
@@ -281,7 +343,8 @@ def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
 def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
                   debug: bool = False, log_path: str | os.PathLike | None = None,
-                  progress: bool = True, threads: int | None = None) -> VideoRun:
+                  progress: bool = True, threads: int | None = None, start_s: float | None = None,
+                  end_s: float | None = None) -> VideoRun:
     """Return what the run did after tracking the lane through a video and writing it annotated.
 
     The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
@@ -295,6 +358,10 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     log_path : per-frame CSV with ``VIDEO_LOG_COLUMNS`` (optional).
     progress : show a tqdm bar with fps and ETA.
     threads : encoder threads (None: ffmpeg's choice).
+    start_s, end_s : run on part of the clip (seconds; None: from its start, to its end): the
+        frames from the first at or after ``start_s`` to the last before ``end_s``
+        (``clip_frames``). The tracker starts fresh on the first of them; the log's ``frame``
+        and ``time_s`` are the source clip's (``run_video``).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -317,7 +384,7 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         return image, video_log_row(index, time_s, result), result.found
 
     return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                     desc=Path(in_path).name, threads=threads)
+                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline
@@ -348,12 +415,14 @@ def hough_log_row(frame: int, time_s: float, result: hough.HoughResult) -> dict:
 def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                 config: hough.HoughConfig = hough.HoughConfig(),
                 log_path: str | os.PathLike | None = None, progress: bool = True,
-                threads: int | None = None) -> VideoRun:
+                threads: int | None = None, start_s: float | None = None,
+                end_s: float | None = None) -> VideoRun:
     """Return what the run did after tracking both lines through a video and writing it annotated.
 
     ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
     CSV at ``log_path`` holds ``hough_log_row``. ``found_frames`` counts frames with both lines
-    (measured or held). Outputs are written atomically by ``run_video``: an error or Ctrl-C
+    (measured or held). ``start_s``, ``end_s`` run on part of the clip, as for
+    ``process_video``. Outputs are written atomically by ``run_video``: an error or Ctrl-C
     leaves nothing behind, except a video that stops decoding half-way: its outputs keep the
     frames before the break, and ``PartialOutputError`` says so.
     """
@@ -368,4 +437,4 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                 result.left_found and result.right_found)
 
     return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                     desc=Path(in_path).name, threads=threads)
+                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)

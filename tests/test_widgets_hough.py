@@ -189,3 +189,82 @@ def test_image_choices_list_bundled_then_p1(tmp_path):
     assert list(choices) == ["a.jpg", "udacity-p1/solidWhiteRight.jpg"]
     assert widgets.hough_image_choices(tmp_path / "repo", tmp_path / "nothing") == {
         "a.jpg": tmp_path / "repo" / "test_images" / "a.jpg"}
+
+
+# --------------------------------------------------------------------------- colour ranges
+
+def test_the_colour_ranges_show_the_configs_hls_bounds(images):
+    t = widgets.HoughTuner(images)
+    hc = t.config.hough
+    for color in ("white", "yellow"):
+        lo, hi = getattr(hc, f"{color}_hls_lo"), getattr(hc, f"{color}_hls_hi")
+        for i, (letter, top) in enumerate(zip("HLS", (179, 255, 255))):
+            s = t.controls[f"{color}.range{i}"]
+            assert (s.value, s.min, s.max, s.description) == ((lo[i], hi[i]), 0, top, letter)
+            assert f"lanelib-slider-{color}-range{i}" in s._dom_classes  # as ThresholdTuner's
+
+
+@pytest.mark.parametrize("key, value, color, lo, hi", [
+    ("yellow.range2", (250, 255), "yellow", (10, 0, 250), (40, 255, 255)),  # the yellow line is too pale
+    ("yellow.range0", (30, 40), "yellow", (30, 0, 100), (40, 255, 255)),  # the line's hue is 24
+    ("white.range1", (150, 255), "white", (0, 150, 0), (179, 255, 255)),  # the grey road is not white...
+    ("white.range1", (150, 180), "white", (0, 150, 0), (179, 180, 255)),  # ... nor the white line
+])
+def test_a_colour_range_sets_its_bounds_and_the_preview_is_the_pipelines(images, key, value, color,
+                                                                         lo, hi):
+    t = widgets.HoughTuner(images)
+    bytes0, color0 = bytes(t.preview.value), t.stages.color_mask.copy()
+    t.controls[key].value = value
+    assert t.error == ""
+    # the moved paint's bounds, every other parameter as it was
+    assert t.config.hough == replace(HoughConfig(), **{f"{color}_hls_lo": lo, f"{color}_hls_hi": hi})
+    # exactly what the pipeline does with the new config, stage by stage and drawn
+    rgb = io.read_image(images["road.png"])
+    fresh = hough.HoughLaneFinder(t.config.hough).process(rgb, keep_stages=True)
+    assert fresh.row() == t.result.row()
+    for stage in ("color_mask", "edges", "roi_edges"):
+        assert np.array_equal(getattr(t.stages, stage), getattr(fresh.stages, stage)), stage
+    assert np.array_equal(t.stages.segments, fresh.stages.segments)
+    assert not np.array_equal(t.stages.color_mask, color0)
+    assert np.array_equal(t.annotated(), hough.annotate(rgb, fresh))
+    assert np.array_equal(t.preview_sheet(), widgets.HoughTuner(images, config=t.config).preview_sheet())
+    assert bytes(t.preview.value) != bytes0
+    if color == "yellow":  # the left line is the yellow one
+        assert not t.result.left_found and t.result.right_found
+        assert "left: no segments" in t.result.reason
+
+
+def test_the_colour_ranges_round_trip_through_save_and_load(images, tmp_path):
+    t = widgets.HoughTuner(images)
+    t.controls["white.range1"].value = (190, 250)
+    t.controls["yellow.range0"].value = (15, 35)
+    t.controls["yellow.range2"].value = (90, 255)
+    path = t.save(tmp_path / "tuned.json")
+    held = json.loads(path.read_text())["hough"]
+    assert (held["white_hls_lo"], held["white_hls_hi"]) == ([0, 190, 0], [179, 250, 255])
+    assert (held["yellow_hls_lo"], held["yellow_hls_hi"]) == ([15, 0, 90], [35, 255, 255])
+    assert load_config(path).hough == t.config.hough
+
+    fresh = widgets.HoughTuner(images)
+    assert fresh.load(path).hough == t.config.hough
+    assert fresh.controls["white.range1"].value == (190, 250)
+    assert fresh.controls["yellow.range0"].value == (15, 35)
+    assert fresh.controls["yellow.range2"].value == (90, 255)
+    assert np.array_equal(fresh.preview_sheet(), t.preview_sheet())
+
+
+def test_a_loaded_low_bound_above_the_high_one_is_kept_until_its_paint_moves(images, tmp_path):
+    # a yellow range that selects nothing (H low 40 > high 10) is valid in a config file
+    odd = HoughConfig(yellow_hls_lo=(40, 0, 100), yellow_hls_hi=(10, 255, 255))
+    path = save_config(replace(PipelineConfig(), hough=odd), tmp_path / "odd.json")
+    t = widgets.HoughTuner(images)
+    t.load(path)
+    assert t.error == "" and t.config.hough == odd
+    assert t.controls["yellow.range0"].value == (10, 40)  # shown sorted
+    assert not t.result.left_found  # nothing is yellow
+    t.controls["white.range1"].value = (190, 255)  # another paint: yellow stays as loaded
+    assert t.config.hough.yellow_hls_lo == (40, 0, 100) and t.config.hough.yellow_hls_hi == (10, 255, 255)
+    t.controls["yellow.range1"].value = (0, 250)  # yellow moved: its bounds are what it shows
+    assert t.config.hough.yellow_hls_lo == (10, 0, 100)
+    assert t.config.hough.yellow_hls_hi == (40, 250, 255)
+    assert t.result.left_found

@@ -17,9 +17,9 @@ frame, the bird's-eye view, colour conversions, the lane mask) is computed once 
   straight-line check.
 - ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels) and the
   search around a fit.
-- ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's Canny thresholds, Hough parameters
-  and region of interest (``PipelineConfig.hough``), on the raw frame; its picker adds the
-  960x540 Udacity P1 images.
+- ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's white and yellow HLS ranges, Canny
+  thresholds, Hough parameters and region of interest (``PipelineConfig.hough``), on the raw
+  frame; its picker adds the 960x540 Udacity P1 images.
 - ``VideoTuner`` (``widgets/video.py``): the tracker's parameters (``PipelineConfig.tracking``:
   smoothing, recency, hold frames, jump limit) and the lane-width bounds of ``checks`` on a
   clip; the debug composite of the tracked frame under the frame slider, a strip of the
@@ -44,6 +44,15 @@ carries ``lanelib-preview``, the picker ``lanelib-picker`` and the readout ``lan
 A new tuner subclasses ``Tuner`` (``widgets/base.py``), sets ``parts`` and ``shows`` and
 implements ``_build``, ``_prepare``, ``_update``, ``_apply``, ``_sync``, ``render`` and
 ``readout`` (see ``Tuner``).
+
+Every tuner exports what it shows: ``tuner.export(folder=None, name=None)`` writes
+``<name>_preview.png`` (the preview sheet, ``preview_sheet()``) and ``<name>_annotated.png`` (the
+frame with the lane drawn under the tuner's config as the command line draws it: ``annotated()``)
+to ``folder`` (default ``out/`` of the repository) and returns their paths;
+``write_preview(path)`` and ``write_annotated(path)`` write one. The name defaults to the picked
+file, the video frame and the tuner (``straight_1_threshold``, ``project_frame50_video``); an
+export never writes over the picked input. The ``export`` button beside the picker does the same
+and lists the files under the preview.
 
 Any tuner also takes videos among its picker's items (``{"clip": "videos/project.mp4"}``, or
 ``image_choices(videos=True)`` / ``video_choices()`` for the bundled ones as ``"videos/<name>"``):

@@ -12,6 +12,10 @@ picked image (``_prepare``).
 The picker's items may be videos (``io.VIDEO_SUFFIXES``) as well as images: a video shows a frame
 slider (``frame_slider``, ``tuner.frame``) under the picker, and each frame it stops on is read by
 seeking (``io.read_frame``) and goes through the same ``_prepare`` and ``_update`` as an image.
+
+Every tuner exports what it shows (``export``, the ``export`` button): the preview sheet and the
+picked frame annotated with the tuned config as the command line draws it (``annotated``), as
+PNG files, never over the picked input.
 """
 from __future__ import annotations
 
@@ -29,9 +33,10 @@ import numpy as np
 from .. import io
 from ..camera import Calibration
 from ..config import PipelineConfig, from_dict, load_config, migrate, save_config, to_dict
-from ..data import UDACITY_ADVANCED, bundled, data_root, udacity, udacity_calibration
+from ..data import UDACITY_ADVANCED, bundled, data_root, repo_root, udacity, udacity_calibration
 from ..draw import sheet
 from ..errors import ConfigError, InputError, LaneLibError
+from ..pipeline import LanePipeline
 
 UDACITY_PREFIX = "udacity/"
 VIDEO_PREFIX = "videos/"
@@ -104,7 +109,14 @@ class Tuner:
     - ``_apply(key)``: return the new PipelineConfig after control ``key`` changed, changing
       nothing (raise ``LaneLibError`` to refuse the value: the readout then shows why);
     - ``_sync()``: set the controls from ``self.config`` (after ``load``);
-    - ``render()``: the named views of the preview; ``readout()``: the numbers as text.
+    - ``render()``: the named views of the preview; ``readout()``: the numbers as text;
+    - ``annotated()``: the picked frame with the lane drawn (default: ``LanePipeline.process``,
+      as ``python -m lanelib images`` draws it); a tuner of another pipeline overrides it.
+
+    Export: ``export(folder, name)`` writes ``<name>_preview.png`` (``preview_sheet()``) and
+    ``<name>_annotated.png`` (``annotated()``); ``write_preview(path)`` and
+    ``write_annotated(path)`` write one of them. The ``export`` button beside the picker writes
+    both to ``out/`` of the repository and lists them under the preview.
     """
 
     columns = 3
@@ -144,6 +156,12 @@ class Tuner:
         self.picker = widgets.Dropdown(options=list(self.images), value=image, description="image",
                                        layout=widgets.Layout(width="420px"))
         self.picker.add_class("lanelib-picker")
+        self.export_button = widgets.Button(description="export", icon="download",
+                                            tooltip="write the preview and the annotated frame "
+                                                    "as PNG to out/",
+                                            layout=widgets.Layout(width="100px"))
+        self.export_button.add_class("lanelib-control-export")
+        self.export_button.on_click(self._on_export)
         self.frame_slider = widgets.IntSlider(value=0, min=0, max=0, description="frame",
                                               continuous_update=False,
                                               layout=widgets.Layout(width="640px", display="none"),
@@ -202,14 +220,80 @@ class Tuner:
     def widget(self) -> widgets.VBox:
         """The tuner's widget: picker, frame slider, controls, preview and readout (made once)."""
         if self._widget is None:
-            self._widget = widgets.VBox([self.picker, self.frame_slider, *self._rows, self.preview,
-                                         self.message])
+            self._widget = widgets.VBox([row(self.picker, self.export_button), self.frame_slider,
+                                         *self._rows, self.preview, self.message])
             self._widget.add_class("lanelib-tuner")
         return self._widget
 
     def preview_sheet(self) -> np.ndarray:
         """Return the preview as an RGB array (what the Image shows, before JPEG encoding)."""
         return sheet(self.render(), self.tile_width_px, self.columns)
+
+    def annotated(self) -> np.ndarray:
+        """Return the picked frame with the lane drawn under the tuner's config (RGB uint8).
+
+        What ``python -m lanelib images`` writes for this frame with the tuner's config and
+        calibration: ``LanePipeline.process`` of the frame on its own (a video frame too: no
+        tracker), the lane and the measurements drawn on the undistorted frame. The Hough and
+        video tuners draw their own pipeline's result (``HoughTuner.annotated``,
+        ``VideoTuner.annotated``).
+        """
+        raw = self._raw
+        calibration = self._calibration_for(self.image)
+        size = (raw.shape[1], raw.shape[0])
+        pipe = self._cached("export pipeline", (id(calibration), size, self.config),
+                            lambda: LanePipeline(self.config, calibration, size=size))
+        return pipe.process(raw).images["result"]
+
+    def export_name(self) -> str:
+        """Return the stem of the exported files: the picked file's name, the frame, the tuner.
+
+        ``<file stem>_<tuner>`` for an image (``straight_1_threshold``), ``<file
+        stem>_frame<index>_<tuner>`` for a video frame (``project_frame50_video``); the tuner
+        is its class name without ``Tuner``, in lower case.
+        """
+        stem = self.images[self.image].stem
+        frame = f"_frame{self.frame}" if self.is_video else ""
+        kind = type(self).__name__.removesuffix("Tuner").lower() or "tuner"
+        return f"{stem}{frame}_{kind}"
+
+    def write_preview(self, path: str | os.PathLike) -> Path:
+        """Write the preview sheet (``preview_sheet()``, full quality) to ``path``; return the path.
+
+        PNG unless the suffix says otherwise (``io.IMAGE_SUFFIXES``); written atomically and
+        never over the picked input.
+        """
+        target = self._export_target(path)
+        return io.write_image(target, self.preview_sheet(), inputs=[self.images[self.image]])
+
+    def write_annotated(self, path: str | os.PathLike) -> Path:
+        """Write the annotated frame (``annotated()``) to ``path``; return the path.
+
+        PNG unless the suffix says otherwise (``io.IMAGE_SUFFIXES``): a PNG holds exactly the
+        pixels the command line draws. Written atomically and never over the picked input.
+        """
+        target = self._export_target(path)
+        return io.write_image(target, self.annotated(), inputs=[self.images[self.image]])
+
+    def export(self, folder: str | os.PathLike | None = None, name: str | None = None) -> dict[str, Path]:
+        """Write the preview and the annotated frame as PNG; return ``{"preview": path, "annotated": path}``.
+
+        Parameters
+        ----------
+        folder : where to write (made if missing); default: ``out/`` of the repository
+            (``data.repo_root()``).
+        name : the files' stem, ``<name>_preview.png`` and ``<name>_annotated.png``; default
+            ``export_name()`` (the picked file, the frame of a video, the tuner).
+
+        Both targets are checked before either is written: a name that would write over the
+        picked input raises ``InputError`` and nothing is written.
+        """
+        out = Path(folder) if folder is not None else repo_root() / "out"
+        stem = name if name is not None else self.export_name()
+        targets = {kind: self._export_target(out / f"{stem}_{kind}.png")
+                   for kind in ("preview", "annotated")}
+        return {"preview": self.write_preview(targets["preview"]),
+                "annotated": self.write_annotated(targets["annotated"])}
 
     def set_config(self, config: PipelineConfig) -> None:
         """Show ``config`` in the controls and the preview."""
@@ -328,6 +412,15 @@ class Tuner:
         h, w = self._raw.shape[:2]
         return self.tile_width_px, max(1, round(self.tile_width_px * h / w))
 
+    def _export_target(self, path: str | os.PathLike) -> Path:
+        """Return ``path`` as an export's target: an image suffix, not the picked input."""
+        target = Path(path)
+        if target.suffix.lower() not in io.IMAGE_SUFFIXES:
+            raise InputError(f"{target}: an exported image needs an image suffix "
+                             f"({', '.join(io.IMAGE_SUFFIXES)}); e.g. {target.name or 'view'}.png")
+        io.check_not_input(target, [self.images[self.image]])
+        return target
+
     def _calibration_for(self, label: str) -> Calibration | None:
         camera = "udacity" if label.startswith(UDACITY_PREFIX) else "bundled"
         if camera not in self._calibrations:
@@ -349,6 +442,19 @@ class Tuner:
         self._config = config
         self._update(key)
         self._refresh()
+
+    def _on_export(self, button=None) -> None:
+        """Export to ``out/`` and list the files under the preview (or say why it failed)."""
+        try:
+            written = self.export()
+        except LaneLibError as e:
+            self.error = str(e)
+            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            return
+        self.error = ""
+        text = "\n".join(filter(None, [self.readout(), "exported: " + ", ".join(
+            str(p) for p in written.values())]))
+        self.message.value = f'<pre style="margin:0">{html.escape(text)}</pre>'
 
     def _on_pick(self, change) -> None:
         self._pick(change["new"])

@@ -21,6 +21,9 @@ from .base import UDACITY_PREFIX, Tuner, row, sized
 UDACITY_P1_PREFIX = "udacity-p1/"
 _PLAIN_KEYS = ("blur_kernel_px", "rho_px", "theta_deg", "threshold_votes", "min_line_length_px",
                "max_line_gap_px", "min_abs_slope")
+COLORS = ("white", "yellow")  # the paint colours of HoughConfig: <colour>_hls_lo, <colour>_hls_hi
+HLS_MAX = (179, 255, 255)  # OpenCV's 8-bit HLS: H in 0..179 (degrees / 2), L and S in 0..255
+COLOR_KEYS = tuple(f"{c}.range{i}" for c in COLORS for i in range(3))
 
 
 def hough_image_choices(root: str | os.PathLike | None = None,
@@ -54,6 +57,12 @@ def _roi_fractions(roi_frac) -> dict[str, float]:
             "bottom_left": blx, "bottom_right": brx}
 
 
+def _shown(lo: int, hi: int, top: int) -> tuple[int, int]:
+    """Return a channel's (low, high) bounds as a range slider up to ``top`` can show them."""
+    lo, hi = (min(max(int(v), 0), top) for v in (lo, hi))
+    return (min(lo, hi), max(lo, hi))
+
+
 class HoughTuner(Tuner):
     """Tune the basic Canny + region of interest + Hough pipeline (``PipelineConfig.hough``).
 
@@ -61,8 +70,15 @@ class HoughTuner(Tuner):
     ``threshold_votes``, ``min_line_length_px``, ``max_line_gap_px``, ``min_abs_slope`` and the
     region of interest as fractions of the image: ``roi.top_y``, ``roi.top_left``,
     ``roi.top_right``, ``roi.bottom_left``, ``roi.bottom_right`` (the x of each corner; the bottom
-    row stays where the config has it). The preview shows the Canny edges, the edges inside the
-    region (outlined), the Hough segments coloured by side and the two lane lines on the frame.
+    row stays where the config has it); the colour selection, one low-high range per HLS
+    channel of each paint: ``white.range0`` .. ``white.range2`` (H 0-179, L, S 0-255:
+    ``white_hls_lo``/``white_hls_hi``) and ``yellow.range0`` .. ``yellow.range2``
+    (``yellow_hls_lo``/``yellow_hls_hi``), as ``ThresholdTuner`` shows its colour ranges. Moving
+    one range rewrites only its paint's bounds (a loaded low bound above the high one shows
+    sorted and is kept until its paint's ranges move). The preview shows the white and yellow
+    selection (inside the region's bounding box, the part the pipeline processes), the Canny
+    edges, the edges inside the region (outlined), the Hough segments coloured by side and the
+    two lane lines on the frame.
 
     The Hough pipeline works on raw frames (no undistortion), so no calibration is used. A change
     reruns ``hough.HoughLaneFinder.process`` on the picked frame (only the region's bounding box
@@ -70,8 +86,8 @@ class HoughTuner(Tuner):
     hough`` run does. ``save`` writes the ``hough`` part; ``load`` reads only that part.
     """
 
-    columns = 2
-    default_tile_width_px = 480
+    columns = 3
+    default_tile_width_px = 400
     parts = ("hough",)
     shows = ("hough",)
     ROI_KEYS = ("roi.top_y", "roi.top_left", "roi.top_right", "roi.bottom_left", "roi.bottom_right")
@@ -110,6 +126,13 @@ class HoughTuner(Tuner):
             row(fsl("roi.top_right", roi["top_right"], 0.0, 1.0, 0.01, "ROI top right x"),
                 fsl("roi.bottom_left", roi["bottom_left"], 0.0, 1.0, 0.01, "ROI bottom left x")),
             row(fsl("roi.bottom_right", roi["bottom_right"], 0.0, 1.0, 0.01, "ROI bottom right x")),
+            *(row(widgets.HTML(f"{color} paint (HLS)", layout=widgets.Layout(width="120px")),
+                  *(self._control(f"{color}.range{i}", widgets.IntRangeSlider(
+                      value=_shown(lo, hi, top), min=0, max=top, description=letter,
+                      **sized(260, 20)))
+                    for i, (letter, lo, hi, top) in enumerate(zip(
+                        "HLS", getattr(hc, f"{color}_hls_lo"), getattr(hc, f"{color}_hls_hi"), HLS_MAX))))
+              for color in COLORS),
         ]
 
     def _sync(self) -> None:
@@ -119,6 +142,10 @@ class HoughTuner(Tuner):
         c["canny"].value = (hc.canny_low, hc.canny_high)
         for key, value in _roi_fractions(hc.roi_frac).items():
             c[f"roi.{key}"].value = value
+        for color in COLORS:
+            for i, (lo, hi, top) in enumerate(zip(getattr(hc, f"{color}_hls_lo"),
+                                                  getattr(hc, f"{color}_hls_hi"), HLS_MAX)):
+                c[f"{color}.range{i}"].value = _shown(lo, hi, top)
 
     def _calibration_for(self, label: str) -> Calibration | None:
         return None  # the Hough pipeline works on raw frames
@@ -141,6 +168,11 @@ class HoughTuner(Tuner):
                       min_line_length_px=int(c["min_line_length_px"].value),
                       max_line_gap_px=int(c["max_line_gap_px"].value),
                       min_abs_slope=round(float(c["min_abs_slope"].value), 4))
+        if key in COLOR_KEYS:  # only the moved paint's bounds: the other keeps the config's
+            color = key.partition(".")[0]
+            ranges = [c[f"{color}.range{i}"].value for i in range(3)]
+            new = replace(new, **{f"{color}_hls_lo": tuple(int(r[0]) for r in ranges),
+                                  f"{color}_hls_hi": tuple(int(r[1]) for r in ranges)})
         return replace(self.config, hough=new)
 
     # ---- the pipeline ---------------------------------------------------------------------
@@ -159,7 +191,8 @@ class HoughTuner(Tuner):
     # ---- views ----------------------------------------------------------------------------
 
     def render(self) -> dict[str, np.ndarray | None]:
-        """Return the Canny edges, the edges in the region, the Hough segments and the lines."""
+        """Return the colour selection, the Canny edges, the edges in the region, the Hough
+        segments and the lines."""
         tw, th = self._tile_size()
         h, w = self.rgb.shape[:2]
         scale = np.array([tw / w, th / h, tw / w, th / h])
@@ -174,8 +207,15 @@ class HoughTuner(Tuner):
             if len(group):  # every segment yellow, then the kept ones in their side's colour
                 segs = hough.draw_lines(segs, np.rint(group * scale).astype(np.int32), color, 2)
         lines = shrink(hough.annotate(self.rgb, self.result), (tw, th))
-        return {"Canny edges": st.edges, "edges in the region": roi_view,
-                "Hough segments (left red, right blue)": segs, "lane lines": lines}
+        return {"white/yellow selection (in the region's box)": st.color_mask, "Canny edges": st.edges,
+                "edges in the region": roi_view, "Hough segments (left red, right blue)": segs,
+                "lane lines": lines}
+
+    def annotated(self) -> np.ndarray:
+        """Return the picked frame with the Hough lines drawn (``hough.annotate``), as ``python -m
+        lanelib hough`` writes it for an image with the tuner's ``hough`` config (a video frame
+        too: found on its own, without the smoothing across frames of a video run)."""
+        return hough.annotate(self.rgb, self.result)
 
     def readout(self) -> str:
         r = self.result

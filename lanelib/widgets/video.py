@@ -227,15 +227,29 @@ class VideoTuner(Tuner):
         if target.suffix.lower() not in io.VIDEO_SUFFIXES:
             raise InputError(f"{target}: the output video needs a video suffix "
                              f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. tuned.mp4")
-        pipe = self.pipeline
-        undistorted = self.config.draw.video_undistorted
         with io.VideoWriter(target, self._video_info(clip).fps, inputs=[clip]) as writer:
             for frame, result in zip(self.frames, self.results):
-                writer.write(pipe.annotate(pipe.undistort(frame), result) if undistorted
-                             else pipe.annotate(frame, result, raw=True))
+                writer.write(self._annotate(frame, result))
         return TunedVideo(target, len(self.results), value=target.read_bytes(), format="mp4",
                           autoplay=False, loop=False, controls=True,
                           layout=widgets.Layout(max_width="100%"))
+
+    def annotated(self) -> np.ndarray:
+        """Return the tracked frame shown, annotated as ``python -m lanelib video`` draws it.
+
+        The tracker's result for the frame (tracked from the clip's first frame), drawn as
+        ``play()`` and ``runs.process_video`` draw it: the frame of the output video before it
+        is encoded (``export`` writes it as a lossless PNG).
+        """
+        i = min(self.frame, len(self.results) - 1)
+        return self._annotate(self._clip[1][i], self.results[i])
+
+    def _annotate(self, frame: np.ndarray, result: FrameResult) -> np.ndarray:
+        """Return ``frame`` with ``result``'s lane drawn as the video command draws it."""
+        pipe = self.pipeline
+        if self.config.draw.video_undistorted:
+            return pipe.annotate(pipe.undistort(frame), result)
+        return pipe.annotate(frame, result, raw=True)
 
     # ---- hooks ----------------------------------------------------------------------------
 
