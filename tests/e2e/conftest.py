@@ -106,15 +106,18 @@ def _mirror_repo(dest: Path) -> Path:
     """Make ``dest/<repo name>`` look like the repo: notebooks/ copied, everything else symlinked.
 
     Relative paths from a notebook (``../test_images``, ``../../shared/data``) resolve as in the
-    repo, while whatever the notebook or JupyterLab writes lands in the copy.
+    repo, while whatever the notebook or JupyterLab writes lands in the copy. ``out/``, where
+    the notebooks save (``out/tuned.json``, ``out/project_tuned.mp4``), is a fresh empty folder:
+    a run never writes into the repo's ``out/``, nor races the nbval run writing there.
     """
     root = dest / REPO.name
     root.mkdir(parents=True)
     source = Path(os.environ.get("LANELIB_E2E_NOTEBOOKS", REPO / "notebooks"))
     shutil.copytree(source, root / "notebooks",
                     ignore=shutil.ignore_patterns(".ipynb_checkpoints", "__pycache__"))
+    (root / "out").mkdir()
     for entry in REPO.iterdir():
-        if entry.name not in {"notebooks", ".git", ".venv"}:
+        if entry.name not in {"notebooks", "out", ".git", ".venv"}:
             (root / entry.name).symlink_to(entry)
     for sibling in REPO.parent.iterdir():
         if sibling.name != REPO.name and not (dest / sibling.name).exists():
