@@ -349,8 +349,8 @@ def _run_evaluate(args) -> int:
 def _add_synth(sub) -> None:
     p = sub.add_parser(
         "synth", help="render synthetic chessboards, road images and videos with ground truth",
-        description="Render lanelib's synthetic data with exact ground truth, the same bytes from the "
-                    "same seeds. --all rewrites the bundled camera_cal/ (20 chessboards and "
+        description="Render lanelib's synthetic data with exact ground truth from fixed seeds (the "
+                    "same bytes on one machine). --all rewrites the bundled camera_cal/ (20 chessboards and "
                     "camera_truth.json), test_images/ (8 scenes, NAME.json beside each) and videos/ "
                     "(project, challenge, harder: 10 s each, NAME.csv per frame and NAME.json beside "
                     "each). The subcommands render one part.",

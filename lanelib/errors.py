@@ -20,6 +20,12 @@ class ConfigError(LaneLibError):
     """A configuration value or file is invalid (unknown key, wrong type, out of range)."""
 
 
+class GeometryError(LaneLibError):
+    """The road geometry could not be estimated from the frames given (``geometry``): no road,
+    too few line segments, segments that meet in no one point, a road that is not straight, or
+    vanishing points that disagree from frame to frame. The message names the reason and the fix."""
+
+
 class DecodeStoppedError(InputError):
     """A video stopped decoding part-way (truncated or corrupt); ``frames`` frames came before.
 

@@ -12,6 +12,11 @@ angles cannot meet four pixel targets, and 0.2 px is what remains). The camera s
 the road, pitched 1.483 deg up and turned 1.551 deg to the right (the principal point is at
 x = 671, right of the image centre).
 
+Other cameras: ``Camera.pinhole`` builds an ideal (or mildly distorted) camera of any size, focal
+length and mounting, including a roll about the optical axis (``roll_deg``, 0 for the bundled
+camera, which stays the same bit for bit). ``vanishing_point_px`` and ``horizon_px`` give the
+geometry that ``lanelib.geometry`` estimates from the road.
+
 Frames: the car frame has its origin on the road surface below the camera, x to the right,
 y down and z forward, in metres. The road is the plane y = 0.
 """
@@ -49,6 +54,8 @@ class Camera:
     height_m : height of the optical centre above the road.
     pitch_deg : tilt of the optical axis, positive down.
     yaw_deg : turn of the optical axis from the car's forward direction, positive right.
+    roll_deg : turn of the camera about its optical axis, positive when its right side dips (the
+        horizon then rises to the right in the image: its row falls by tan(roll) per column).
     """
 
     camera_matrix: tuple[tuple[float, ...], ...] = UDACITY_CAMERA_MATRIX
@@ -57,6 +64,28 @@ class Camera:
     height_m: float = MOUNT_HEIGHT_M
     pitch_deg: float = MOUNT_PITCH_DEG
     yaw_deg: float = MOUNT_YAW_DEG
+    roll_deg: float = 0.0
+
+    @staticmethod
+    def pinhole(size_px: tuple[int, int], hfov_deg: float | None = None, focal_px: float | None = None,
+                height_m: float = MOUNT_HEIGHT_M, pitch_deg: float = 0.0, yaw_deg: float = 0.0,
+                roll_deg: float = 0.0, dist_coeffs: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0),
+                principal_px: tuple[float, float] | None = None) -> "Camera":
+        """Return a camera with square pixels of ``size_px`` (w, h), mounted as given.
+
+        The focal length is ``focal_px``, or the one that gives a horizontal field of view of
+        ``hfov_deg`` (exactly one of the two). The principal point is the image centre unless
+        ``principal_px`` says otherwise; ``dist_coeffs`` (OpenCV k1, k2, p1, p2, k3) default to
+        none (an ideal pinhole).
+        """
+        if (hfov_deg is None) == (focal_px is None):
+            raise ValueError("Camera.pinhole: give exactly one of hfov_deg and focal_px")
+        w, h = int(size_px[0]), int(size_px[1])
+        f = float(focal_px) if focal_px is not None else w / 2 / np.tan(np.radians(hfov_deg) / 2)
+        cx, cy = principal_px if principal_px is not None else (w / 2, h / 2)
+        matrix = ((f, 0.0, float(cx)), (0.0, f, float(cy)), (0.0, 0.0, 1.0))
+        return Camera(matrix, tuple(float(d) for d in dist_coeffs), (w, h), float(height_m),
+                      float(pitch_deg), float(yaw_deg), float(roll_deg))
 
     @property
     def K(self) -> np.ndarray:
@@ -73,7 +102,24 @@ class Camera:
         p, y = np.radians(self.pitch_deg), np.radians(self.yaw_deg)
         z_axis = np.array([np.sin(y) * np.cos(p), np.sin(p), np.cos(y) * np.cos(p)])
         x_axis = np.array([np.cos(y), 0.0, -np.sin(y)])
-        return np.stack([x_axis, np.cross(z_axis, x_axis), z_axis])
+        y_axis = np.cross(z_axis, x_axis)
+        if self.roll_deg:
+            r = np.radians(self.roll_deg)
+            x_axis, y_axis = np.cos(r) * x_axis + np.sin(r) * y_axis, np.cos(r) * y_axis - np.sin(r) * x_axis
+        return np.stack([x_axis, y_axis, z_axis])
+
+    def vanishing_point_px(self) -> tuple[float, float]:
+        """Return where the car's forward direction vanishes in the undistorted image (x, y px)."""
+        d = self.K @ self.rotation()[:, 2]
+        return float(d[0] / d[2]), float(d[1] / d[2])
+
+    def horizon_px(self) -> tuple[float, float]:
+        """Return the horizon in the undistorted image: (its row at the image centre column w/2,
+        its slope in rows per column). The horizon is the image of every horizontal direction."""
+        line = np.linalg.inv(self.K).T @ self.rotation()[:, 1]   # l . (x, y, 1) = 0
+        slope = -line[0] / line[1]
+        x = self.size_px[0] / 2
+        return float(-(line[0] * x + line[2]) / line[1]), float(slope)
 
     def centre(self) -> np.ndarray:
         """Return the optical centre in the car frame (m)."""

@@ -11,6 +11,7 @@ mipmap level that matches the footprint, so distant dashes fade instead of shimm
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import cv2
@@ -33,6 +34,7 @@ MAX_FOOTPRINT_M = 50.0
 CONCRETE_JOINT_M = 4.5  # transverse joints of concrete slabs
 SKYLINE_BAND_DEG = (-1.0, 7.0)
 NOISE_MARGIN_PX = 16
+HOOD_HEIGHT_REF_PX = 720  # image height at which the hood is textures.hood_profile's 26 px
 
 
 def _box(a: np.ndarray, b: np.ndarray, inv_w: np.ndarray, lo, hi) -> np.ndarray:
@@ -129,8 +131,15 @@ def _mip_bands(footprint_m: np.ndarray) -> tuple[tuple[int, int, int, int], ...]
 
 
 def _hood(size_px: tuple[int, int]) -> dict:
-    """Return the hood's first row, coverage (anti-aliased) and shading for the grid."""
+    """Return the hood's first row, coverage (anti-aliased) and shading for the grid.
+
+    The hood is ``textures.hood_profile`` at 720 rows, and as high in proportion to the image at
+    other heights.
+    """
     top = hood_profile(size_px)
+    if size_px[1] != HOOD_HEIGHT_REF_PX:
+        h = float(size_px[1])
+        top = (h - (h - top) * (h / HOOD_HEIGHT_REF_PX)).astype(np.float32)
     row0 = int(np.floor(top.min()))
     rows = np.arange(row0, size_px[1], dtype=np.float32)[:, None]
     alpha = np.clip(rows + 0.5 - top[None, :], 0.0, 1.0)[..., None]
@@ -207,11 +216,25 @@ class Renderer:
                                       light_table(scene, self.road.s_m)], axis=1)
         hills, trees = skyline(rng)
         self.skyline = np.column_stack([np.append(hills, hills[0]), np.append(trees, trees[0])])
+        self._noise_rng_state = rng.bit_generator.state
+        self._set_grid(grid, rng)
+
+    def _set_grid(self, grid: GroundGrid, rng: np.random.Generator) -> None:
+        """Set what depends on the camera grid: the camera noise (drawn from ``rng``), haze and sky."""
+        self.grid = grid
         w, h = grid.camera.size_px
         self.noise = rng.standard_normal((h + NOISE_MARGIN_PX, w + NOISE_MARGIN_PX, 3)).astype(np.float32)
-        look = scene.look
-        self.haze = (1.0 - np.exp(-grid.distance_m / look.haze_m)).astype(np.float32)
+        self.haze = (1.0 - np.exp(-grid.distance_m / self.scene.look.haze_m)).astype(np.float32)
         self.sky = self._sky()
+
+    def for_grid(self, grid: GroundGrid) -> "Renderer":
+        """Return a renderer of the same scene through another camera grid, without drawing the
+        scene's maps again: it renders exactly what ``Renderer(scene, grid)`` renders."""
+        other = copy.copy(self)
+        rng = np.random.default_rng()
+        rng.bit_generator.state = self._noise_rng_state
+        other._set_grid(grid, rng)
+        return other
 
     # ------------------------------------------------------------------ geometry
 

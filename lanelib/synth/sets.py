@@ -1,8 +1,9 @@
 """The bundled synthetic data: eight test scenes, three video sets and the calibration boards.
 
-Every item has a fixed seed, so ``generate_all`` writes the same bytes on every run (JPEG through
-libjpeg, H.264 through x264 with one thread: frame threading would make the bytes depend on the
-machine's core count).
+Every item has a fixed seed, so ``generate_all`` writes the same bytes on every run on one machine
+(JPEG through libjpeg, H.264 through x264 with one thread: frame threading would make the bytes
+depend on the machine's core count). On another CPU the truth is the same and a few pixels may
+differ by one grey level: numpy's SIMD kernels (exp, sin) may round a float's last bit differently.
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ VIDEO_THREADS = 1          # x264 threads; more make the bytes depend on the mac
 EXPOSURE_TARGET = 112.0    # auto exposure: mean grey of the road area it aims at
 EXPOSURE_RATE = 0.12       # share of the log-error corrected per frame
 EXPOSURE_LIMITS = (0.35, 3.0)
-METER_ROWS = slice(440, 680)
+METER_ROWS = slice(440, 680)   # at 720 rows; in proportion for other heights (meter_rows)
 
 SUNNY = Look(tree_shadows_per_100m=0.6, patches_per_100m=1.0)
 
@@ -152,9 +153,16 @@ def video_sets() -> dict[str, VideoSet]:
     }
 
 
+def meter_rows(height_px: int) -> slice:
+    """Return the rows the auto exposure meters: METER_ROWS at 720 rows, the same share of others."""
+    if height_px == 720:
+        return METER_ROWS
+    return slice(int(METER_ROWS.start * height_px / 720), int(METER_ROWS.stop * height_px / 720))
+
+
 def _next_exposure(frame: np.ndarray, gain: float) -> float:
     """Return the auto-exposure gain for the next frame after ``frame`` was taken at ``gain``."""
-    mean = float(frame[METER_ROWS].mean()) + 1.0
+    mean = float(frame[meter_rows(frame.shape[0])].mean()) + 1.0
     new = gain * (EXPOSURE_TARGET / mean) ** EXPOSURE_RATE
     return float(np.clip(new, *EXPOSURE_LIMITS))
 

@@ -28,11 +28,14 @@ from .camera import Camera
 from .render import MAX_ROAD_ANGLE_RAD, Renderer
 from .road import CarPose, car_frame, world_to_car
 
-H_SAMPLES_PX = tuple(range(420, 720, 10))
+H_SAMPLES_PX = tuple(range(420, 720, 10))   # the bundled 1280x720 camera's rows (h_samples_px for others)
 NOT_VISIBLE = -2.0
 TRUTH_RANGE_M = 100.0
 # undistorted rows of the default perspective trapezoid (top, bottom)
 BIRD_EYE_ROWS_PX = (DEFAULT_SRC_1280x720[0][1], DEFAULT_SRC_1280x720[1][1])
+# distance ahead (m) of the default trapezoid's top row seen by the bundled camera: the top row of
+# other cameras' default truth trapezoid
+BIRD_EYE_TOP_M = 28.25
 IMAGE_FORMAT = "lanelib-synth-image-truth/1"
 VIDEO_FORMAT = "lanelib-synth-video-truth/1"
 FRAME_COLUMNS = ("frame", "time_s", "curvature_per_m", "radius_m", "offset_m", "heading_rad", "lane_width_m")
@@ -67,7 +70,12 @@ class PerspectiveTruth:
 
 @dataclass(frozen=True)
 class CameraTruth:
-    """The true camera: intrinsics, distortion, mounting, and its exact perspective points."""
+    """The true camera: intrinsics, distortion, mounting, and its exact perspective points.
+
+    ``roll_deg`` is written to the truth files only when it is not 0 (the bundled camera's files
+    do not hold it). ``vanishing_point_px``, ``horizon_px`` and ``birdseye_scale`` give the true
+    road geometry that ``lanelib.geometry`` estimates.
+    """
 
     camera_matrix: tuple[tuple[float, ...], ...]
     dist_coeffs: tuple[float, ...]
@@ -76,6 +84,25 @@ class CameraTruth:
     pitch_deg: float
     yaw_deg: float
     perspective: PerspectiveTruth
+    roll_deg: float = 0.0
+
+    def camera(self) -> Camera:
+        """Return the synthetic ``Camera`` this record describes."""
+        return Camera(tuple(tuple(r) for r in self.camera_matrix), tuple(self.dist_coeffs),
+                      tuple(int(v) for v in self.size_px), self.height_m, self.pitch_deg, self.yaw_deg,
+                      self.roll_deg)
+
+    def vanishing_point_px(self) -> tuple[float, float]:
+        """Return where the car's forward direction vanishes in the undistorted image (x, y px)."""
+        return self.camera().vanishing_point_px()
+
+    def horizon_px(self) -> tuple[float, float]:
+        """Return the horizon's row at the image centre column (px) and its slope (rows per column)."""
+        return self.camera().horizon_px()
+
+    def birdseye_scale(self, src_px, dst_px) -> tuple[float, float]:
+        """Return the exact (xm_per_px, ym_per_px) of any bird's-eye points (``birdseye_scale``)."""
+        return birdseye_scale(self.camera(), src_px, dst_px)
 
     def calibration(self) -> Calibration:
         """Return this camera as a ``camera.Calibration`` (exact: RMS reprojection error 0 px)."""
@@ -139,9 +166,62 @@ class VideoTruth:
 
 # --------------------------------------------------------------------------- computing
 
-def perspective_truth(camera: Camera, lane_width_m: float = DEFAULT_LANE_WIDTH_M) -> PerspectiveTruth:
-    """Return the exact bird's-eye src points and scale of ``camera`` for a centred straight lane."""
-    top_row, bottom_row = BIRD_EYE_ROWS_PX
+def h_samples_px(size_px: tuple[int, int]) -> tuple[int, ...]:
+    """Return the truth rows of a camera of ``size_px``: H_SAMPLES_PX at 1280x720, else every 10th
+    row from the same share of the height (7/12) to the bottom."""
+    h = int(size_px[1])
+    if h == 720:
+        return H_SAMPLES_PX
+    return tuple(range(int(round(h * 420 / 720 / 10)) * 10, h, 10))
+
+
+def default_rows_px(camera: Camera) -> tuple[float, float]:
+    """Return the (top, bottom) undistorted rows of ``camera``'s default truth trapezoid.
+
+    A 1280x720 camera's (the bundled one's) are the default points' rows (470, 720), unless its
+    horizon comes within 20 px of row 470; another camera's are the row where the road
+    BIRD_EYE_TOP_M ahead is seen and the bottom row.
+    """
+    if tuple(camera.size_px) == (1280, 720) and camera.horizon_px()[0] < BIRD_EYE_ROWS_PX[0] - 20:
+        return BIRD_EYE_ROWS_PX
+    top = camera.project(np.array([[0.0, 0.0, BIRD_EYE_TOP_M]]), distort=False)[0, 1]
+    return float(top), float(camera.size_px[1])
+
+
+def default_dst_px(size_px: tuple[int, int]) -> tuple[Point, ...]:
+    """Return the default bird's-eye rectangle for images of ``size_px``: columns w/4 and 3w/4, all rows."""
+    w, h = float(size_px[0]), float(size_px[1])
+    return ((w / 4, 0.0), (w / 4, h), (3 * w / 4, h), (3 * w / 4, 0.0))
+
+
+def birdseye_scale(camera: Camera, src_px, dst_px) -> tuple[float, float]:
+    """Return the exact (xm_per_px, ym_per_px) that bird's-eye points give with ``camera``.
+
+    ``src_px`` (tl, bl, br, tr, undistorted image) are cast onto the road: across, the mean of the
+    top and bottom edges' lateral extent (m) over their widths in the bird's-eye view; along, the
+    mean of the left and right edges' extent ahead (m) over their heights. For src points that
+    are the image of a road rectangle (or of any parallelogram with two sides along the road)
+    these are the scale of the whole bird's-eye view.
+    """
+    g = camera.ground_points(np.asarray(src_px, np.float64), distorted=False)
+    d = np.asarray(dst_px, np.float64)
+    x_m = (abs(g[2, 0] - g[1, 0]) + abs(g[3, 0] - g[0, 0])) / 2
+    z_m = (abs(g[0, 1] - g[1, 1]) + abs(g[3, 1] - g[2, 1])) / 2
+    w_px = (abs(d[2, 0] - d[1, 0]) + abs(d[3, 0] - d[0, 0])) / 2
+    h_px = (abs(d[0, 1] - d[1, 1]) + abs(d[3, 1] - d[2, 1])) / 2
+    return float(x_m / w_px), float(z_m / h_px)
+
+
+def perspective_truth(camera: Camera, lane_width_m: float = DEFAULT_LANE_WIDTH_M,
+                      rows_px: tuple[float, float] | None = None,
+                      dst_px: tuple[Point, ...] | None = None) -> PerspectiveTruth:
+    """Return the exact bird's-eye src points and scale of ``camera`` for a centred straight lane.
+
+    ``rows_px`` are the trapezoid's (top, bottom) undistorted rows (default ``default_rows_px``);
+    ``dst_px`` the bird's-eye corners (default: the default points' at 1280x720, else
+    ``default_dst_px``).
+    """
+    top_row, bottom_row = default_rows_px(camera) if rows_px is None else rows_px
     half = lane_width_m / 2
     corners = []
     for row, x_m in ((top_row, -half), (bottom_row, -half), (bottom_row, half), (top_row, half)):
@@ -149,7 +229,9 @@ def perspective_truth(camera: Camera, lane_width_m: float = DEFAULT_LANE_WIDTH_M
         u, v = camera.project(np.array([[x_m, 0.0, z]]), distort=False)[0]
         corners.append((round(float(u), 4), round(float(v), 4)))
     length = camera.ground_z_on_line(top_row, 0.0) - camera.ground_z_on_line(bottom_row, 0.0)
-    dst = tuple((float(x), float(y)) for x, y in DEFAULT_DST_1280x720)
+    if dst_px is None:
+        dst_px = DEFAULT_DST_1280x720 if tuple(camera.size_px) == (1280, 720) else default_dst_px(camera.size_px)
+    dst = tuple((float(x), float(y)) for x, y in dst_px)
     cfg = PerspectiveConfig(tuple(corners), dst, tuple(camera.size_px), lane_width_m, length)
     return PerspectiveTruth(cfg.src_px, cfg.dst_px, cfg.size_px, lane_width_m, length,
                             cfg.xm_per_px, cfg.ym_per_px)
@@ -159,7 +241,7 @@ def camera_truth(camera: Camera) -> CameraTruth:
     """Return the CameraTruth record of ``camera``."""
     return CameraTruth(tuple(tuple(r) for r in camera.camera_matrix), tuple(camera.dist_coeffs),
                        tuple(camera.size_px), camera.height_m, camera.pitch_deg, camera.yaw_deg,
-                       perspective_truth(camera))
+                       perspective_truth(camera), camera.roll_deg)
 
 
 def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
@@ -176,7 +258,7 @@ def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
     uv = camera.project(np.column_stack([pts[:, 0], np.zeros(len(pts)), pts[:, 1]]))
     w = camera.size_px[0]
     out = []
-    for row in H_SAMPLES_PX:
+    for row in h_samples_px(camera.size_px):
         v = uv[:, 1] - row
         cross = np.flatnonzero((v[:-1] >= 0) & (v[1:] < 0))
         if cross.size == 0:
@@ -197,7 +279,8 @@ def lane_truth(renderer: Renderer, pose: CarPose) -> LaneTruth:
     return LaneTruth(
         curvature_per_m=curvature, radius_m=math.inf if curvature == 0 else 1.0 / abs(curvature),
         offset_m=pose.offset_m, heading_rad=pose.heading_rad,
-        lane_width_m=renderer.scene.layout.lane_width_m, h_samples_px=H_SAMPLES_PX,
+        lane_width_m=renderer.scene.layout.lane_width_m,
+        h_samples_px=h_samples_px(renderer.grid.camera.size_px),
         left_x_px=_line_x(renderer, pose, -half), right_x_px=_line_x(renderer, pose, half))
 
 
@@ -209,7 +292,7 @@ def _camera_json(cam: CameraTruth) -> dict:
     return {
         "camera_matrix": [list(r) for r in cam.camera_matrix], "dist_coeffs": list(cam.dist_coeffs),
         "image_size": list(cam.size_px), "height_m": cam.height_m, "pitch_deg": cam.pitch_deg,
-        "yaw_deg": cam.yaw_deg,
+        "yaw_deg": cam.yaw_deg, **({"roll_deg": cam.roll_deg} if cam.roll_deg else {}),
         "perspective": {"src_px": [list(q) for q in p.src_px], "dst_px": [list(q) for q in p.dst_px],
                         "size_px": list(p.size_px), "lane_width_m": p.lane_width_m,
                         "visible_length_m": round(p.visible_length_m, 6),
@@ -275,7 +358,7 @@ def _camera_from_json(obj: dict, where: Path) -> CameraTruth:
                                  float(p["xm_per_px"]), float(p["ym_per_px"]))
         return CameraTruth(tuple(tuple(r) for r in obj["camera_matrix"]), tuple(obj["dist_coeffs"]),
                            tuple(obj["image_size"]), float(obj["height_m"]), float(obj["pitch_deg"]),
-                           float(obj["yaw_deg"]), persp)
+                           float(obj["yaw_deg"]), persp, float(obj.get("roll_deg", 0.0)))
     except (KeyError, TypeError, ValueError) as e:
         raise InputError(f"{where}: the camera entry is incomplete ({e!r}); regenerate the truth") from None
 

@@ -1,0 +1,1325 @@
+"""The road geometry of a camera, estimated from frames of the road itself.
+
+``estimate_geometry(frames)`` returns a ``RoadGeometry``: the vanishing point of the road
+direction, the horizon (with the camera's roll), the hood, the points of a bird's-eye view that
+reaches ``look_ahead_m`` ahead, its metric scale, and when a focal length is known (given, from a
+calibration, or measured from the dashes) the camera's pitch, yaw and height. It says how
+confident it is, what it assumed, and which frames it used and why it left the others out.
+``RoadGeometry.perspective_config()`` is the ``perspective.PerspectiveConfig`` to run with.
+``vanishing_point(frame)`` is the cheap per-frame part, for a video to check every few seconds
+whether the vanishing point drifts (a hill, a bump, a camera knocked).
+
+How each quantity is found (all in the undistorted image: frames are undistorted first when a
+``camera.Lens`` or ``camera.Calibration`` is given):
+
+- **Line segments.** The painted lines are masked (``thresholds``: paint 25 grey levels brighter
+  than the road beside it, a horizontal top-hat as wide as 12 % of the image height).
+  The mask is cut into horizontal bands (1/24 of the height); every connected piece of a band is
+  a segment, described by the centres of its horizontal runs (one per row), so a segment is thin
+  whatever the line's width. Segments that are not straight and thin (RMS off their axis above
+  1 px), shorter than 1.2 % of the height or within 3 deg of horizontal are dropped.
+- **Vanishing point of one frame.** RANSAC (fixed seed): the intersection of two segments drawn
+  with probability by length, scored by the length of the segments that point at it within
+  1.5 deg and lie below it; then weighted least squares on the inliers (each segment's distance
+  to the point, weighted by its length squared over its distance squared: equal weight per
+  angle), twice, the second time with 1 deg. Stubs of dashes cut by a band row join the inliers
+  when they continue one across the cut and point at the point within 3 deg. The inliers are
+  grouped into lines by their angle about the point (a gap of 1.2 deg or more starts a new
+  line); each line is refitted through all its run centres, and the frame's point is the
+  weighted least-squares intersection of those lines. A point outside the middle 70 % of the
+  width or 5-85 % of the height, or fewer than two lines 4 deg apart below it, gives no point
+  (the frame is rotated, or shows no road).
+- **Straightness** ("the segments of each line are collinear"; frames where the road bends are
+  left out). Each line is followed up the image through the segments that continue it across
+  the band rows (bending or not), and a parabola fitted to all their run centres must bow less
+  than ``MAX_BOW_PX`` + 0.3 % of the line's length from its chord (lines spanning a fifth of the
+  road's rows or more); and the vanishing point of the far segments (the third of the road
+  nearest the horizon) must lie within 0.8 % of the image width of that of the near ones, in x
+  (a bend) and in y (a crest or a dip). On the bundled video both reject every frame on its
+  900-2200 m curves. Across frames, a frame whose point lies more than 1 % of the image height
+  (at least 3 px) from the median row, or 4 % of the width from the median column, is left out
+  as inconsistent (a hill, a bump, a lane change).
+- **The ego lane.** A road line at lateral offset t (m) from the camera, seen from height H,
+  runs from the vanishing point at atan(t / H) from straight down (in coordinates turned by the
+  roll). The ego lane's two lines are chosen in each frame among the two nearest lines on either
+  side, each 20-80 deg from straight down, as the pair most nearly centred on the camera; the
+  lane's width r (below) is the median over frames, and frames more than 20 % off it (a dashed
+  line not seen, a bright seam in the lane) are left out of it.
+- **Horizon and roll.** The vanishing point of the road lies on the horizon. Its slope is the
+  camera's roll, which lane lines of one direction cannot show by themselves: it is measured
+  from the spacing of three or more lines (the ego lane's two and any line beyond them up to
+  80 deg from straight down), assuming every lane has the same width. Along any image line
+  parallel to the horizon, lines equally spaced on the road are equally spaced in the image
+  (that image line is the picture of a road line whose own vanishing point is at infinity, so
+  the map between them is affine); the roll that makes the lines' spacings whole multiples of
+  the ego lane's in all frames is used when at least 3 frames give it one by one within 0.3 deg.
+  On the synthetic cameras this gives the roll within 0.05 deg. Otherwise the roll is assumed 0
+  and the assumptions say so; measured on the synthetic cameras rolled by 1.5 deg, ignoring the
+  roll moves the horizon at the image centre by |w/2 - vp_x| tan(1.5 deg) (0.1 px with the
+  vanishing point at the centre, 3.6 px on the narrow camera turned by 3 deg), puts the lane
+  width 1.3 % off and the scale along the road 6-8 % off (the dashes are measured square to
+  the wrong horizon).
+- **Hood.** Given (``hood_row_px``), or from three frames or more (``detect_hood``): the hood is
+  still while the road moves, and its top is an edge that stays put. The hood row is the
+  highest row of that edge over the middle 80 % of the columns. When none is found (a still
+  car, a single frame, no hood in view): just below the lowest lane-line pixel found.
+- **Bird's-eye points.** In coordinates about the vanishing point turned by the roll (u along
+  the horizon, v its distance below it), a road line at lateral offset t is u = k v with
+  k = t cos(pitch) / (H cos(yaw)) + tan(yaw) sin(pitch); the ego lane's lines give
+  r = k_right - k_left. The src trapezoid is centred on the camera's own line
+  (k = tan(yaw) sin(pitch); 0 when the focal length is unknown: the camera is assumed on the
+  car's centre line) and r/2 wide on each side; its bottom edge lies parallel to the horizon
+  just above the hood (1 % of the height above it, and raised until its corners are inside the
+  frame), its top edge parallel to the horizon where the road is ``look_ahead_m`` ahead of the
+  camera (pulled in, and said so, when that is within 5 % of the height of the horizon). Edges
+  parallel to the horizon make the warp an affine rectification of the road: lane lines become
+  vertical and the scale is the same all over the view. dst is the rectangle of columns w/4
+  and 3w/4 over the whole height.
+- **Metric scale.** Across the road: the src sides are one lane width apart (``lane_width_m``,
+  3.7 m by default), so xm_per_px = lane_width_m / (w/2). Along the road: the distance ahead
+  of a point v px below the horizon is s = C / v + s0 (a pinhole over a flat road; s0 =
+  -H tan(pitch)/cos(yaw), a few cm, 0 when the focal length is unknown). C is measured, in this
+  order: from the dash period where dashed lines are seen (``_dash_scale``: along each line
+  the dashes fall at even steps of 1/v, (dash_m + gap_m) / C apart), else from the focal length
+  (a calibration's K or ``focal_px``) and the lane width
+  (C = f lane_width_m / (r cos(pitch) cos^2(yaw))), else from an assumed focal length (a 60 deg
+  horizontal field of view), which the result states. With the dash period, the focal length
+  follows from the same formula, so the pitch, yaw and camera height are given too (with the
+  principal point at the image centre unless a calibration gives it).
+- **Confidence** (0-1): the product of min(1, frames used / 5), the agreement of the frames'
+  vanishing points (1 up to 1 px of scatter in y, falling off beyond), min(1, frames showing the
+  ego lane / 5), the source of the scale (dashes 1, focal length 0.9, dashes and focal length
+  disagreeing by more than 8 % 0.6, assumed focal length 0.4) and 0.9 when the hood was not
+  found. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
+
+Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
+no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
+points that disagree between frames), road not straight.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import cv2
+import numpy as np
+
+from . import io
+from .camera import Calibration, Lens, Undistorter
+from .errors import GeometryError, InputError
+from .perspective import DEFAULT_LANE_WIDTH_M, Perspective, PerspectiveConfig
+from .thresholds import ThresholdConfig, TopHatMask, combine
+
+DEFAULT_LOOK_AHEAD_M = 25.0
+DEFAULT_DASH_M = 3.0
+DEFAULT_GAP_M = 9.0
+ASSUMED_HFOV_DEG = 60.0
+LOW_CONFIDENCE = 0.5
+DRIFT_PX = 3.0          # a vanishing point this far off the horizon has drifted (see horizon_shift_px)
+MIN_GOOD_FRAMES = 5     # frames on straight road for full confidence
+RANSAC_SEED = 15
+RANSAC_HYPOTHESES = 200
+MAX_SEGMENTS = 250
+RANSAC_TOL_DEG = 1.5
+INLIER_TOL_DEG = 1.0
+LINE_GAP_DEG = 1.2
+MIN_SEGMENTS = 4
+MIN_LINE_SEPARATION_DEG = 4.0
+MIN_LINE_ROWS_FRACTION = 0.02  # a line spans at least this share of the rows (and 10)
+MAX_BOW_PX = 1.5
+BAND_FRACTION = 1 / 24
+TOPHAT_FRACTION = 0.12
+TOPHAT_GREY = 25
+HOOD_STATIC_GREY = 1.5
+HOOD_EDGE_GREY = 6.0
+HOOD_MAX_FRAMES = 15            # frames (evenly spread) the hood is looked for in
+HOOD_MAX_FRACTION = 0.35
+MAX_ROLL_DEG = 4.0
+ROLL_MAX_LINE_ANGLE_DEG = 80.0  # lines flatter than this (|k| > 5.7) tell the roll too loosely
+ROLL_MIN_FRAMES = 3
+EGO_ANGLES_DEG = (20.0, 80.0)
+ROLL_MAX_SPREAD_DEG = 0.3
+DASH_DISAGREEMENT = 0.08
+FAR_FRACTION = 0.35
+NEAR_FRACTION = 0.45
+FAR_NEAR_TOLERANCE = 0.008
+DASH_V_MIN_FRACTION = 0.02
+DASH_MIN_PERIODS = 1.5
+DASH_MIN_FIT = 0.5             # mean cos of the dash pairs' phase at the period found
+DASH_MIN_PAIRS = 3
+DASH_LENGTH_RANGE = 1.35       # the period is searched within this factor of what the dashes' lengths say
+DASH_FOCAL_RANGE = 1.35        # with a known focal length, C is searched within this factor of its C
+FOCAL_RANGE_W = (0.3, 3.5)     # else focal lengths from 0.3 to 3.5 image widths (hfov 16-118 deg)
+
+Point = tuple[float, float]
+
+
+# --------------------------------------------------------------------------- records
+
+@dataclass(frozen=True)
+class RoadLine:
+    """One straight painted line found in a frame (undistorted image, px).
+
+    ``point_px`` is the centroid of its run centres and ``direction`` its unit direction
+    (pointing down the image); ``rows_px`` the rows it spans; ``angle_deg`` its angle about the
+    frame's vanishing point, from straight down, positive to the right; ``bow_px`` how far a
+    parabola fitted along it bows from its chord; ``segments`` how many band segments it joins.
+    """
+
+    point_px: Point
+    direction: Point
+    rows_px: tuple[float, float]
+    angle_deg: float
+    bow_px: float
+    points: int
+    segments: int
+
+
+@dataclass(frozen=True)
+class VanishingPoint:
+    """The vanishing point of the road direction in one frame, or None and why.
+
+    ``point_px`` is in the undistorted image; ``segments`` the line segments found,
+    ``inlier_segments`` those that point at it; ``lines`` the straight lines they form;
+    ``straight`` whether every long line is straight; ``reason`` is '' when the point is good
+    (found and straight), else what went wrong and what to do.
+    """
+
+    point_px: Point | None
+    segments: int
+    inlier_segments: int
+    lines: tuple[RoadLine, ...]
+    straight: bool
+    reason: str
+
+    @property
+    def ok(self) -> bool:
+        """Return True when the frame gave a vanishing point on a straight road."""
+        return self.point_px is not None and not self.reason
+
+
+@dataclass(frozen=True)
+class RoadGeometry:
+    """The bird's-eye geometry of a camera estimated from frames of the road (``estimate_geometry``).
+
+    Positions are in the undistorted image (px, y down), angles in degrees. ``horizon_row_px`` is
+    the horizon's row at the image centre column (w/2) and ``horizon_slope`` its rows per column;
+    ``roll_deg`` is positive when the camera's right side dips (the horizon rises to the right).
+    ``pitch_deg`` (positive down), ``yaw_deg`` (positive right, the optical axis from the road
+    direction) and ``camera_height_m`` are None when no focal length is known. ``src_px`` and
+    ``dst_px`` are the bird's-eye points (tl, bl, br, tr), ``near_m`` and ``look_ahead_m`` the
+    distances ahead of the camera of their bottom and top edges, ``visible_length_m`` the road
+    between them. ``inverse_depth_scale_px_m`` is C in s = C / v + s0 and ``lane_width_ratio``
+    the ego lane's r (see the module docstring); ``dash_fit`` how well the dashes fit the dash
+    period found (1: perfectly; 0: no dashes seen; used from DASH_MIN_FIT).
+    ``frames_rejected`` holds (frame index, reason) pairs.
+    """
+
+    size_px: tuple[int, int]
+    vanishing_point_px: Point
+    horizon_row_px: float
+    horizon_slope: float
+    roll_deg: float
+    roll_source: str
+    pitch_deg: float | None
+    yaw_deg: float | None
+    camera_height_m: float | None
+    focal_px: float | None
+    focal_source: str
+    hood_row_px: float
+    hood_source: str
+    src_px: tuple[Point, ...]
+    dst_px: tuple[Point, ...]
+    lane_width_m: float
+    look_ahead_m: float
+    near_m: float
+    visible_length_m: float
+    xm_per_px: float
+    ym_per_px: float
+    scale_source: str
+    inverse_depth_scale_px_m: float
+    lane_width_ratio: float
+    dash_fit: float
+    confidence: float
+    assumptions: tuple[str, ...]
+    frames_used: tuple[int, ...]
+    frames_rejected: tuple[tuple[int, str], ...]
+    frame_vanishing_points: tuple[tuple[int, float, float], ...] = field(default=(), repr=False)
+
+    def perspective_config(self) -> PerspectiveConfig:
+        """Return the ``PerspectiveConfig`` of these bird's-eye points and scale."""
+        return PerspectiveConfig(self.src_px, self.dst_px, self.size_px, self.lane_width_m,
+                                 self.visible_length_m)
+
+    def perspective(self) -> Perspective:
+        """Return the ``Perspective`` (undistorted image <-> bird's-eye view) of these points."""
+        return Perspective(self.perspective_config())
+
+    def horizon_shift_px(self, point_px: Point) -> float:
+        """Return how far (px) a frame's vanishing point lies below this horizon (negative: above).
+
+        A video checks for drift with it: a bend or the car's heading moves the vanishing point
+        along the horizon, a crest, a dip or a knocked camera moves it off; more than
+        ``DRIFT_PX`` (or 1 % of the height) on several checks in a row calls for a new estimate.
+        """
+        r = math.radians(self.roll_deg)
+        return float((point_px[0] - self.vanishing_point_px[0]) * math.sin(r)
+                     + (point_px[1] - self.vanishing_point_px[1]) * math.cos(r))
+
+    @property
+    def low_confidence(self) -> bool:
+        """Return True when the confidence is below ``LOW_CONFIDENCE``."""
+        return self.confidence < LOW_CONFIDENCE
+
+    def summary(self) -> str:
+        """Return the geometry in a few lines of text (what the CLI prints)."""
+        vx, vy = self.vanishing_point_px
+        angles = ("pitch, yaw: unknown (no focal length)" if self.pitch_deg is None else
+                  f"pitch {self.pitch_deg:+.2f} deg, yaw {self.yaw_deg:+.2f} deg, camera "
+                  f"{self.camera_height_m:.2f} m above the road (focal {self.focal_px:.0f} px, "
+                  f"{self.focal_source})")
+        return "\n".join([
+            f"vanishing point ({vx:.1f}, {vy:.1f}) px, horizon row {self.horizon_row_px:.1f} px at the "
+            f"centre, roll {self.roll_deg:+.2f} deg ({self.roll_source})",
+            angles,
+            f"hood row {self.hood_row_px:.0f} px ({self.hood_source}); bird's-eye view from "
+            f"{self.near_m:.1f} m to {self.look_ahead_m:.1f} m ahead",
+            f"{self.xm_per_px:.5f} m/px across, {self.ym_per_px:.5f} m/px along ({self.scale_source})",
+            f"confidence {self.confidence:.2f}; {len(self.frames_used)} frames used, "
+            f"{len(self.frames_rejected)} left out",
+        ])
+
+    def to_dict(self) -> dict:
+        """Return the geometry as JSON-able values."""
+        r = lambda v, nd=4: None if v is None else round(float(v), nd)  # noqa: E731
+        pts = lambda ps: [[r(x, 3), r(y, 3)] for x, y in ps]  # noqa: E731
+        return {
+            "size_px": list(self.size_px),
+            "vanishing_point_px": [r(v, 3) for v in self.vanishing_point_px],
+            "horizon_row_px": r(self.horizon_row_px, 3), "horizon_slope": r(self.horizon_slope, 6),
+            "roll_deg": r(self.roll_deg), "roll_source": self.roll_source,
+            "pitch_deg": r(self.pitch_deg), "yaw_deg": r(self.yaw_deg),
+            "camera_height_m": r(self.camera_height_m), "focal_px": r(self.focal_px, 2),
+            "focal_source": self.focal_source,
+            "hood_row_px": r(self.hood_row_px, 1), "hood_source": self.hood_source,
+            "src_px": pts(self.src_px), "dst_px": pts(self.dst_px),
+            "lane_width_m": self.lane_width_m, "look_ahead_m": r(self.look_ahead_m, 3),
+            "near_m": r(self.near_m, 3), "visible_length_m": r(self.visible_length_m, 4),
+            "xm_per_px": r(self.xm_per_px, 7), "ym_per_px": r(self.ym_per_px, 7),
+            "scale_source": self.scale_source,
+            "inverse_depth_scale_px_m": r(self.inverse_depth_scale_px_m, 2),
+            "lane_width_ratio": r(self.lane_width_ratio, 5),
+            "dash_fit": r(self.dash_fit, 3),
+            "confidence": r(self.confidence, 3), "assumptions": list(self.assumptions),
+            "frames_used": list(self.frames_used),
+            "frames_rejected": [[i, why] for i, why in self.frames_rejected],
+        }
+
+
+# --------------------------------------------------------------------------- masks and segments
+
+def paint_mask_config(size_px: tuple[int, int]) -> ThresholdConfig:
+    """Return the mask of painted lines used for the geometry, for frames of ``size_px``.
+
+    Pixels TOPHAT_GREY (25) grey levels (HLS lightness) brighter than the road beside them: a horizontal
+    top-hat 12 % of the image height wide, wider than a line's run across any row of the road.
+    No colour test: far from the lens centre, vignetting and haze leave white paint at a
+    lightness of 100 or less, and yellow paint is brighter than asphalt too.
+    """
+    width = max(15, int(round(TOPHAT_FRACTION * size_px[1])) | 1)
+    return ThresholdConfig(line_tophat=TopHatMask("hls", "l", width, TOPHAT_GREY, 255), rule="line_tophat")
+
+
+@dataclass(frozen=True)
+class _Segments:
+    """Band segments of a mask: per segment centre, unit direction (down), length, count; per run
+    its centre and its segment (-1: none)."""
+
+    centre: np.ndarray      # (N, 2)
+    direction: np.ndarray   # (N, 2), dy >= 0
+    length: np.ndarray      # (N,)
+    count: np.ndarray       # (N,)
+    run_x: np.ndarray
+    run_y: np.ndarray
+    run_segment: np.ndarray
+
+
+def _segments(mask: np.ndarray, band_px: int, max_run_px: int) -> _Segments:
+    """Return the straight thin band segments of a 0/255 mask (see the module docstring)."""
+    h, w = mask.shape
+    cut = mask.copy()
+    cut[::band_px] = 0
+    _, labels = cv2.connectedComponents(cut, connectivity=8)
+    padded = np.zeros((h, w + 2), np.int8)
+    padded[:, 1:-1] = cut > 0
+    d = np.diff(padded, axis=1)
+    ys, x0 = np.nonzero(d == 1)
+    _, x1 = np.nonzero(d == -1)
+    keep = (x1 - x0) <= max_run_px
+    ys, x0, x1 = ys[keep], x0[keep], x1[keep]
+    xc = (x0 + x1 - 1) * 0.5
+    lab = labels[ys, x0]
+    n_lab = int(lab.max()) + 1 if lab.size else 1
+    yf = ys.astype(np.float64)
+    cnt = np.bincount(lab, minlength=n_lab).astype(np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx = np.bincount(lab, xc, n_lab) / cnt
+        my = np.bincount(lab, yf, n_lab) / cnt
+        vxx = np.bincount(lab, xc * xc, n_lab) / cnt - mx * mx
+        vyy = np.bincount(lab, yf * yf, n_lab) / cnt - my * my
+        vxy = np.bincount(lab, xc * yf, n_lab) / cnt - mx * my
+    half_tr = (vxx + vyy) / 2
+    disc = np.sqrt(np.maximum(half_tr ** 2 - (vxx * vyy - vxy ** 2), 0.0))
+    lam1, lam2 = half_tr + disc, np.maximum(half_tr - disc, 0.0)
+    theta = 0.5 * np.arctan2(2 * vxy, vxx - vyy)
+    dx, dy = np.cos(theta), np.sin(theta)
+    flip = dy < 0
+    dx[flip], dy[flip] = -dx[flip], -dy[flip]
+    length = np.sqrt(12 * np.maximum(lam1, 0.0))
+    ok = ((cnt >= 5) & (length >= max(8.0, 0.012 * h)) & (np.sqrt(lam2) <= 1.0)
+          & (dy >= math.sin(math.radians(3.0))))
+    ok[0] = False
+    idx = np.flatnonzero(ok)
+    if len(idx) > MAX_SEGMENTS:       # the longest: the rest are flecks of asphalt, leaves, noise
+        idx = np.sort(idx[np.argsort(-length[idx], kind="stable")[:MAX_SEGMENTS]])
+    seg_of_label = np.full(n_lab, -1)
+    seg_of_label[idx] = np.arange(len(idx))
+    return _Segments(np.column_stack([mx[idx], my[idx]]), np.column_stack([dx[idx], dy[idx]]),
+                     length[idx], cnt[idx], xc, yf, seg_of_label[lab])
+
+
+def _normals(direction: np.ndarray) -> np.ndarray:
+    return np.column_stack([-direction[:, 1], direction[:, 0]])
+
+
+def _angle_errors(vp: np.ndarray, centre: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return (sin of the angle between each segment and the direction to ``vp``, whether the
+    segment lies below ``vp``) for vp of shape (2,) or (K, 2) (then (K, N) arrays)."""
+    dv = vp[..., None, :] - centre                      # (..., N, 2)
+    dist = np.hypot(dv[..., 0], dv[..., 1])
+    sin = np.abs((dv * normal).sum(-1)) / np.maximum(dist, 1e-9)
+    return sin, dv[..., 1] < -2.0
+
+
+def _intersect(centre: np.ndarray, normal: np.ndarray, weight: np.ndarray, start: np.ndarray,
+               iterations: int = 3) -> np.ndarray:
+    """Return the weighted least-squares intersection of lines (centre, normal), re-weighted by
+    1 / distance^2 from the current point (equal weight per angle)."""
+    p = start.astype(np.float64)
+    nn = normal[:, :, None] * normal[:, None, :]            # (N, 2, 2)
+    for _ in range(iterations):
+        d2 = np.maximum(((centre - p) ** 2).sum(1), 1.0)
+        wt = weight / d2
+        a = (wt[:, None, None] * nn).sum(0)
+        b = (wt[:, None, None] * nn @ centre[:, :, None])[:, :, 0].sum(0)
+        if abs(np.linalg.det(a)) < 1e-12 * max(np.abs(a).max(), 1e-300) ** 2:
+            break
+        p = np.linalg.solve(a, b)
+    return p
+
+
+def _ransac(seg: _Segments, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
+    """Return (vanishing point, inlier mask) of the segments, or None when no point gathers them."""
+    n = len(seg.length)
+    normal = _normals(seg.direction)
+    prob = seg.length / seg.length.sum()
+    pairs = rng.choice(n, size=(RANSAC_HYPOTHESES, 2), p=prob)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    lines = np.column_stack([normal, -(normal * seg.centre).sum(1)])
+    hom = np.cross(lines[pairs[:, 0]], lines[pairs[:, 1]])
+    good = np.abs(hom[:, 2]) > 1e-9
+    if not good.any():
+        return None
+    vps = hom[good, :2] / hom[good, 2:3]
+    sin, below = _angle_errors(vps, seg.centre, normal)
+    inl = (sin < math.sin(math.radians(RANSAC_TOL_DEG))) & below
+    score = (inl * seg.length).sum(1)
+    best = int(np.argmax(score))
+    vp, inliers = vps[best], inl[best]
+    for tol in (RANSAC_TOL_DEG, INLIER_TOL_DEG):
+        if inliers.sum() < 2:
+            return None
+        vp = _intersect(seg.centre[inliers], normal[inliers], seg.length[inliers] ** 2, vp)
+        sin, below = _angle_errors(vp, seg.centre, normal)
+        inliers = (sin < math.sin(math.radians(tol))) & below
+    return vp, inliers
+
+
+def _up_links(seg: _Segments) -> np.ndarray:
+    """Return, for every segment, the segment that continues it in the band above (-1: none).
+
+    The continuation's bottom end lies within 3 px (plus 2 px per unit of the line's slant) of
+    the segment's top end and points the same way within 10 deg: the same painted line across
+    the cut row, straight or bending.
+    """
+    n = len(seg.length)
+    if n < 2:
+        return np.full(n, -1)
+    half = seg.direction * (seg.length / 2)[:, None]
+    top, bottom = seg.centre - half, seg.centre + half
+    dist = np.hypot(*(top[:, None, :] - bottom[None, :, :]).transpose(2, 0, 1))    # [j, i]
+    cos = seg.direction @ seg.direction.T
+    tol = 3.0 + 2.0 / np.maximum(seg.direction[:, 1], 0.1)
+    ok = (dist <= tol[:, None]) & (cos >= math.cos(math.radians(10.0)))
+    ok &= seg.centre[None, :, 1] < seg.centre[:, None, 1]
+    np.fill_diagonal(ok, False)
+    dist = np.where(ok, dist, np.inf)
+    best = np.argmin(dist, axis=1)
+    return np.where(np.isfinite(dist[np.arange(n), best]), best, -1)
+
+
+def _follow_up(start, up: np.ndarray) -> list[int]:
+    """Return ``start`` and every segment reached from it by following ``up`` links."""
+    seen = set(int(i) for i in start)
+    todo = list(seen)
+    while todo:
+        j = int(up[todo.pop()])
+        if j >= 0 and j not in seen:
+            seen.add(j)
+            todo.append(j)
+    return sorted(seen)
+
+
+def _fit_line(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Return (centroid, unit direction pointing down, bow px) of points along one line."""
+    c = np.array([x.mean(), y.mean()])
+    pts = np.column_stack([x, y]) - c
+    _, _, vt = np.linalg.svd(pts, full_matrices=False)
+    d = vt[0] if vt[0, 1] >= 0 else -vt[0]
+    along = pts @ d
+    across = pts @ np.array([-d[1], d[0]])
+    span = along.max() - along.min()
+    bow = 0.0
+    if span > 0 and len(along) >= 5:
+        a2 = np.polyfit(along / span, across, 2)[0]
+        bow = abs(a2) * 0.25
+    return c, d, float(bow)
+
+
+# --------------------------------------------------------------------------- one frame
+
+@dataclass(frozen=True)
+class _FrameAnalysis:
+    vp: VanishingPoint
+    mask: np.ndarray
+    line_fits: tuple[tuple[np.ndarray, np.ndarray, float, float], ...]   # (point, dir, top row, bottom row)
+
+
+class RoadLineFinder:
+    """Finds the painted lines and the vanishing point in frames of one size.
+
+    Parameters
+    ----------
+    size_px : (width, height) of the frames.
+    lens : a ``camera.Lens`` or ``camera.Calibration`` to undistort the frames with, or None
+        (frames taken as undistorted).
+    hood_top_px : the hood's top row, one number or one per column; rows from there down are
+        left out. None: none are.
+    """
+
+    def __init__(self, size_px: tuple[int, int], lens: Lens | Calibration | None = None,
+                 hood_top_px: float | np.ndarray | None = None):
+        self.size = (int(size_px[0]), int(size_px[1]))
+        calibration = lens.calibration if isinstance(lens, Lens) else lens
+        self.undistorter = Undistorter(calibration, self.size)
+        self.calibration = self.undistorter.calibration
+        self.config = paint_mask_config(self.size)
+        w, h = self.size
+        self.band_px = max(6, int(round(BAND_FRACTION * h)))
+        self.max_run_px = self.config.line_tophat.width_px
+        if hood_top_px is None:
+            hood = np.full(w, float(h))
+        else:
+            hood = np.broadcast_to(np.asarray(hood_top_px, np.float64), (w,)).copy()
+        self.hood_top = hood
+        rows = np.arange(h)[:, None]
+        self.keep = (rows < np.floor(hood)[None, :]).astype(np.uint8) * 255
+
+    def undistort(self, frame: np.ndarray) -> np.ndarray:
+        """Return the undistorted frame (unchanged without a lens)."""
+        return self.undistorter.undistort(frame)
+
+    def mask(self, undistorted: np.ndarray) -> np.ndarray:
+        """Return the 0/255 mask of painted lines of an undistorted frame, hood left out."""
+        return cv2.bitwise_and(combine(undistorted, self.config), self.keep)
+
+    def analyse(self, frame: np.ndarray, undistorted: bool = False) -> _FrameAnalysis:
+        """Return the frame's vanishing point, lines and mask (``frame`` raw unless ``undistorted``)."""
+        und = frame if undistorted else self.undistort(frame)
+        mask = self.mask(und)
+        return self._analyse_mask(mask)
+
+    def vanishing_point(self, frame: np.ndarray, undistorted: bool = False) -> VanishingPoint:
+        """Return the vanishing point of the road in one frame (``VanishingPoint``)."""
+        return self.analyse(frame, undistorted).vp
+
+    def _analyse_mask(self, mask: np.ndarray) -> _FrameAnalysis:
+        w, h = self.size
+        seg = _segments(mask, self.band_px, self.max_run_px)
+        n = len(seg.length)
+
+        def fail(reason: str, vp=None, inl: int = 0, lines=()) -> _FrameAnalysis:
+            return _FrameAnalysis(VanishingPoint(vp, n, inl, lines, False, reason), mask, ())
+
+        if n == 0:
+            return fail("no road: no painted line was found; give frames of a road with painted "
+                        "lane lines, in daylight")
+        if n < MIN_SEGMENTS:
+            return fail(f"too few line segments ({n}, need {MIN_SEGMENTS}): the lane lines are "
+                        "faint, worn or hidden; give frames where both lane lines are visible")
+        found = _ransac(seg, np.random.default_rng(RANSAC_SEED))
+        if found is None:
+            return fail(f"inconsistent: the {n} line segments meet in no one point; give frames "
+                        "of a straight road with both lane lines visible")
+        vp, inliers = found
+        if inliers.sum() < MIN_SEGMENTS or seg.length[inliers].sum() < 0.25 * seg.length.sum():
+            return fail(f"inconsistent: only {int(inliers.sum())} of {n} line segments point at one "
+                        "vanishing point; give frames of a straight road with both lane lines "
+                        "visible", None, int(inliers.sum()))
+        # a short dash cut by a band row leaves a stub whose direction is poor: the segments that
+        # continue an inlier across a cut and point at the point within 3 deg join the inliers
+        up = _up_links(seg)
+        sin, below = _angle_errors(vp, seg.centre, _normals(seg.direction))
+        loose = (sin < math.sin(math.radians(3.0))) & below
+        for _ in range(2):
+            linked = np.zeros(n, bool)
+            has_up = up >= 0
+            linked[up[has_up & inliers]] = True                 # the segment above an inlier
+            linked[has_up] |= inliers[up[has_up]]               # the segment below an inlier
+            inliers = inliers | (linked & loose)
+        # group the inlier segments into lines by their angle about the point
+        idx = np.flatnonzero(inliers)
+        dv = seg.centre[idx] - vp
+        ang = np.degrees(np.arctan2(dv[:, 0], dv[:, 1]))
+        order = np.argsort(ang)
+        groups, current = [], [idx[order[0]]]
+        for a_prev, a, i in zip(ang[order[:-1]], ang[order[1:]], idx[order[1:]]):
+            if a - a_prev >= LINE_GAP_DEG:
+                groups.append(current)
+                current = []
+            current.append(i)
+        groups.append(current)
+        lines, fits = [], []
+        for g in groups:
+            runs = np.isin(seg.run_segment, g)
+            x, y = seg.run_x[runs], seg.run_y[runs]
+            if len(x) < 6 or y.max() - y.min() < max(10.0, MIN_LINE_ROWS_FRACTION * h):
+                continue
+            c, d, _ = _fit_line(x, y)
+            chain = np.isin(seg.run_segment, _follow_up(g, up))
+            _, _, bow = _fit_line(seg.run_x[chain], seg.run_y[chain])
+            a = math.degrees(math.atan2(c[0] - vp[0], c[1] - vp[1]))
+            lines.append(RoadLine((float(c[0]), float(c[1])), (float(d[0]), float(d[1])),
+                                  (float(y.min()), float(y.max())), a, bow, len(x), len(g)))
+            fits.append((c, d, float(y.min()), float(y.max()), len(x)))
+        if len(lines) < 2 or (max(l.angle_deg for l in lines) - min(l.angle_deg for l in lines)
+                              < MIN_LINE_SEPARATION_DEG):
+            return fail(f"too few lines: the segments form {len(lines)} line(s) through the vanishing "
+                        "point, and it takes two lane lines; give frames where both lane lines are "
+                        "visible", None, int(inliers.sum()), tuple(lines))
+        c = np.array([f[0] for f in fits])
+        d = np.array([f[1] for f in fits])
+        span = np.array([f[3] - f[2] for f in fits])
+        cnt = np.array([f[4] for f in fits], np.float64)
+        vp = _intersect(c, _normals(d), cnt * span ** 2 / np.maximum(np.abs(d[:, 1]), 0.05) ** 2, vp)
+        lines = [RoadLine(l.point_px, l.direction, l.rows_px,
+                          math.degrees(math.atan2(l.point_px[0] - vp[0], l.point_px[1] - vp[1])),
+                          l.bow_px, l.points, l.segments) for l in lines]
+        below = [i for i, l in enumerate(lines) if abs(l.angle_deg) < 88.0]
+        if len(below) < 2:
+            return fail("too few lines: fewer than two lines lie below the point where they meet; give "
+                        "frames of a road ahead (is the video rotated?)", None, int(inliers.sum()), tuple(lines))
+        lines, fits = [lines[i] for i in below], [fits[i] for i in below]
+        vpt = (float(vp[0]), float(vp[1]))
+        if not (0.15 * w <= vp[0] <= 0.85 * w and 0.05 * h <= vp[1] <= 0.85 * h):
+            return fail(f"inconsistent: the lines meet at ({vp[0]:.0f}, {vp[1]:.0f}) px, far from where "
+                        "a camera looking along the road sees its vanishing point; is the frame "
+                        "rotated, or the camera not looking ahead?", None, int(inliers.sum()),
+                        tuple(lines))
+        bottom = max(l.rows_px[1] for l in lines)
+        road_rows = max(bottom - vp[1], 1.0)
+        reason, straight = "", True
+        for l in lines:
+            length = (l.rows_px[1] - l.rows_px[0]) / max(l.direction[1], 1e-3)
+            if l.rows_px[1] - l.rows_px[0] >= 0.2 * road_rows and l.bow_px > MAX_BOW_PX + 0.003 * length:
+                straight = False
+                reason = (f"road not straight: a lane line bows {l.bow_px:.1f} px from a straight "
+                          "line; give frames of a straight stretch of road")
+                break
+        if straight:
+            found = _near_far_vps(seg, vp, road_rows)
+            if found is not None:
+                dx, dy = found[1] - found[0]
+                tol = max(4.0, FAR_NEAR_TOLERANCE * w)
+                if abs(dx) > tol:
+                    straight = False
+                    side = "right" if dx > 0 else "left"
+                    reason = (f"road not straight: the far lines point {abs(dx):.0f} px {side} of the near "
+                              "ones (a bend); give frames of a straight stretch of road")
+                elif abs(dy) > tol:
+                    straight = False
+                    reason = (f"road not flat: the far lines vanish {abs(dy):.0f} px {'below' if dy > 0 else 'above'} "
+                              "the near ones (a crest or a dip); give frames of a level stretch of road")
+        fits_out = tuple((f[0], f[1], f[2], f[3]) for f in fits)
+        return _FrameAnalysis(VanishingPoint(vpt, n, int(inliers.sum()), tuple(lines), straight, reason),
+                              mask, fits_out)
+
+
+def _band_vp(seg: _Segments, vp: np.ndarray, v_from: float, v_to: float) -> np.ndarray | None:
+    """Return the vanishing point of the segments between ``v_from`` and ``v_to`` px below ``vp``,
+    or None when they do not tell one: too few, fewer than two lines of some length (20 px or a
+    tenth of the band's rows), or a point no nearer ``vp`` than the band itself."""
+    v = seg.centre[:, 1] - vp[1]
+    band = (v > v_from) & (v < v_to)
+    if band.sum() < MIN_SEGMENTS:
+        return None
+    sub = _Segments(seg.centre[band], seg.direction[band], seg.length[band], seg.count[band],
+                    seg.run_x[:0], seg.run_y[:0], seg.run_segment[:0])
+    found = _ransac(sub, np.random.default_rng(RANSAC_SEED))
+    if found is None or found[1].sum() < 3:
+        return None
+    p, inl = found
+    if p[1] > vp[1] + v_from or abs(p[1] - vp[1]) > 0.5 * max(v_from, 20.0) + 20.0:
+        return None
+    ang = np.degrees(np.arctan2(sub.centre[inl, 0] - p[0], sub.centre[inl, 1] - p[1]))
+    length = sub.length[inl]
+    order = np.argsort(ang)
+    cuts = np.flatnonzero(np.diff(ang[order]) >= LINE_GAP_DEG) + 1
+    rows = min(v_to, float(v.max())) - v_from
+    enough = max(20.0, 0.1 * rows)
+    lines = sum(length[order][a:b].sum() >= enough
+                for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(order)]))
+    return p if lines >= 2 else None
+
+
+def _near_far_vps(seg: _Segments, vp: np.ndarray, road_rows: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Return the vanishing points of the far part of the road (up to FAR_FRACTION of its rows
+    below ``vp``: all segments there) and of the near part (from NEAR_FRACTION down: the segments
+    within 3 deg of pointing at ``vp``, as the grain of near asphalt makes short segments of every
+    direction), or None when either is unknown."""
+    far = _band_vp(seg, vp, 2.0, FAR_FRACTION * road_rows)
+    if far is None:
+        return None
+    sin, below = _angle_errors(vp, seg.centre, _normals(seg.direction))
+    keep = (sin < math.sin(math.radians(3.0))) & below
+    sub = _Segments(seg.centre[keep], seg.direction[keep], seg.length[keep], seg.count[keep],
+                    seg.run_x[:0], seg.run_y[:0], seg.run_segment[:0])
+    near = _band_vp(sub, vp, NEAR_FRACTION * road_rows, 1e9)
+    return None if near is None else (near, far)
+
+
+def vanishing_point(frame: np.ndarray, lens: Lens | Calibration | None = None,
+                    hood_row_px: float | None = None) -> VanishingPoint:
+    """Return the vanishing point of the road in one RAW frame (undistorted with ``lens``).
+
+    A video checks for drift (a hill, a bump) by comparing it with the estimated geometry's
+    ``vanishing_point_px`` every few seconds; for many frames make one ``RoadLineFinder``
+    (it undistorts with maps computed once).
+    """
+    frame = _check_frame(frame, "frame")
+    return RoadLineFinder((frame.shape[1], frame.shape[0]), lens, hood_row_px).vanishing_point(frame)
+
+
+def _check_frame(frame, name: str) -> np.ndarray:
+    """Return ``frame`` as a contiguous RGB uint8 array, or raise ``InputError`` (``io.check_rgb``)."""
+    return io.check_rgb(frame, name)
+
+
+# --------------------------------------------------------------------------- hood
+
+def detect_hood(frames: list[np.ndarray]) -> np.ndarray | None:
+    """Return the hood's top row in every column (float; h where there is none) from 3+ frames of
+    a moving car, or None when no hood is seen (or it cannot be told: fewer frames, a car
+    standing still).
+
+    The hood is still while the road moves, and its top is an edge that stays put. Per pixel of
+    the bottom HOOD_MAX_FRACTION of the frame: the standard deviation across frames of the frame
+    minus its local mean (a box 2 % of the height wide, which cancels exposure changes) is below
+    ``HOOD_STATIC_GREY`` on the hood; going up each column from the bottom row, the hood ends at
+    the first pixel that changes, and only where the median across frames of the vertical
+    gradient there is a near-horizontal edge of ``HOOD_EDGE_GREY`` or more (smooth asphalt near
+    the car changes little too, but has no such edge). A hood must be seen in a third of the
+    middle 80 % of the columns.
+    """
+    if len(frames) < 3:
+        return None
+    h, w = frames[0].shape[:2]
+    top = int(h * (1 - HOOD_MAX_FRACTION))
+    k = max(5, int(0.02 * h) | 1)
+    pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), HOOD_MAX_FRAMES)).round().astype(int))
+    grey = [cv2.cvtColor(frames[i][top:], cv2.COLOR_RGB2GRAY).astype(np.float32) for i in pick]
+    std = cv2.blur(np.stack([g - cv2.blur(g, (k, k)) for g in grey]).std(0), (9, 3))
+    gy = np.median(np.stack([cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=0.25) for g in grey]), axis=0)
+    gx = np.median(np.stack([cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=0.25) for g in grey]), axis=0)
+    strength = np.where(np.abs(gy) >= 2 * np.abs(gx), np.abs(gy), 0.0)
+    up = (std >= HOOD_STATIC_GREY)[::-1]
+    seen = up.any(0)
+    if seen.mean() < 0.5:
+        return None          # most columns never change: the car stands still
+    n_rows = up.shape[0]
+    first = np.where(seen, np.argmax(up, axis=0), 0)
+    rows = n_rows - 1 - first                        # row (in the region) where the stillness ends
+    # the edge: the strongest near-horizontal one from 2 rows below that to k rows above (the
+    # local mean lets the road's changes reach k / 2 rows into the hood)
+    offsets = np.arange(-k, 3)
+    cand = np.clip(rows[None, :] + offsets[:, None], 0, n_rows - 1)
+    cols = np.arange(w)
+    vals = strength[cand, cols[None, :]]
+    best = np.argmax(vals, axis=0)
+    edge_row = cand[best, cols]
+    has = seen & (first > 0) & (vals[best, cols] >= HOOD_EDGE_GREY)
+    lo, hi = int(0.1 * w), int(0.9 * w)
+    if has[lo:hi].mean() < 1 / 3:
+        return None
+    hood = np.where(has, top + edge_row + 0.5, h).astype(np.float64)
+    return _running_median(hood, max(3, (w // 40) | 1))
+
+
+def _running_median(values: np.ndarray, k: int) -> np.ndarray:
+    pad = k // 2
+    v = np.pad(values, pad, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(v, k)
+    return np.median(windows, axis=1)
+
+
+# --------------------------------------------------------------------------- roll
+
+def _k(angle_deg: np.ndarray, roll_deg: float) -> np.ndarray:
+    """Return k = du/dv of lines at ``angle_deg`` about the vanishing point, in coordinates rotated by the roll."""
+    return np.tan(np.radians(np.asarray(angle_deg) - roll_deg))
+
+
+def _ego_frames(angle_lists: dict[int, np.ndarray], roll_deg: float) -> dict[int, tuple[int, int, float]]:
+    """Return {frame: (left line, right line, r = k_right - k_left)} of the ego lane in the frames
+    where it is seen.
+
+    In each frame the pair is chosen among the two nearest lines on either side of the camera's
+    line, each EGO_ANGLES_DEG from straight down (atan of half a lane over the camera's height:
+    56 deg for 3.7 m lanes seen from 1.25 m; 37 deg from a 2.5 m truck cab), as the one most
+    nearly centred on it (a car drives near its lane's centre); a bright
+    seam inside the lane, or a dashed line not seen, makes the nearest pair the wrong one. The
+    lane's width r is the median over the frames whose pair is centred within a fifth of its
+    width (all frames when none is), and frames whose r is more than 20 % off it are left out.
+    """
+    chosen = {}
+    for i, ang in angle_lists.items():
+        k = _k(ang, roll_deg)
+        # an ego line lies EGO_ANGLES_DEG from straight down: atan(half a lane / camera height)
+        lo, hi = (math.tan(math.radians(a)) for a in EGO_ANGLES_DEG)
+        left = [j for j in np.argsort(-k) if -hi <= k[j] <= -lo][:2]
+        right = [j for j in np.argsort(k) if lo <= k[j] <= hi][:2]
+        best = None
+        for a in left:
+            for b in right:
+                asym = abs(k[a] + k[b]) / (k[b] - k[a])
+                if best is None or asym < best[0]:
+                    best = (asym, int(a), int(b), float(k[b] - k[a]))
+        if best is not None:
+            chosen[i] = best
+    if not chosen:
+        return {}
+    centred = [c[3] for c in chosen.values() if c[0] < 0.2] or [c[3] for c in chosen.values()]
+    r = float(np.median(centred))
+    return {i: (a, b, w) for i, (_, a, b, w) in chosen.items() if abs(w / r - 1) <= 0.2}
+
+
+def _roll_from_spacing(frames: list[tuple[np.ndarray, tuple[int, int]]]) -> tuple[float, int] | None:
+    """Return (roll deg, lines used) that makes the lines of every frame (their angles about the
+    frame's vanishing point, and which two are the ego lane's) equally spaced along the horizon,
+    whole multiples of the ego lane's width apart, or None when no frame shows a line beyond the
+    ego lane's.
+
+    The cost, summed over the frames' lines outside the ego lane, is each line's distance from a
+    whole multiple (capped at 0.15, so that a line of another spacing, e.g. a shoulder, weighs
+    little), on a grid of rolls within MAX_ROLL_DEG; its minimum is refined by least squares
+    with the multiples fixed.
+    """
+    grid = np.arange(-MAX_ROLL_DEG, MAX_ROLL_DEG + 1e-9, 0.01)
+    terms = []          # (angles, ego pair, other line indices)
+    for ang, pair in frames:
+        ang = np.asarray(ang, np.float64)
+        lo, hi = sorted(ang[list(pair)])
+        # lines beyond the ego lane's, not so flat that a hundredth of a degree moves them a lane
+        others = [j for j in range(len(ang)) if (ang[j] < lo or ang[j] > hi)
+                  and abs(ang[j]) <= ROLL_MAX_LINE_ANGLE_DEG]
+        if others:
+            terms.append((ang, pair, others))
+    if not terms:
+        return None
+
+    def multiples(rolls: np.ndarray, ang, pair, others) -> np.ndarray:
+        k = _k(ang[None, :], rolls[:, None])
+        return (k[:, others] - k[:, [pair[0]]]) / (k[:, [pair[1]]] - k[:, [pair[0]]])
+
+    cost = np.zeros(len(grid))
+    for ang, pair, others in terms:
+        n = multiples(grid, ang, pair, others)
+        cost += np.minimum(np.abs(n - np.round(n)), 0.15).sum(1)
+    b = int(np.argmin(cost + 1e-3 * np.abs(grid)))   # a tie goes to the smaller roll
+    roll = float(grid[b])
+    # least squares around it with the multiples fixed
+    fixed = []
+    for ang, pair, others in terms:
+        n = multiples(np.array([roll]), ang, pair, others)[0]
+        keep = [(j, round(v)) for j, v in zip(others, n) if abs(v - round(v)) < 0.1 and round(v) not in (0, 1)]
+        if keep:
+            fixed.append((ang, pair, [j for j, _ in keep], np.array([m for _, m in keep], np.float64)))
+    if not fixed:
+        return None
+    fine = roll + np.arange(-0.05, 0.05 + 1e-9, 0.001)
+    sq = np.zeros(len(fine))
+    for ang, pair, idx, m in fixed:
+        sq += ((multiples(fine, ang, pair, idx) - m) ** 2).sum(1)
+    return float(fine[int(np.argmin(sq))]), sum(len(f[2]) for f in fixed)
+
+
+# --------------------------------------------------------------------------- estimate
+
+@dataclass(frozen=True)
+class _Basis:
+    vp: np.ndarray
+    eh: np.ndarray   # along the horizon (to the right)
+    ev: np.ndarray   # down, perpendicular to the horizon
+
+    def to_uv(self, p: np.ndarray) -> np.ndarray:
+        d = np.asarray(p, np.float64) - self.vp
+        return np.stack([d @ self.eh, d @ self.ev], axis=-1)
+
+    def to_xy(self, u, v) -> np.ndarray:
+        return self.vp + np.multiply.outer(u, self.eh) + np.multiply.outer(v, self.ev)
+
+
+def _basis(vp, roll_deg: float) -> _Basis:
+    r = math.radians(roll_deg)
+    return _Basis(np.asarray(vp, np.float64), np.array([math.cos(r), -math.sin(r)]),
+                  np.array([math.sin(r), math.cos(r)]))
+
+
+def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | None = None,
+                      focal_px: float | None = None, lane_width_m: float = DEFAULT_LANE_WIDTH_M,
+                      look_ahead_m: float = DEFAULT_LOOK_AHEAD_M, dash_m: float = DEFAULT_DASH_M,
+                      gap_m: float = DEFAULT_GAP_M, hood_row_px: float | None = None,
+                      estimate_roll: bool = True) -> RoadGeometry:
+    """Return the bird's-eye geometry of a camera estimated from RAW frames of the road.
+
+    Parameters
+    ----------
+    frames : RGB uint8 frames of one camera (a few dozen, seconds apart, some on straight road).
+    lens : the camera's ``camera.Lens`` or ``camera.Calibration``; frames are undistorted with it
+        and its camera matrix gives the focal length and principal point. None: the frames are
+        taken as undistorted, the principal point as the image centre.
+    focal_px : the horizontal focal length (px) of the undistorted frames, if known without a
+        calibration (it overrides the calibration's).
+    lane_width_m : the width of the lanes (between line centres).
+    look_ahead_m : how far ahead of the camera the bird's-eye view reaches.
+    dash_m, gap_m : the painted and empty lengths of the dashed lines.
+    hood_row_px : the top row of the car's hood; None: detected from the frames.
+    estimate_roll : False assumes a roll of 0 (to measure what ignoring it costs).
+
+    Raises
+    ------
+    GeometryError
+        If no frame gives a vanishing point on a straight road, or the look-ahead is nearer
+        than the road the camera sees; the message names the reason of every frame.
+    InputError
+        If ``frames`` is empty or holds frames of different sizes or kinds.
+    """
+    frames = [_check_frame(f, f"frame {i}") for i, f in enumerate(frames)]
+    if not frames:
+        raise InputError("estimate_geometry: no frames given; pass frames of a road (a video's "
+                         "first seconds, or a folder of images)")
+    h, w = frames[0].shape[:2]
+    for i, f in enumerate(frames):
+        if f.shape[:2] != (h, w):
+            raise InputError(f"frame {i}: is {f.shape[1]}x{f.shape[0]} but frame 0 is {w}x{h}; "
+                             "estimate the geometry from frames of one camera")
+    if lane_width_m <= 0 or look_ahead_m <= 0 or dash_m <= 0 or gap_m <= 0:
+        raise InputError("estimate_geometry: lane_width_m, look_ahead_m, dash_m and gap_m must be positive")
+    assumptions: list[str] = []
+    finder = RoadLineFinder((w, h), lens)
+    calibration = finder.calibration
+
+    # hood (from at most HOOD_MAX_FRAMES frames, evenly spread)
+    if hood_row_px is not None:
+        hood = np.full(w, float(hood_row_px))
+        hood_source = "given"
+    else:
+        pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), HOOD_MAX_FRAMES)).round().astype(int))
+        hood = detect_hood([finder.undistort(frames[i]) for i in pick])
+        hood_source = "detected: still across frames, up to an edge that stays put"
+        if hood is None or np.min(hood[int(0.1 * w):int(0.9 * w)]) >= h - 1:
+            hood_source = "not detected"
+    finder = RoadLineFinder((w, h), lens, hood)
+    analyses = [finder.analyse(f) for f in frames]
+
+    # frames with a vanishing point on a straight road, consistent with the others
+    rejected: list[tuple[int, str]] = []
+    cand = []
+    for i, a in enumerate(analyses):
+        if a.vp.ok:
+            cand.append(i)
+        else:
+            rejected.append((i, a.vp.reason))
+    if not cand:
+        raise GeometryError(_no_frame_message(rejected, len(frames)))
+    pts = np.array([analyses[i].vp.point_px for i in cand])
+    med = np.median(pts, axis=0)
+    tol_y, tol_x = max(3.0, 0.01 * h), 0.04 * w
+    used = []
+    for i, p in zip(cand, pts):
+        if abs(p[1] - med[1]) > tol_y or abs(p[0] - med[0]) > tol_x:
+            rejected.append((i, f"inconsistent: its vanishing point ({p[0]:.1f}, {p[1]:.1f}) px is off "
+                                f"the median of the frames ({med[0]:.1f}, {med[1]:.1f}) px (a hill, a "
+                                "bump or a lane change?)"))
+        else:
+            used.append(i)
+    if not used:
+        raise GeometryError(_no_frame_message(rejected, len(frames)))
+    rejected.sort()
+    weights = np.array([analyses[i].vp.inlier_segments for i in used], np.float64)
+    vps = np.array([analyses[i].vp.point_px for i in used])
+    vp = (vps * weights[:, None]).sum(0) / weights.sum()
+    scatter_y = float(np.std(vps[:, 1])) if len(used) > 1 else float("nan")
+
+    # the ego lane: the nearest line left and right of the camera's; where a dashed line is not
+    # seen, the nearest is the next lane's, so frames whose lane is much wider than most are left out
+    angle_lists = {i: np.array([l.angle_deg for l in analyses[i].vp.lines]) for i in used}
+    ego = _ego_frames(angle_lists, 0.0)
+
+    # roll
+    roll, roll_source = 0.0, "assumed 0"
+    if estimate_roll:
+        found = _roll_from_spacing([(angle_lists[i], ego[i][:2]) for i in ego])
+        if found is not None:
+            each = [r for r in (_roll_from_spacing([(angle_lists[i], ego[i][:2])]) for i in ego) if r is not None]
+            spread = float(np.median([abs(r[0] - found[0]) for r in each]))
+            if len(each) >= ROLL_MIN_FRAMES and spread <= ROLL_MAX_SPREAD_DEG:
+                roll = found[0]
+                roll_source = (f"lane spacing ({found[1]} lines beyond the ego lane's in {len(each)} frames, "
+                               f"frame to frame within {spread:.2f} deg)")
+            else:
+                assumptions.append(
+                    f"the lines beyond the ego lane's give a roll of {found[0]:+.2f} deg but "
+                    + (f"in only {len(each)} frames" if len(each) < ROLL_MIN_FRAMES else
+                       f"frame by frame {spread:.2f} deg apart (lanes of other widths?)") + ": not used")
+    if roll_source == "assumed 0":
+        dx = abs(w / 2 - vp[0])
+        assumptions.append(
+            "roll assumed 0 (it takes lines beyond the ego lane's, of equally wide lanes, to measure it): "
+            "a roll of 1.5 deg would move the horizon at the image centre by "
+            f"{dx * math.tan(math.radians(1.5)):.1f} px, the lane width by about 1.3 % and the scale along "
+            "the road by about 7 %")
+    else:
+        assumptions.append("every lane is as wide as the ego lane (the roll is measured from their spacing)")
+    basis = _basis(vp, roll)
+    slope = -math.tan(math.radians(roll))
+    horizon_row = float(vp[1] + slope * (w / 2 - vp[0]))
+
+    # the ego lane's width in k = du/dv
+    ego = _ego_frames(angle_lists, roll)
+    if not ego:
+        raise GeometryError(f"no frame shows both lines of the lane the car drives in, one on each side "
+                            f"of the camera and {EGO_ANGLES_DEG[0]:g}-{EGO_ANGLES_DEG[1]:g} deg from straight "
+                            "down below the vanishing point; give frames where the car drives between two "
+                            "lane lines (is the video rotated?)")
+    r_k = float(np.median([e[2] for e in ego.values()]))
+    ego_both = len(ego)
+
+    # focal length and principal point
+    if calibration is not None:
+        K = calibration.camera_matrix
+        fx, fy, pp = float(K[0, 0]), float(K[1, 1]), np.array([K[0, 2], K[1, 2]], np.float64)
+        focal_source = "calibration"
+    else:
+        fx = fy = None
+        pp = np.array([w / 2, h / 2])
+        focal_source = "unknown"
+    if focal_px is not None:
+        fy = float(focal_px) if fx is None else fy * float(focal_px) / fx
+        fx = float(focal_px)
+        focal_source = "given"
+    if calibration is None:
+        assumptions.append("principal point at the image centre")
+    pp_u, pp_v = basis.to_uv(pp)
+
+    def angles(f_x: float, f_y: float) -> tuple[float, float]:
+        """Return (pitch, yaw) in radians for focal lengths f_x, f_y."""
+        theta = math.atan2(pp_v, f_y)
+        psi = math.atan(pp_u * math.cos(theta) / f_x)
+        return theta, psi
+
+    def c_from_focal(f_x: float, f_y: float) -> float:
+        theta, psi = angles(f_x, f_y)
+        return f_x * lane_width_m / (r_k * math.cos(theta) * math.cos(psi) ** 2)
+
+    # hood row and the bottom of the road
+    if hood_source == "not detected":
+        lowest = [max(l.rows_px[1] for l in analyses[i].vp.lines) for i in used]
+        hood_row = float(min(h, np.max(lowest) + 1))
+        hood_source = "not detected: just below the lowest lane-line pixel"
+        assumptions.append("hood not detected (it takes 3 frames of a moving car): the view starts "
+                           "just below the lowest lane-line pixel found")
+        hood = np.full(w, hood_row)
+    else:
+        lo, hi = int(0.1 * w), int(0.9 * w)
+        hood_row = float(np.min(hood[lo:hi]))
+
+    # dash period -> C
+    c_focal = c_from_focal(fx, fy) if fx is not None else None
+    if c_focal is not None:
+        c_range = (c_focal / DASH_FOCAL_RANGE, c_focal * DASH_FOCAL_RANGE)
+    else:
+        c_range = tuple(f * w * lane_width_m / r_k for f in FOCAL_RANGE_W)
+    c_dash, dash_fit = _dash_scale(analyses, used, hood, roll, dash_m, gap_m, (w, h), c_range)
+    scale_conf = 1.0
+    if c_dash is not None:
+        f_dash = c_dash * r_k / lane_width_m
+        for _ in range(4):  # the angles depend on the focal length
+            theta, psi = angles(f_dash, f_dash)
+            f_dash = c_dash * r_k * math.cos(theta) * math.cos(psi) ** 2 / lane_width_m
+        if not 0.2 * w <= f_dash <= 6 * w:
+            assumptions.append(f"a dash period was found but implies a focal length of {f_dash:.0f} px, "
+                               "out of reach for a road camera: not used")
+            c_dash = None
+    if c_dash is not None:
+        C = c_dash
+        scale_source = f"dash period ({dash_m:g} m dash + {gap_m:g} m gap, dash pairs fit {dash_fit:.2f})"
+        assumptions.append(f"dashed lines are {dash_m:g} m painted + {gap_m:g} m gap")
+        if c_focal is not None:
+            diff = c_dash / c_focal - 1
+            if abs(diff) > DASH_DISAGREEMENT:
+                scale_conf = 0.6
+                assumptions.append(f"the dash period and the focal length with the lane width disagree by "
+                                   f"{100 * diff:+.0f} %: the lanes or the dashes may not be as assumed")
+        else:
+            fx = fy = f_dash
+            focal_source = "dash period and lane width"
+    elif c_focal is not None:
+        C, scale_source = c_focal, "focal length and lane width"
+        scale_conf = 0.9
+    else:
+        fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
+        C = c_from_focal(fa, fa)
+        scale_source = f"assumed focal length {fa:.0f} px ({ASSUMED_HFOV_DEG:g} deg field of view)"
+        assumptions.append(f"no dashed lines and no focal length: a focal length of {fa:.0f} px "
+                           f"({ASSUMED_HFOV_DEG:g} deg horizontal field of view) is assumed; the scale "
+                           "along the road may be off by tens of percent")
+        scale_conf = 0.4
+    assumptions.append(f"lanes {lane_width_m:g} m wide; a flat road")
+
+    pitch = yaw = height = None
+    k_c, s0 = 0.0, 0.0
+    if fx is not None:
+        theta, psi = angles(fx, fy)
+        pitch, yaw = math.degrees(theta), math.degrees(psi)
+        height = fx * lane_width_m * math.cos(theta) / (fy * r_k * math.cos(psi))
+        k_c = (fx / fy) * math.tan(psi) * math.sin(theta)
+        s0 = -height * math.tan(theta) / math.cos(psi)
+    else:
+        assumptions.append("the camera sits on the car's centre line")
+
+    # bird's-eye points
+    half = r_k / 2
+    margin = max(2.0, 0.01 * h)
+    v_bottom = _bottom_v(basis, (k_c - half, k_c + half), hood, margin, (w, h))
+    if v_bottom is None:
+        raise GeometryError("no road is seen above the hood between the lane lines; give "
+                            "hood_row_px, or frames where the road is seen below the horizon")
+    near_m = C / v_bottom + s0
+    v_min = max(8.0, 0.05 * h)
+    if look_ahead_m - s0 <= 0 or C / (look_ahead_m - s0) > v_bottom - 0.1 * h:
+        raise GeometryError(f"look-ahead {look_ahead_m:g} m: the nearest road seen above the hood is "
+                            f"{near_m:.1f} m ahead; choose a look-ahead of at least {near_m + 5:.0f} m")
+    v_top = C / (look_ahead_m - s0)
+    if v_top < v_min:
+        v_top = v_min
+        new = C / v_top + s0
+        assumptions.append(f"look-ahead cut from {look_ahead_m:g} m to {new:.1f} m: farther rows lie within "
+                           f"{v_min:.0f} px of the horizon, where a pixel is metres of road")
+        look_ahead_m = new
+    corners = [(k_c - half, v_top), (k_c - half, v_bottom), (k_c + half, v_bottom), (k_c + half, v_top)]
+    src = tuple(tuple(float(c) for c in basis.to_xy(k * v, v)) for k, v in corners)
+    dst = ((w / 4, 0.0), (w / 4, float(h)), (3 * w / 4, float(h)), (3 * w / 4, 0.0))
+    visible = C / v_top - C / v_bottom
+    xm, ym = lane_width_m / (w / 2), visible / h
+
+    # confidence
+    n_used = len(used)
+    conf = min(1.0, n_used / MIN_GOOD_FRAMES)
+    if n_used > 1 and scatter_y > 1.0:
+        conf *= math.exp(-((scatter_y - 1.0) / 3.0) ** 2)
+    conf *= scale_conf
+    conf *= min(1.0, ego_both / MIN_GOOD_FRAMES)
+    if hood_source.startswith("not detected"):
+        conf *= 0.9
+    return RoadGeometry(
+        size_px=(w, h), vanishing_point_px=(float(vp[0]), float(vp[1])), horizon_row_px=horizon_row,
+        horizon_slope=slope, roll_deg=roll, roll_source=roll_source, pitch_deg=pitch, yaw_deg=yaw,
+        camera_height_m=height, focal_px=fx, focal_source=focal_source if fx is not None else "unknown",
+        hood_row_px=hood_row, hood_source=hood_source, src_px=src, dst_px=dst,
+        lane_width_m=float(lane_width_m), look_ahead_m=float(look_ahead_m), near_m=float(near_m),
+        visible_length_m=float(visible), xm_per_px=xm, ym_per_px=ym, scale_source=scale_source,
+        inverse_depth_scale_px_m=float(C), lane_width_ratio=r_k, dash_fit=float(dash_fit),
+        confidence=float(round(conf, 4)),
+        assumptions=tuple(assumptions), frames_used=tuple(used), frames_rejected=tuple(rejected),
+        frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, vps)))
+
+
+def _no_frame_message(rejected: list[tuple[int, str]], n: int) -> str:
+    """Return the error of a run where no frame gave a consistent vanishing point."""
+    reasons: dict[str, list[int]] = {}
+    for i, why in sorted(rejected):
+        reasons.setdefault(why.split(":")[0], []).append(i)
+    parts = [f"{why} ({len(ix)} frame{'s' if len(ix) > 1 else ''})" for why, ix in reasons.items()]
+    first = sorted(rejected)[0][1] if rejected else ""
+    return (f"no consistent vanishing point in {n} frame{'s' if n > 1 else ''}: {'; '.join(parts)}. "
+            f"First: {first}")
+
+
+def _bottom_v(basis: _Basis, ks: tuple[float, float], hood: np.ndarray, margin: float,
+              size: tuple[int, int]) -> float | None:
+    """Return the largest v (distance below the horizon) whose horizon-parallel segment between
+    the lines u = k v stays above the hood by ``margin`` and inside the frame."""
+    w, h = size
+    v_hi = float(np.max(basis.to_uv(np.array([[0, h], [w, h]], np.float64))[:, 1]))
+    for v in np.arange(math.floor(v_hi), 4.0, -1.0):
+        u = np.linspace(ks[0] * v, ks[1] * v, 64)
+        xy = basis.to_xy(u, np.full_like(u, v))
+        if xy[0, 0] < 0 or xy[-1, 0] > w - 1:
+            continue
+        cols = np.clip(np.round(xy[:, 0]).astype(int), 0, w - 1)
+        if np.all(xy[:, 1] <= hood[cols] - margin):
+            return float(v)
+    return None
+
+
+def _dash_runs(on: np.ndarray, q0: float, dq: float, max_len_q: float,
+               v_resolved: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the (centres, lengths) in q of the dashes in an on/off signal sampled at
+    q0 + dq * i (0 at both ends): runs of paint, joined across gaps under 3 px, at least 2 px
+    long, wholly inside the signal, no longer than ``max_len_q``, and at least ``v_resolved`` px
+    below the horizon (nearer it the dashes blur together)."""
+    edges = np.diff(on.astype(np.int8))
+    starts, ends = np.flatnonzero(edges == 1) + 1, np.flatnonzero(edges == -1) + 1   # [start, end)
+    if len(starts) == 0:
+        return np.zeros(0), np.zeros(0)
+    qs, qe = q0 + dq * starts, q0 + dq * ends
+    # join runs whose gap is under 3 px (v = 1/q, so a step dq is v^2 dq px)
+    gap_px = (qs[1:] - qe[:-1]) / (qs[1:] * qe[:-1])
+    first = np.flatnonzero(np.r_[True, gap_px >= 3.0])
+    qs, qe = np.minimum.reduceat(qs, first), np.maximum.reduceat(qe, first)
+    inner = np.ones(len(qs), bool)
+    inner[0] = starts[0] > 1
+    inner[-1] &= ends[-1] < len(on) - 1
+    length_px = (qe - qs) / (qs * qe)
+    centre = (qs + qe) / 2
+    keep = inner & (length_px >= 2.0) & (qe - qs <= max_len_q) & (1.0 / centre >= v_resolved)
+    return centre[keep], (qe - qs)[keep]
+
+
+def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, gap_m: float,
+                size: tuple[int, int], c_range: tuple[float, float]) -> tuple[float | None, float]:
+    """Return (C from the dash period, how well the dashes fit it), or (None, fit) without a
+    clear dash period; C is searched within ``c_range``.
+
+    Each line of each frame is sampled along its length at even steps of q = 1/v (v: px below
+    the frame's horizon), where s = C q + s0 makes a dash pattern periodic; the runs of paint
+    that end inside the sampled stretch are its dashes (``_dash_runs``). The long ones (10 px or
+    more) give a first C = dash_m / length (the median); runs under 40 % of a dash's length
+    there (a raised marker in a gap, a fleck) are dropped. For a period P in q, the fit is the
+    weighted mean over all pairs of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair
+    lies a whole number of periods apart (each pair weighted by the inverse variance of its
+    centres, whose error in q grows as q^2); the period is the best fit within a factor
+    DASH_LENGTH_RANGE of what the lengths say (which rules out its harmonics), used from a fit
+    of DASH_MIN_FIT; C = (dash_m + gap_m) / P.
+    """
+    w, h = size
+    period_m = dash_m + gap_m
+    v_min = max(6.0, DASH_V_MIN_FRACTION * h)
+    signals_meta = []
+    v_max = 0.0
+    for i in used:
+        a = analyses[i]
+        fb = _basis(a.vp.point_px, roll)
+        for c, d, _, bottom in a.line_fits:
+            v_line = float(fb.to_uv(c + d * (bottom - c[1]) / d[1])[1])
+            if v_line <= 2 * v_min:
+                continue
+            v_max = max(v_max, v_line)
+            signals_meta.append((i, fb, c, d, v_line))
+    if not signals_meta:
+        return None, 0.0
+    q_lo, q_hi = 1.0 / v_max, 1.0 / v_min
+    dq = 0.5 / v_max ** 2
+    n = int((q_hi - q_lo) / dq) + 1
+    if n > 40000:
+        n = 40000
+        dq = (q_hi - q_lo) / (n - 1)
+    q = q_lo + dq * np.arange(n)
+    v = 1.0 / q
+    span = q_hi - q_lo
+    lo = max(DASH_MIN_PERIODS / span, c_range[0] / period_m)
+    hi = c_range[1] / period_m
+    if hi <= lo:
+        return None, 0.0
+    # nearer the horizon than this, a gap spans under 3 px for the smallest C searched
+    v_resolved = math.sqrt(3.0 * c_range[0] / gap_m)
+    kernel = np.ones((1, 5), np.uint8)
+    dilated = {}
+    runs = []
+    for i, fb, c, d, v_line in signals_meta:
+        if i not in dilated:
+            dilated[i] = cv2.dilate(analyses[i].mask, kernel)
+        m = dilated[i]
+        # points of the line at distance v below the frame's horizon
+        c_v = float((c - fb.vp) @ fb.ev)
+        tau = (v - c_v) / float(d @ fb.ev)
+        xi = np.round(c[0] + tau * d[0]).astype(int)
+        yi = np.round(c[1] + tau * d[1]).astype(int)
+        inside = (xi >= 0) & (xi < w) & (yi >= 0) & (v <= v_line + 1)
+        inside[inside] &= yi[inside] < hood[xi[inside]] - 1
+        idx = np.flatnonzero(inside)
+        if len(idx) < 0.2 * n:
+            continue
+        stretch = slice(idx[0], idx[-1] + 1)
+        on = np.zeros(idx[-1] - idx[0] + 3, np.int8)
+        on[1:-1] = (m[np.clip(yi[stretch], 0, h - 1), np.clip(xi[stretch], 0, w - 1)] > 0) & inside[stretch]
+        runs.append(_dash_runs(on, q[idx[0]] - dq, dq, 0.6 / lo, v_resolved))
+    # the dashes' own lengths: C = dash_m / length for the long ones (10 px or more)
+    cen = np.concatenate([r[0] for r in runs]) if runs else np.zeros(0)
+    lq = np.concatenate([r[1] for r in runs]) if runs else np.zeros(0)
+    long = lq * cen ** -2 >= 10.0
+    if long.sum() < 2:
+        return None, 0.0
+    c_len = float(np.median(dash_m / lq[long]))
+    lo = max(lo, c_len / DASH_LENGTH_RANGE / period_m)
+    hi = min(hi, c_len * DASH_LENGTH_RANGE / period_m)
+    if hi <= lo:
+        return None, 0.0
+    diffs = []
+    for centre, length in runs:
+        # runs much shorter than a dash there (a raised marker in a gap, a fleck) are not dashes
+        # and, with C known roughly, runs nearer the horizon than where a gap spans 6 px
+        ok = (length >= 0.4 * dash_m / c_len) & (centre <= 1.0 / math.sqrt(6.0 * c_len / gap_m))
+        centre = centre[ok]
+        if len(centre) >= 2:
+            jj, kk = np.triu_indices(len(centre), 1)
+            # a centre's error in q is its error in px times q^2: weight each pair by 1 / variance
+            diffs.append(np.stack([centre[kk] - centre[jj], 1.0 / (centre[kk] ** 4 + centre[jj] ** 4)]))
+    if not diffs or sum(d.shape[1] for d in diffs) < DASH_MIN_PAIRS:
+        return None, 0.0
+    diffs, weights = np.concatenate(diffs, axis=1)
+    weights = weights / weights.sum()
+    step = 1.0 / (40 * span)
+    nu = np.arange(lo, hi + step, step)
+    if len(nu) < 3:
+        return None, 0.0
+    fit = np.cos(2 * np.pi * np.multiply.outer(nu, diffs)) @ weights
+    b = int(np.argmax(fit))
+    if fit[b] < DASH_MIN_FIT or b in (0, len(nu) - 1):
+        return None, float(fit[b])
+    c0, c1, c2 = fit[b - 1], fit[b], fit[b + 1]
+    den = c0 - 2 * c1 + c2
+    f = nu[b] + (0.5 * (c0 - c2) / den * step if den < 0 else 0.0)
+    return float(f * period_m), float(c1)
