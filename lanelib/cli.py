@@ -15,9 +15,9 @@ import json
 import sys
 from pathlib import Path
 
-from . import bench, data, evaluate, hough, runs, synth
+from . import bench, data, evaluate, geometry, hough, runs, synth
 from .camera import Calibration, calibrate, parse_pattern
-from .config import PipelineConfig, load_config_or_preset, override
+from .config import PipelineConfig, load_config_or_preset, override, save_parts
 from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
 from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
@@ -55,6 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_calibrate(sub)
     _add_images(sub)
     _add_video(sub)
+    _add_geometry(sub)
     _add_bench(sub)
     _add_hough(sub)
     _add_evaluate(sub)
@@ -70,6 +71,44 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
                    help="PipelineConfig JSON (e.g. saved by a notebook tuner) or the name of a "
                         "bundled preset (p1: the 960x540 Udacity P1 camera); default: built-in")
     _set_arg(p)
+
+
+def _geometry_args(p: argparse.ArgumentParser, auto: bool) -> None:
+    """Add the options of the road geometry estimate (``auto``: behind ``--auto-geometry``)."""
+    if auto:
+        p.add_argument("--auto-geometry", action="store_true",
+                       help="estimate the bird's-eye points and scale from the frames themselves "
+                            "(see `geometry --help`) instead of the config's perspective; an "
+                            "estimate that fails or is not confident stops the run (exit 2)")
+    g = p.add_argument_group("road geometry" + (" (with --auto-geometry)" if auto else ""))
+    g.add_argument("--lane-width", type=float, default=runs.GeometryOptions.lane_width_m, metavar="M",
+                   help="the ego lane's width, which sets the scale across the road (default 3.7)")
+    g.add_argument("--look-ahead-m", type=float, default=runs.GeometryOptions.look_ahead_m, metavar="M",
+                   help="how far ahead of the camera the bird's-eye view reaches (default 25)")
+    g.add_argument("--dash-m", type=float, default=runs.GeometryOptions.dash_m, metavar="M",
+                   help="length of a dash of the dashed lines, for the scale along the road (default 3)")
+    g.add_argument("--gap-m", type=float, default=runs.GeometryOptions.gap_m, metavar="M",
+                   help="gap between dashes (default 9; US freeways: --dash-m 3.05 --gap-m 9.14)")
+    g.add_argument("--focal-px", type=float, metavar="PX",
+                   help="the camera's focal length in px when no calibration gives it")
+    g.add_argument("--geometry-seconds", type=float, default=runs.GeometryOptions.seconds, metavar="S",
+                   help="of a video read for the estimate, from its start (default 20)")
+    g.add_argument("--accept-low-confidence", action="store_true",
+                   help=f"use an estimate whose confidence is below {geometry.LOW_CONFIDENCE} "
+                        "(refused otherwise)")
+
+
+def _geometry_options(args) -> "runs.GeometryOptions":
+    return runs.GeometryOptions(lane_width_m=args.lane_width, look_ahead_m=args.look_ahead_m,
+                                dash_m=args.dash_m, gap_m=args.gap_m, focal_px=args.focal_px,
+                                seconds=args.geometry_seconds,
+                                accept_low_confidence=args.accept_low_confidence)
+
+
+def _print_geometry(geo) -> None:
+    print(geo.summary())
+    for a in geo.assumptions:
+        print(f"  assumed: {a}")
 
 
 def _set_arg(p: argparse.ArgumentParser) -> None:
@@ -131,12 +170,17 @@ def _add_images(sub) -> None:
     _common_pipeline_args(p)
     p.add_argument("--debug", action="store_true",
                    help="write the 2x2 debug composite instead of the annotated frame")
+    _geometry_args(p, auto=True)
     p.set_defaults(func=_run_images)
 
 
 def _run_images(args) -> int:
     files = list_images(args.in_dir)
     config, calibration = _load_pipeline_inputs(args)
+    if args.auto_geometry:
+        geo = runs.estimate_road_geometry(args.in_dir, calibration, _geometry_options(args))
+        _print_geometry(geo)
+        config = runs.with_geometry(config, geo)
     rows = runs.process_images(files, args.output, config, calibration, debug=args.debug)
     for r in rows:
         if "error" in r:
@@ -177,6 +221,7 @@ def _add_video(sub) -> None:
                         "offset_m, lane_width_m, left_a..c, right_a..c (bird's-eye pixel fits)")
     _range_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    _geometry_args(p, auto=True)
     p.set_defaults(func=_run_video)
 
 
@@ -205,12 +250,64 @@ def _part(args, run) -> str:
 
 def _run_video(args) -> int:
     config, calibration = _load_pipeline_inputs(args)
+    options = _geometry_options(args) if args.auto_geometry else None
+    if options is not None:
+        print(f"estimating the road geometry from the first {options.seconds:g} s of {args.input}")
     run = runs.process_video(args.input, args.output, config, calibration, debug=args.debug,
                              log_path=args.log, progress=not args.no_progress,
-                             start_s=args.start, end_s=args.end)
+                             start_s=args.start, end_s=args.end, auto_geometry=options,
+                             on_geometry=_print_geometry)
+    for note in run.notes:
+        print(f"geometry: {note}")
     print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
           f"({run.fps:.1f} fps); lane found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
+    return 0
+
+
+def _add_geometry(sub) -> None:
+    p = sub.add_parser(
+        "geometry", help="estimate the bird's-eye view from the road itself",
+        description="Estimate the road geometry of a camera from a video's first seconds or a folder "
+                    "of its images: the vanishing point of the road and the horizon (with the roll, "
+                    "from three or more lane lines), the hood, the bird's-eye points for a look-ahead, "
+                    "the scale across (lane width) and along the road (the dash period, else the "
+                    "focal length of --calibration or --focal-px, else an assumed 60 deg field of "
+                    "view, which is said), and pitch and yaw when a focal length is known. Writes "
+                    "the perspective part of a PipelineConfig to OUT (merged into OUT when it is "
+                    "already a config, e.g. one a tuner saved; else the whole config of --config or "
+                    "the defaults) and prints the figures, the confidence and every assumption. "
+                    "Frames with no consistent vanishing point, or an estimate below the confidence "
+                    "limit, stop with the reason (exit 2). See lanelib/geometry.py for the method.",
+        epilog=_exit_codes())
+    p.add_argument("input", type=Path, metavar="VIDEO_OR_FOLDER",
+                   help="a video of the camera (a straight stretch helps) or a folder of its images")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE",
+                   help="config JSON to write (readable by --config)")
+    p.add_argument("--calibration", type=Path, metavar="FILE",
+                   help="the camera's calibration JSON (undistorts the frames; its focal length "
+                        "gives pitch, yaw and a check of the scale)")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="for a new OUT: the config whose other parts it holds (default: built-in)")
+    p.add_argument("--json", type=Path, metavar="FILE", help="also write every figure as JSON")
+    _geometry_args(p, auto=False)
+    p.set_defaults(func=_run_geometry)
+
+
+def _run_geometry(args) -> int:
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    inputs = [args.input] + ([args.calibration] if args.calibration else [])
+    check_not_input(args.output, inputs)
+    if args.json:
+        check_not_input(args.json, inputs + [args.output])
+    base = load_config_or_preset(args.config) if args.config else PipelineConfig()
+    geo = runs.estimate_road_geometry(args.input, calibration, _geometry_options(args))
+    _print_geometry(geo)
+    save_parts(runs.with_geometry(base, geo), args.output, ("perspective",))
+    print(f"perspective written to {args.output} (use it with --config {args.output})")
+    if args.json:
+        write_json(args.json, geo.to_dict(), inputs=inputs)
+        print(f"figures written to {args.json}")
     return 0
 
 

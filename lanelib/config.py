@@ -173,6 +173,22 @@ def save_config(config: PipelineConfig, path: str | os.PathLike) -> Path:
     return io.write_json(path, to_dict(config))
 
 
+def save_parts(config: PipelineConfig, path: str | os.PathLike, parts: "typing.Iterable[str]") -> Path:
+    """Write ``parts`` of ``config`` (e.g. ``("perspective",)``) into the config file at ``path``.
+
+    A file that exists keeps every other part it holds (what another tuner or command wrote
+    there) and is checked first: one that is not a valid config raises ``ConfigError`` and is left
+    as it is. A new file gets the whole config. The file is replaced atomically.
+    """
+    p = Path(path)
+    if not p.exists():
+        return save_config(config, p)
+    load_config(p)  # refuse to merge into a file that is not a valid config
+    held = io.read_json(p, "config file")
+    held.update({part: to_dict(getattr(config, part)) for part in parts})
+    return io.write_json(p, held)
+
+
 def load_config(path: str | os.PathLike) -> PipelineConfig:
     """Read a PipelineConfig JSON file (keys left out keep their defaults)."""
     data = io.read_json(path, "config file")

@@ -86,10 +86,11 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   horizontal field of view), which the result states. With the dash period, the focal length
   follows from the same formula, so the pitch, yaw and camera height are given too (with the
   principal point at the image centre unless a calibration gives it).
-- **Confidence** (0-1): the product of min(1, frames used / 5), the agreement of the frames'
-  vanishing points (1 up to 1 px of scatter in y, falling off beyond), min(1, frames showing the
+- **Confidence** (0-1): the product of min(1, frames used / 5), how well the frames pin the
+  vanishing point (1 up to 1 px of standard error of their mean row, falling off beyond: a car
+  pitching over bumps scatters single frames by a few px, and many frames still pin it), min(1, frames showing the
   ego lane / 5), the source of the scale (dashes 1, focal length 0.9, dashes and focal length
-  disagreeing by more than 8 % 0.6, assumed focal length 0.4) and 0.9 when the hood was not
+  disagreeing by more than 8 % 0.75, and then the focal length is used, assumed focal length 0.4) and 0.9 when the hood was not
   found. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
@@ -249,8 +250,10 @@ class RoadGeometry:
 
     def perspective_config(self) -> PerspectiveConfig:
         """Return the ``PerspectiveConfig`` of these bird's-eye points and scale."""
+        d = np.asarray(self.dst_px, np.float64)
+        car_x = float((d[:, 0].min() + d[:, 0].max()) / 2)  # the camera's own line: the car's centre
         return PerspectiveConfig(self.src_px, self.dst_px, self.size_px, self.lane_width_m,
-                                 self.visible_length_m)
+                                 self.visible_length_m, car_x)
 
     def perspective(self) -> Perspective:
         """Return the ``Perspective`` (undistorted image <-> bird's-eye view) of these points."""
@@ -1089,9 +1092,13 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         if c_focal is not None:
             diff = c_dash / c_focal - 1
             if abs(diff) > DASH_DISAGREEMENT:
-                scale_conf = 0.6
+                # the calibrated focal length is measured, the dash pattern only assumed: trust it
+                scale_conf = 0.75
+                C, scale_source = c_focal, (f"focal length and lane width (the dash period "
+                                            f"disagreed by {100 * diff:+.0f} %)")
                 assumptions.append(f"the dash period and the focal length with the lane width disagree by "
-                                   f"{100 * diff:+.0f} %: the lanes or the dashes may not be as assumed")
+                                   f"{100 * diff:+.0f} %: the dashes may not be {dash_m:g} m + {gap_m:g} m "
+                                   "(or the lanes not as wide as assumed); the focal length is used")
         else:
             fx = fy = f_dash
             focal_source = "dash period and lane width"
@@ -1147,8 +1154,11 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     # confidence
     n_used = len(used)
     conf = min(1.0, n_used / MIN_GOOD_FRAMES)
-    if n_used > 1 and scatter_y > 1.0:
-        conf *= math.exp(-((scatter_y - 1.0) / 3.0) ** 2)
+    # how well the frames pin the vanishing point: the standard error of their mean row (a car
+    # that pitches over bumps scatters each frame's point by a few px; many frames still pin it)
+    std_err_y = scatter_y / math.sqrt(n_used) if n_used > 1 else float("nan")
+    if n_used > 1 and std_err_y > 1.0:
+        conf *= math.exp(-((std_err_y - 1.0) / 3.0) ** 2)
     conf *= scale_conf
     conf *= min(1.0, ego_both / MIN_GOOD_FRAMES)
     if hood_source.startswith("not detected"):

@@ -55,6 +55,10 @@ class PerspectiveConfig:
     size_px : (width, height) of the images the points belong to; the bird's-eye view has this size.
     lane_width_m : the real distance between the dst left and right lines (US lane: 3.7 m).
     visible_length_m : the real road length between the dst top and bottom rows.
+    car_x_px : x (px) of the car's centre line in the bird's-eye view, from which the offset is
+        measured and the search splits left from right; None (the default): where the bottom
+        row's centre pixel of the image lands, right for a camera that looks straight ahead.
+        ``geometry.RoadGeometry`` sets it (a turned camera's image centre is not the car's).
     """
 
     src_px: tuple[Point, ...] = DEFAULT_SRC_1280x720
@@ -62,6 +66,7 @@ class PerspectiveConfig:
     size_px: tuple[int, int] = (1280, 720)
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
     visible_length_m: float = DEFAULT_VISIBLE_LENGTH_M
+    car_x_px: float | None = None
 
     def __post_init__(self):
         for name in ("src_px", "dst_px"):
@@ -126,7 +131,8 @@ def scaled(config: PerspectiveConfig, size_px: tuple[int, int]) -> PerspectiveCo
     sy = size_px[1] / config.size_px[1]
     sc = lambda pts: tuple((x * sx, y * sy) for x, y in pts)  # noqa: E731
     return PerspectiveConfig(sc(config.src_px), sc(config.dst_px), tuple(size_px),
-                             config.lane_width_m, config.visible_length_m)
+                             config.lane_width_m, config.visible_length_m,
+                             None if config.car_x_px is None else config.car_x_px * sx)
 
 
 # --------------------------------------------------------------------------- transforms of points
@@ -273,6 +279,10 @@ class Perspective(Homography):
         self.size = tuple(int(v) for v in config.size_px)
         self.xm_per_px = config.xm_per_px
         self.ym_per_px = config.ym_per_px
+        w, h = self.size
+        # the car's centre line in the bird's-eye view (``PerspectiveConfig.car_x_px``)
+        self.car_x_px = (float(config.car_x_px) if config.car_x_px is not None
+                         else float(self([(w / 2, h - 1)])[0, 0]))
 
     def _check(self, image: np.ndarray) -> None:
         io.check_rgb(image, "image", self.size, owner="the perspective",

@@ -56,8 +56,7 @@ class LanePipeline:
         self._clahe = thresholds.make_clahe(config.thresholds, self.size)  # None when off
         self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
-        w, h = self.size
-        self.car_x_px = float(self.perspective([(w / 2, h - 1)])[0, 0])
+        self.car_x_px = self.perspective.car_x_px
 
     # ---- stages ---------------------------------------------------------------------------
 

@@ -22,18 +22,21 @@ import csv
 import math
 import os
 import time
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 from tqdm import tqdm
 
-from . import hough, io
+from . import geometry, hough, io
 from .camera import Calibration
 from .config import PipelineConfig
-from .errors import (ConfigError, DecodeStoppedError, InputError, LaneLibError, PartialOutputError,
-                     naming_the_file)
+from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
+                     PartialOutputError, naming_the_file)
+from .geometry import RoadGeometry
+from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
 from .result import FrameResult
 from .tracking import LaneTracker
@@ -127,6 +130,7 @@ class VideoRun:
     fps: float
     found_frames: int
     first_frame: int = 0
+    notes: tuple[str, ...] = ()  # what happened on the way (e.g. the road geometry re-estimated)
 
 
 # a frame whose time is a hair (float rounding) before a bound counts as at the bound
@@ -285,6 +289,175 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, first)
 
 
+# --------------------------------------------------------------------------- road geometry from frames
+
+@dataclass(frozen=True)
+class GeometryOptions:
+    """How ``--auto-geometry`` estimates the road geometry and, through a video, checks it.
+
+    Parameters
+    ----------
+    lane_width_m, look_ahead_m, dash_m, gap_m, focal_px : as for ``geometry.estimate_geometry``.
+    seconds : of a video read for the estimate, from its start (or from ``start_s``).
+    max_frames : frames of those (or of a folder's images) used, evenly spread.
+    check_every_s : through a video, the vanishing point is measured this often
+        (``geometry.RoadLineFinder``, about 15 ms a frame).
+    drift_checks : this many checks in a row with the vanishing point off the horizon (by more
+        than ``geometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
+        for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
+        too little confidence for a new estimate to be used).
+    accept_low_confidence : use an estimate below ``geometry.LOW_CONFIDENCE`` (refused otherwise).
+    """
+
+    lane_width_m: float = DEFAULT_LANE_WIDTH_M
+    look_ahead_m: float = geometry.DEFAULT_LOOK_AHEAD_M
+    dash_m: float = geometry.DEFAULT_DASH_M
+    gap_m: float = geometry.DEFAULT_GAP_M
+    focal_px: float | None = None
+    seconds: float = 20.0
+    max_frames: int = 50
+    check_every_s: float = 0.5
+    drift_checks: int = 5
+    accept_low_confidence: bool = False
+
+    def __post_init__(self):
+        if not (self.seconds > 0 and self.max_frames >= 1 and self.check_every_s > 0
+                and self.drift_checks >= 1):
+            raise ConfigError("geometry options: seconds and check_every_s must be positive, "
+                              "max_frames and drift_checks 1 or more")
+
+    def estimate(self, frames: Sequence[np.ndarray], calibration: Calibration | None,
+                 hood_row_px: float | None = None) -> RoadGeometry:
+        """Return ``geometry.estimate_geometry`` of ``frames`` with these options."""
+        return geometry.estimate_geometry(frames, calibration, focal_px=self.focal_px,
+                                          lane_width_m=self.lane_width_m, look_ahead_m=self.look_ahead_m,
+                                          dash_m=self.dash_m, gap_m=self.gap_m, hood_row_px=hood_row_px)
+
+
+def sample_frames(source: str | os.PathLike, seconds: float | None = None, max_frames: int = 50,
+                  start_s: float | None = None) -> list[np.ndarray]:
+    """Return up to ``max_frames`` frames of a video (from ``start_s``, over ``seconds``) or of a
+    folder of images (by name), evenly spread.
+
+    Raises
+    ------
+    InputError
+        If the source is missing, unreadable, or holds no frame; an image that cannot be read
+        names itself.
+    """
+    path = Path(source)
+    if path.is_dir():
+        files = io.list_images(path)
+        step = max(1, math.ceil(len(files) / max_frames))
+        return [io.read_image(f) for f in files[::step]]
+    if not path.exists():
+        raise InputError(f"{path}: no such file or folder; check the path")
+    info = io.video_info(path)
+    end = None if seconds is None else (start_s or 0.0) + seconds
+    span = clip_frames(info, start_s, end if end is None or end * info.fps < info.n_frames else None)
+    step = max(1, math.ceil(len(span) / max_frames))
+    out = []
+    with io.VideoReader(path, span.start, span.stop, info) as reader:
+        for i, frame in enumerate(reader):
+            if i % step == 0:
+                out.append(frame)
+    return out
+
+
+def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration | None = None,
+                           options: GeometryOptions = GeometryOptions(),
+                           start_s: float | None = None) -> RoadGeometry:
+    """Return the road geometry estimated from a video's first ``options.seconds`` or a folder.
+
+    Raises
+    ------
+    GeometryError
+        If the frames give no consistent vanishing point (the reason: no road, too few
+        segments, inconsistent, road not straight), or if the estimate's confidence is below
+        ``geometry.LOW_CONFIDENCE`` and ``options.accept_low_confidence`` is off: a low
+        confidence result is never used silently.
+    """
+    frames = sample_frames(source, options.seconds, options.max_frames, start_s)
+    try:
+        geo = options.estimate(frames, calibration)
+    except GeometryError as e:
+        raise GeometryError(naming_the_file(str(e), Path(source))) from None
+    if geo.low_confidence and not options.accept_low_confidence:
+        fixes = ([] if calibration is not None or options.focal_px else ["a calibration (--calibration)"])
+        fixes.append("frames of a longer straight stretch" + ("" if Path(source).is_dir() else
+                                                              " (--geometry-seconds)"))
+        raise GeometryError(
+            f"{source}: the road geometry estimated from {len(frames)} frames ({len(geo.frames_used)} "
+            f"on straight road) has confidence {geo.confidence:.2f}, below {geometry.LOW_CONFIDENCE} "
+            f"({'; '.join(geo.assumptions)}); give {' or '.join(fixes)}, or pass "
+            "--accept-low-confidence to use it anyway")
+    return geo
+
+
+def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
+    """Return ``config`` with the bird's-eye points and scale of ``geo``."""
+    return replace(config, perspective=geo.perspective_config())
+
+
+class GeometryWatch:
+    """Through a video, check the road geometry and estimate it again when the horizon moves.
+
+    ``check(frame, index, time_s)`` measures the frame's vanishing point every
+    ``options.check_every_s``; after ``options.drift_checks`` checks in a row whose point lies
+    off the horizon (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of
+    the height) it estimates the geometry from those frames and returns it (None otherwise). A
+    failed or low-confidence new estimate keeps the old geometry. ``notes`` says what happened.
+    """
+
+    def __init__(self, geo: RoadGeometry, calibration: Calibration | None, options: GeometryOptions,
+                 fps: float):
+        self.geometry = geo
+        self.calibration = calibration
+        self.options = options
+        self.every = max(1, round(options.check_every_s * fps))
+        self.finder = geometry.RoadLineFinder(geo.size_px, lens=calibration, hood_top_px=geo.hood_row_px)
+        self.tolerance_px = max(geometry.DRIFT_PX, 0.01 * geo.size_px[1])
+        self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
+        self.shifts: list[float] = []
+        self.notes: list[str] = []
+
+    def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
+        if index % self.every:
+            return None
+        vp = self.finder.vanishing_point(frame)
+        if not vp.ok:
+            return None  # a bend, a frame without lines: says nothing about the horizon
+        shift = self.geometry.horizon_shift_px(vp.point_px)
+        if abs(shift) <= self.tolerance_px:
+            self.off.clear()
+            self.shifts.clear()
+            return None
+        self.off.append(frame)
+        self.shifts.append(shift)
+        if len(self.off) < self.options.drift_checks:
+            return None
+        where = (f"frame {index} ({time_s:.2f} s): the vanishing point lay "
+                 f"{abs(float(np.median(self.shifts))):.1f} px {'below' if np.median(self.shifts) > 0 else 'above'} "
+                 f"the horizon in {len(self.off)} checks in a row")
+        frames = list(self.off)
+        self.off.clear()
+        self.shifts.clear()
+        try:  # the hood is the car's: it stays where it was
+            new = self.options.estimate(frames, self.calibration, self.geometry.hood_row_px)
+        except GeometryError as e:
+            self.notes.append(f"{where}; a new estimate failed ({e}); the geometry is kept")
+            return None
+        if new.low_confidence and not self.options.accept_low_confidence:
+            self.notes.append(f"{where}; the new estimate has confidence {new.confidence:.2f}, "
+                              "below the limit; the geometry is kept")
+            return None
+        self.notes.append(f"{where}; geometry estimated again: horizon row "
+                          f"{self.geometry.horizon_row_px:.1f} -> {new.horizon_row_px:.1f} px, "
+                          f"{new.ym_per_px:.4f} m/px along (was {self.geometry.ym_per_px:.4f})")
+        self.geometry = new
+        return new
+
+
 # --------------------------------------------------------------------------- the advanced pipeline
 
 def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
@@ -344,7 +517,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
                   debug: bool = False, log_path: str | os.PathLike | None = None,
                   progress: bool = True, threads: int | None = None, start_s: float | None = None,
-                  end_s: float | None = None) -> VideoRun:
+                  end_s: float | None = None, auto_geometry: GeometryOptions | None = None,
+                  on_geometry: Callable[[RoadGeometry], None] | None = None) -> VideoRun:
     """Return what the run did after tracking the lane through a video and writing it annotated.
 
     The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
@@ -362,16 +536,34 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         frames from the first at or after ``start_s`` to the last before ``end_s``
         (``clip_frames``). The tracker starts fresh on the first of them; the log's ``frame``
         and ``time_s`` are the source clip's (``run_video``).
+    auto_geometry : estimate the bird's-eye points and scale from the clip's first
+        ``seconds`` (from ``start_s``) instead of ``config.perspective`` (``estimate_road_geometry``:
+        a ``GeometryError`` before anything is written when that fails or is not confident), then
+        keep checking them (``GeometryWatch``); a new estimate restarts the tracker. The run's
+        ``notes`` say when and why.
+    on_geometry : called with the first estimate, before the run starts (the CLI prints it).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
     the frames before the break, and ``PartialOutputError`` says so.
     """
     trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
+    watch: list[GeometryWatch] = []
+    if auto_geometry is not None:
+        geo = estimate_road_geometry(in_path, calibration, auto_geometry, start_s)
+        if on_geometry is not None:
+            on_geometry(geo)
+        config = with_geometry(config, geo)
+        watch.append(GeometryWatch(geo, calibration, auto_geometry, io.video_info(in_path).fps))
+
+    current = [config]  # the config of the geometry in use
 
     def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict, bool]:
-        if not trackers:
-            trackers.append(LaneTracker(pipeline_for(frame, config, calibration)))
+        new = watch[0].check(frame, index, time_s) if watch else None
+        if new is not None:
+            current[0] = with_geometry(config, new)
+        if not trackers or new is not None:
+            trackers[:] = [LaneTracker(pipeline_for(frame, current[0], calibration))]
         tracker = trackers[0]
         pipe = tracker.pipeline
         result = tracker.update(frame, keep_images=debug)
@@ -383,8 +575,9 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
             image = pipe.annotate(frame, result, raw=True)
         return image, video_log_row(index, time_s, result), result.found
 
-    return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+    run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                    desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+    return replace(run, notes=tuple(watch[0].notes)) if watch else run
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline

@@ -32,7 +32,7 @@ import numpy as np
 
 from .. import io
 from ..camera import Calibration
-from ..config import PipelineConfig, from_dict, load_config, migrate, save_config, to_dict
+from ..config import PipelineConfig, from_dict, load_config, migrate, save_parts, to_dict
 from ..data import UDACITY_ADVANCED, bundled, data_root, repo_root, udacity, udacity_calibration
 from ..draw import sheet
 from ..errors import ConfigError, InputError, LaneLibError
@@ -310,13 +310,7 @@ class Tuner:
         raises ``ConfigError`` and is left as it is. A new file gets the whole config, the file
         the CLI's ``--config`` reads. The file is replaced atomically.
         """
-        p = Path(path)
-        if not p.exists():
-            return save_config(self.config, p)
-        load_config(p)  # refuse to merge into a file that is not a valid config
-        held = io.read_json(p, "config file")
-        held.update({part: to_dict(getattr(self.config, part)) for part in self.parts})
-        return io.write_json(p, held)
+        return save_parts(self.config, path, self.parts)
 
     def load(self, path: str | os.PathLike) -> PipelineConfig:
         """Read a PipelineConfig JSON into the controls and the preview; return the new config.

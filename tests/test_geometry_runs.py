@@ -1,0 +1,161 @@
+"""The road geometry in runs and on the command line: `geometry`, `--auto-geometry`, the drift watch."""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import geometry, io, runs
+from lanelib.camera import Calibration, calibrate
+from lanelib.cli import main
+from lanelib.config import PipelineConfig, load_config, save_config
+from lanelib.errors import GeometryError
+from lanelib.synth import load_video_truth
+
+REPO = Path(__file__).resolve().parents[1]
+CLIP = REPO / "videos" / "project.mp4"
+OPTIONS = runs.GeometryOptions(seconds=6.0, max_frames=25)
+
+
+@pytest.fixture(scope="module")
+def calibration_file(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("cal") / "calibration.json"
+    calibrate(REPO / "camera_cal").save(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def estimate(calibration_file):
+    cal = Calibration.load(calibration_file)
+    return cal, runs.estimate_road_geometry(CLIP, cal, OPTIONS)
+
+
+def test_the_estimate_on_the_bundled_clip_finds_the_true_horizon(estimate):
+    _, geo = estimate
+    truth = load_video_truth(CLIP).camera
+    row, _ = truth.horizon_px()
+    assert geo.horizon_row_px == pytest.approx(row, abs=2.0)
+    assert not geo.low_confidence
+    config = runs.with_geometry(PipelineConfig(), geo)
+    assert config.perspective == geo.perspective_config()
+    assert config.perspective.car_x_px == pytest.approx(640.0)  # the camera's line: dst centre
+    assert config.thresholds == PipelineConfig().thresholds
+
+
+def test_geometry_cli_writes_a_config_that_scores_like_the_true_points(calibration_file, tmp_path, capsys):
+    out = tmp_path / "geometry.json"
+    figures = tmp_path / "figures.json"
+    code = main(["geometry", str(CLIP), "-o", str(out), "--calibration", str(calibration_file),
+                 "--geometry-seconds", "6", "--json", str(figures)])
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert "vanishing point (" in printed and "confidence" in printed and f"--config {out}" in printed
+    config = load_config(out)
+    assert np.allclose(json.loads(figures.read_text())["src_px"], config.perspective.src_px, atol=1e-3)
+    # scored against the ground truth through the estimated view: as good as the default points
+    assert main(["evaluate", "video", str(CLIP), "--config", str(out), "--max-frames", "50",
+                 "--json", str(tmp_path / "eval.json")]) == 0
+    scores = json.loads((tmp_path / "eval.json").read_text())
+    assert scores["found_rate"] == 1.0 and scores["point_accuracy"] >= 0.99
+    assert scores["offset_err_cm_median"] < 5.0
+    assert config.perspective.lane_width_m == 3.7
+
+
+def test_geometry_cli_merges_into_a_tuned_config(calibration_file, tmp_path, capsys):
+    tuned = tmp_path / "tuned.json"
+    base = PipelineConfig()
+    save_config(replace(base, search=replace(base.search, margin_px=55)), tuned)
+    assert main(["geometry", str(CLIP), "-o", str(tuned), "--calibration", str(calibration_file),
+                 "--geometry-seconds", "6"]) == 0
+    merged = load_config(tuned)
+    assert merged.search.margin_px == 55  # what the tuner saved is kept
+    assert merged.perspective != base.perspective and merged.perspective.car_x_px is not None
+
+
+def test_video_auto_geometry_tracks_the_lane(calibration_file, tmp_path, capsys):
+    out = tmp_path / "out.mp4"
+    code = main(["video", str(CLIP), "-o", str(out), "--calibration", str(calibration_file),
+                 "--auto-geometry", "--geometry-seconds", "6", "--end", "3", "--no-progress"])
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert "estimating the road geometry from the first 6 s" in printed and "horizon row" in printed
+    assert "lane found in 75 of 75 frames" in printed
+
+
+def _grey_clip(path: Path, frames: int = 20) -> Path:
+    with io.VideoWriter(path, 25.0) as w:
+        for i in range(frames):
+            w.write(np.full((360, 640, 3), 90 + i % 3, np.uint8))
+    return path
+
+
+def test_no_road_stops_the_run_with_the_reason(tmp_path, capsys):
+    clip = _grey_clip(tmp_path / "grey.mp4")
+    for argv in (["geometry", str(clip), "-o", str(tmp_path / "g.json")],
+                 ["video", str(clip), "-o", str(tmp_path / "o.mp4"), "--auto-geometry"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert str(clip) in err and "no road" in err
+    assert not (tmp_path / "g.json").exists() and not (tmp_path / "o.mp4").exists()
+
+
+def test_a_rotated_clip_is_refused(tmp_path, capsys):
+    rotated = tmp_path / "rotated.mp4"
+    with io.VideoReader(CLIP, 0, 40) as r, io.VideoWriter(rotated, 25.0) as w:
+        for frame in r:
+            w.write(np.ascontiguousarray(np.rot90(frame)))
+    assert main(["geometry", str(rotated), "-o", str(tmp_path / "g.json")]) == 2
+    err = capsys.readouterr().err
+    assert str(rotated) in err and ("rotated" in err or "confidence" in err)
+
+
+def test_a_night_clip_is_refused_unless_accepted(tmp_path, capsys):
+    night = tmp_path / "night.mp4"
+    with io.VideoReader(CLIP, 0, 100) as r, io.VideoWriter(night, 25.0) as w:
+        for frame in r:
+            w.write((frame * 0.12).astype(np.uint8))
+    code = main(["geometry", str(night), "-o", str(tmp_path / "g.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and str(night) in err
+    assert "confidence" in err or "no road" in err or "too few" in err
+
+
+def test_low_confidence_is_refused_unless_accepted(calibration_file, tmp_path, capsys):
+    # the bundled test images: 3 of 8 on straight road, too few for a confident estimate
+    argv = ["images", str(REPO / "test_images"), "-o", str(tmp_path / "out"), "--calibration",
+            str(calibration_file), "--auto-geometry"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "below 0.5" in err and "--accept-low-confidence" in err and "(--calibration)" not in err
+    assert main(argv + ["--accept-low-confidence"]) == 0
+    printed = capsys.readouterr().out
+    assert "confidence 0.3" in printed and "of 8 images: lane found" in printed
+
+
+def _shifted(frame: np.ndarray, dy: float) -> np.ndarray:
+    """The frame moved down by dy px (the horizon of a camera that pitched up)."""
+    m = np.float32([[1, 0, 0], [0, 1, dy]])
+    return cv2.warpAffine(frame, m, (frame.shape[1], frame.shape[0]), borderMode=cv2.BORDER_REPLICATE)
+
+
+def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
+    cal, geo = estimate
+    frames = runs.sample_frames(CLIP, 6.0, 25)
+    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok]
+    assert len(straight) >= 6
+    options = runs.GeometryOptions(check_every_s=0.04)  # every frame; 5 in a row (the default)
+    watch = runs.GeometryWatch(geo, cal, options, fps=25.0)
+    for i, f in enumerate(straight[:4]):  # on the horizon: nothing happens
+        assert watch.check(f, i, i / 25) is None
+    assert watch.notes == []
+    moved = [_shifted(f, 12.0) for f in straight]
+    got = [watch.check(f, 10 + i, (10 + i) / 25) for i, f in enumerate(moved[:5])]
+    assert got[:4] == [None] * 4 and got[4] is not None, watch.notes
+    assert got[4].horizon_row_px == pytest.approx(geo.horizon_row_px + 12.0, abs=1.5)
+    assert len(watch.notes) == 1 and "below the horizon in 5 checks in a row" in watch.notes[0]
+    assert "geometry estimated again" in watch.notes[0]
+    assert watch.check(moved[5], 20, 0.8) is None  # the new horizon is where the frames say
