@@ -1,6 +1,7 @@
 """The road geometry in runs and on the command line: `geometry`, `--auto-geometry`, the drift watch."""
 from __future__ import annotations
 
+import csv
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -159,3 +160,20 @@ def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     assert len(watch.notes) == 1 and "below the horizon in 5 checks in a row" in watch.notes[0]
     assert "geometry estimated again" in watch.notes[0]
     assert watch.check(moved[5], 20, 0.8) is None  # the new horizon is where the frames say
+
+
+def test_a_p1_clip_with_auto_geometry_and_no_setup(udacity_p1, tmp_path, capsys):
+    """Real footage of another camera (960x540), no calibration, no preset: the geometry from the
+    road itself gives a plausible lane in every frame."""
+    clip = udacity_p1 / "test_videos" / "solidWhiteRight.mp4"
+    log = tmp_path / "log.csv"
+    code = main(["video", str(clip), "-o", str(tmp_path / "out.mp4"), "--auto-geometry",
+                 "--log", str(log), "--no-progress"])
+    printed = capsys.readouterr().out
+    assert code == 0 and "dash period" in printed
+    rows = list(csv.DictReader(log.open()))
+    assert len(rows) == 221
+    widths = [float(r["lane_width_m"]) for r in rows if r["lane_width_m"]]
+    offsets = [abs(float(r["offset_m"])) for r in rows if r["offset_m"]]
+    assert len(widths) == len(offsets) == 221
+    assert all(3.0 <= w <= 4.5 for w in widths) and max(offsets) < 0.6
