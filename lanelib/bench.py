@@ -16,7 +16,11 @@
   fps ratio tends to when CPU is the limit, and it does not depend on other load.
 - ``stages_ms``: each stage alone on the same frames (one thread): the remap, the thresholds and
   each mask the rule uses, the searches, the measurements, the tracker's update, the overlay on
-  the raw frame (the video path) and the full-frame undistort the images path and --debug add.
+  the raw frame (the video path) and the full-frame undistort the images path and --debug add;
+  and the road geometry's per-frame vanishing point (``geometry.RoadLineFinder``), which
+  ``--auto-geometry`` runs twice a second through a video.
+- ``geometry_s``: ``--auto-geometry``'s estimate (``geometry.estimate_geometry``) from the frames
+  it reads (up to 50 of the clip's first 20 s), CPU and wall seconds, without the decoding.
 
 Single-thread timings are CPU time of the timing thread (``time.thread_time``), which a busy
 machine does not inflate; the wall-clock medians are printed beside them. The clip is the
@@ -37,13 +41,13 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from . import data, io, thresholds
+from . import data, geometry, io, thresholds
 from .camera import Calibration
 from .config import PipelineConfig
-from .errors import InputError
+from .errors import InputError, LaneLibError
 from .evaluate import calibration_from_truth
 from .pipeline import LanePipeline
-from .runs import process_video
+from .runs import GeometryOptions, process_video, sample_frames
 from .tracking import LaneTracker
 
 GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7)}
@@ -123,6 +127,10 @@ def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, d
             tracker = LaneTracker(pipe)
             for raw in frames:
                 add("tracker update", lambda: tracker.update(raw))
+        finder = geometry.RoadLineFinder(pipe.size, lens=pipe.lens)
+        for _ in range(repeats):
+            for raw in frames:
+                add("vanishing point (geometry)", lambda: finder.vanishing_point(raw))
     return {k: {"cpu_ms": statistics.median(c for c, _ in v), "wall_ms": statistics.median(w for _, w in v)}
             for k, v in samples.items()}
 
@@ -178,6 +186,17 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
                     frames.append(frame.copy())
         pipe = LanePipeline(config, calibration, size=size)
         stages = stage_times(pipe, frames, repeats)
+        options = GeometryOptions()
+        sampled = sample_frames(video, options.seconds, options.max_frames)
+        c0, w0 = time.process_time(), time.perf_counter()
+        try:
+            geo = options.estimate(sampled, calibration)
+            geometry_note = f"confidence {geo.confidence:.2f}, {len(geo.frames_used)} frames used"
+        except LaneLibError as e:
+            geometry_note = f"no estimate: {e}"
+        geometry_s = {"cpu_s": round(time.process_time() - c0, 2),
+                      "wall_s": round(time.perf_counter() - w0, 2), "frames": len(sampled),
+                      "result": geometry_note}
         codec, vid = [], []
         for _ in range(video_rounds):
             codec.append(codec_run(clip, Path(tmp) / "codec.mp4"))
@@ -194,6 +213,7 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         "video_cpu_ms_per_frame": round(video_cpu, 1), "codec_cpu_ms_per_frame": round(codec_cpu, 1),
         "cpu_codec_to_video": round(codec_cpu / video_cpu, 2),
         "stages_ms": {k: {kk: round(vv, 2) for kk, vv in v.items()} for k, v in stages.items()},
+        "geometry_s": geometry_s,
         "video_fps_runs": [round(v[0], 1) for v in vid], "codec_fps_runs": [round(c[0], 1) for c in codec],
         "load_average": [round(v, 2) for v in os.getloadavg()],
         "clip_frames": clip_frames, "stage_frames": len(frames), "cpu_count": os.cpu_count(),
@@ -226,6 +246,9 @@ def format_report(f: dict) -> str:
              f"{f['codec_cpu_ms_per_frame']:.1f} ms (ffmpeg included), codec/video "
              f"{f['cpu_codec_to_video']:.2f} (the fps ratio when CPU is the limit); "
              f"load average {', '.join(map(str, f['load_average']))}",
+             f"geometry_s      {f['geometry_s']['cpu_s']:8.2f}   --auto-geometry's estimate from "
+             f"{f['geometry_s']['frames']} frames (CPU s; wall {f['geometry_s']['wall_s']:.2f} s; "
+             f"{f['geometry_s']['result']})",
              "",
              f"{'stage (one thread)':28s} {'cpu ms':>8s} {'wall ms':>8s}  x remap"]
     for name, v in f["stages_ms"].items():

@@ -467,8 +467,12 @@ def test_bench_reports_every_figure_consistently(capsys):
             "annotate raw (video path)", "tracker update"} <= set(stages)
     rule = thresholds.rule_masks(PipelineConfig().thresholds)
     assert len(rule) >= 2 and {f"  mask {n}" for n in rule} <= set(stages)
+    assert "vanishing point (geometry)" in stages
+    geo = f["geometry_s"]
+    assert geo["frames"] == 50 and geo["cpu_s"] > 0 and geo["result"].startswith("confidence")
     report = bench.format_report(f)
     assert "detect_to_remap" in report and "video_to_codec" in report and f"mask {rule[0]}" in report
+    assert "--auto-geometry's estimate from 50 frames" in report
 
 
 def test_bench_refuses_a_tiny_clip():
