@@ -149,7 +149,12 @@ DASH_V_MIN_FRACTION = 0.02
 DASH_MIN_PERIODS = 1.5
 DASH_MIN_FIT = 0.5             # mean cos of the dash pairs' phase at the period found
 DASH_MIN_PAIRS = 3
-DASH_LENGTH_RANGE = 1.35       # the period is searched within this factor of what the dashes' lengths say
+# The period is searched from C / DASH_LENGTH_RANGE to C * DASH_LENGTH_UP, C what the dashes'
+# lengths say. Higher up because a dash's length in the image is biased long (blur, a smeared or
+# dilated mask, a raised marker at its end), so its C low; never up to 2: the period's harmonic
+# at twice C fits the dash pairs as well as the period itself.
+DASH_LENGTH_RANGE = 1.35
+DASH_LENGTH_UP = 1.7
 DASH_FOCAL_RANGE = 1.35        # with a known focal length, C is searched within this factor of its C
 FOCAL_RANGE_W = (0.3, 3.5)     # else focal lengths from 0.3 to 3.5 image widths (hfov 16-118 deg)
 
@@ -1241,7 +1246,8 @@ def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, ga
     weighted mean over all pairs of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair
     lies a whole number of periods apart (each pair weighted by the inverse variance of its
     centres, whose error in q grows as q^2); the period is the best fit within a factor
-    DASH_LENGTH_RANGE of what the lengths say (which rules out its harmonics), used from a fit
+    DASH_LENGTH_RANGE below and DASH_LENGTH_UP above what the lengths say (which rules out the
+    harmonic at twice C), used from a fit
     of DASH_MIN_FIT; C = (dash_m + gap_m) / P.
     """
     w, h = size
@@ -1304,7 +1310,7 @@ def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, ga
         return None, 0.0
     c_len = float(np.median(dash_m / lq[long]))
     lo = max(lo, c_len / DASH_LENGTH_RANGE / period_m)
-    hi = min(hi, c_len * DASH_LENGTH_RANGE / period_m)
+    hi = min(hi, c_len * DASH_LENGTH_UP / period_m)
     if hi <= lo:
         return None, 0.0
     diffs = []

@@ -162,18 +162,19 @@ def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     assert watch.check(moved[5], 20, 0.8) is None  # the new horizon is where the frames say
 
 
-def test_a_p1_clip_with_auto_geometry_and_no_setup(udacity_p1, tmp_path, capsys):
+@pytest.mark.parametrize("name, frames", [("solidWhiteRight", 221), ("solidYellowLeft", 681)])
+def test_a_p1_clip_with_auto_geometry_and_no_setup(udacity_p1, tmp_path, capsys, name, frames):
     """Real footage of another camera (960x540), no calibration, no preset: the geometry from the
     road itself gives a plausible lane in every frame."""
-    clip = udacity_p1 / "test_videos" / "solidWhiteRight.mp4"
+    clip = udacity_p1 / "test_videos" / f"{name}.mp4"
     log = tmp_path / "log.csv"
     code = main(["video", str(clip), "-o", str(tmp_path / "out.mp4"), "--auto-geometry",
                  "--log", str(log), "--no-progress"])
     printed = capsys.readouterr().out
     assert code == 0 and "dash period" in printed
     rows = list(csv.DictReader(log.open()))
-    assert len(rows) == 221
+    assert len(rows) == frames
     widths = [float(r["lane_width_m"]) for r in rows if r["lane_width_m"]]
     offsets = [abs(float(r["offset_m"])) for r in rows if r["offset_m"]]
-    assert len(widths) == len(offsets) == 221
+    assert len(widths) == len(offsets) == frames
     assert all(3.0 <= w <= 4.5 for w in widths) and max(offsets) < 0.6
