@@ -9,14 +9,16 @@ frame, the bird's-eye view, colour conversions, the lane mask) is computed once 
 
 - ``ThresholdTuner`` (``widgets/thresholds.py``): every mask of ``ThresholdConfig`` on the
   bird's-eye view (on/off, colour space and channel, low/high range, Sobel kernel, top-hat width)
-  and the rule that combines them.
+  and the rule that combines them, CLAHE, an opening per colour mask, a stacked view of masks.
 - ``PerspectiveTuner`` (``widgets/perspective.py``): each src corner and the dst rectangle
   (``src.tl.x``, ..., ``dst.left_x``, ...; ``set_points``), the symmetric shortcut (top y, top
   width, bottom width, centre x, dst margin) and clicks on the preview (``ipyevents``) that place
-  the four src corners; the points on the undistorted frame, the bird's-eye view and the
-  straight-line check.
-- ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels) and the
-  search around a fit.
+  the four src corners, and "estimate from this clip/frame" (``estimate``, ``set_geometry``:
+  the road geometry of ``lanelib.geometry``); the points on the undistorted frame, the
+  bird's-eye view and the straight-line check.
+- ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels), the
+  search around a fit and the search's switches (trimming, window histogram, centre side first,
+  growing margin).
 - ``HoughTuner`` (``widgets/hough.py``): the basic pipeline's white and yellow HLS ranges, Canny
   thresholds, Hough parameters and region of interest (``PipelineConfig.hough``), on the raw
   frame; its picker adds the 960x540 Udacity P1 images.

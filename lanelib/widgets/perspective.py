@@ -1,9 +1,11 @@
 """``PerspectiveTuner``: the bird's-eye transform's four src corners and dst rectangle, set one by
-one, by symmetric shortcuts or by clicks on the preview, with the straight-line check
+one, by symmetric shortcuts, by clicks on the preview or estimated from the road itself
+(``geometry.estimate_geometry``), with the straight-line check
 (``perspective.straight_line_check``) as the measure of a good one."""
 from __future__ import annotations
 
 import html
+import math
 from dataclasses import replace
 
 import cv2
@@ -11,11 +13,12 @@ import ipyevents
 import ipywidgets as widgets
 import numpy as np
 
-from .. import thresholds
+from .. import runs, thresholds
 from ..camera import Calibration, FastBirdseye, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
-from ..errors import LaneLibError
+from ..errors import GeometryError, InputError, LaneLibError
+from ..geometry import LOW_CONFIDENCE, RoadGeometry
 from ..perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
                            straight_line_check, trapezoid_src)
 from .base import Tuner, row, sized
@@ -27,6 +30,8 @@ CORNER_NAMES = {"tl": "top left", "bl": "bottom left", "br": "bottom right", "tr
 SRC_POINT_KEYS = tuple(f"src.{c}.{a}" for c in CORNERS for a in ("x", "y"))
 DST_KEYS = ("dst.left_x", "dst.right_x", "dst.top_y", "dst.bottom_y")
 PLACE = "place_points"
+ESTIMATE = "estimate"
+ESTIMATE_LABELS = {False: "estimate from this frame", True: "estimate from this clip"}
 
 
 def _trapezoid_of(src_px) -> dict[str, float]:
@@ -84,6 +89,29 @@ def _bounds(key: str, size_px: tuple[int, int]) -> tuple[float, float]:
     return -float(span), 2.0 * span
 
 
+def carried_car_x(old: PerspectiveConfig, new: Perspective) -> float | None:
+    """Return the bird's-eye x (px) of ``old``'s car centre line under the new points ``new``.
+
+    ``old.car_x_px`` (set by an estimate: ``geometry.RoadGeometry.perspective_config``) is a
+    line on the road; two of its points (the bird's-eye view's top and bottom rows) are mapped
+    back to the undistorted frame through the old points and into the new view, and the result
+    is where that line crosses the new view's bottom row, where the offset is measured. None
+    when ``old`` has none (the default: where the image's bottom centre lands) or the line does
+    not cross the new view's bottom row within one image width of it.
+    """
+    if old.car_x_px is None:
+        return None
+    if new.config.src_px == old.src_px and new.config.dst_px == old.dst_px:
+        return old.car_x_px
+    w, h = old.size_px
+    image = Perspective(old).inverse([(old.car_x_px, 0.0), (old.car_x_px, h - 1.0)])
+    (x0, y0), (x1, y1) = new(image)
+    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or abs(y1 - y0) < 1e-6:
+        return None
+    x = x0 + (h - 1.0 - y0) * (x1 - x0) / (y1 - y0)
+    return round(float(x), 3) if -w <= x <= 2 * w else None
+
+
 def click_to_frame(event: dict, tile_px: tuple[int, int], columns: int,
                    frame_px: tuple[int, int]) -> tuple[float, float] | None:
     """Return the frame pixel (x, y) of a click on the preview's first tile, or None elsewhere.
@@ -130,6 +158,17 @@ class PerspectiveTuner(Tuner):
       four are set together (one corner at a time could pass through shapes that are no
       trapezoid) and the toggle disarms (``click_to_frame`` maps a click to frame pixels).
 
+    - "estimate from this clip" (a video) or "estimate from this frame" (an image), the
+      ``estimate`` button beside ``place_points``: the road geometry estimated from the road
+      itself (``estimate``, ``set_geometry``) sets the src and dst points, the visible length
+      and ``PerspectiveConfig.car_x_px`` (the car's centre line in the bird's-eye view). The
+      readout adds the estimate's summary (vanishing point, horizon, scale, confidence) and
+      what it assumed, and flags an estimate below ``geometry.LOW_CONFIDENCE`` ("low
+      confidence: ... check the points before saving"); the preview draws its horizon and
+      vanishing point on the undistorted frame until another item is picked. An estimate that
+      fails (``GeometryError``: no road, too few segments, inconsistent, road not straight)
+      shows its reason in red and leaves the points as they are.
+
     Whatever set the points, every control then shows them: the per-corner controls the exact
     points, the symmetric sliders the least-squares symmetric summary of the corners (each
     row's mean y and width, the mean of the two rows' centres, the mean dst margin; the very
@@ -141,8 +180,16 @@ class PerspectiveTuner(Tuner):
     check; the readout gives the check as numbers. Moving the src corners keeps the lane width
     in metres and updates the visible road length to the same camera
     (``perspective.road_length_m`` from the rows' widths, with the focal length the starting
-    config implies), so the metric scale stays right. ``save`` writes the ``perspective``
-    part; ``load`` reads it and the ``thresholds`` and ``search`` parts the check uses.
+    config implies), so the metric scale stays right. Moving points by hand after an estimate
+    keeps its car centre line as a line on the road (``carried_car_x``: the same line, seen
+    through the new points; a config without ``car_x_px`` keeps None, where the image's
+    bottom centre lands). ``save`` writes the ``perspective`` part (with ``car_x_px``);
+    ``load`` reads it and the ``thresholds`` and ``search`` parts the check uses.
+
+    ``geometry_options`` (a ``runs.GeometryOptions``) is what the estimate button uses: 20 s
+    of a clip from its start, 50 frames, 3.7 m lanes, a 25 m look-ahead, and
+    ``accept_low_confidence`` on (a low-confidence estimate is applied and flagged, not
+    refused); set it, or pass options to ``estimate``, to change them.
     """
 
     columns = 3
@@ -163,12 +210,97 @@ class PerspectiveTuner(Tuner):
             tuner's camera from the src rows' widths (``perspective.road_length_m``).
 
         Raises ``ConfigError`` for points that are no trapezoid of road ahead (collinear or
-        repeated points, a top row not narrower than the bottom one).
+        repeated points, a top row not narrower than the bottom one). The car's centre line
+        (``car_x_px``) of an earlier estimate is carried over (``carried_car_x``).
         """
         new = self._points_config(src_px, dst_px, visible_length_m)
         self.error = ""
         self._pending = []
         self._show(replace(self.config, perspective=new))
+        self._update(None)
+        self._refresh()
+        return self.config
+
+    def estimate(self, start_s: float | None = None, **options) -> RoadGeometry:
+        """Estimate the road geometry from the picked item, set the points to it and return it.
+
+        A video: ``runs.estimate_road_geometry`` of the picked clip, ``seconds`` of it from
+        ``start_s`` (default: its start), ``max_frames`` frames evenly spread, what
+        ``python -m lanelib geometry CLIP`` gives. An image: ``geometry.estimate_geometry`` of
+        this frame alone (one frame measures neither the hood nor the roll and gives a low
+        confidence). Both with the tuner's calibration for the item. The result goes into the
+        controls through ``set_geometry``.
+
+        Parameters
+        ----------
+        start_s : where in the clip the frames start (s); videos only.
+        **options : fields of ``runs.GeometryOptions`` that replace those of
+            ``self.geometry_options`` for this estimate: ``lane_width_m``, ``look_ahead_m``,
+            ``dash_m``, ``gap_m``, ``focal_px``, ``seconds``, ``max_frames``,
+            ``accept_low_confidence`` (on by default here: a low-confidence estimate is
+            applied and flagged in the readout; off refuses it with a ``GeometryError``).
+
+        Raises
+        ------
+        GeometryError
+            If the frames give no consistent vanishing point (the reason: no road, too few
+            segments, inconsistent, road not straight), or a low confidence is refused; the
+            points are left as they are.
+        InputError
+            For an unknown option, or ``start_s`` with an image.
+        """
+        names = set(runs.GeometryOptions.__dataclass_fields__)
+        unknown = sorted(set(options) - names)
+        if unknown:
+            raise InputError(f"estimate: unknown options {unknown}; use fields of "
+                             f"runs.GeometryOptions ({', '.join(sorted(names))})")
+        opts = replace(self.geometry_options, **options)
+        label, path = self.image, self.images[self.image]
+        calibration = self._calibration_for(label)
+        trial = replace(opts, accept_low_confidence=True)  # a low confidence is judged below
+        if self.is_video:
+            start = 0.0 if start_s is None else float(start_s)
+            geo = runs.estimate_road_geometry(path, calibration, trial, start_s)
+            source = f"the clip {label}, {opts.seconds:g} s from {start:g} s"
+        else:
+            if start_s is not None:
+                raise InputError(f"{label}: start_s is for a video; an image is estimated from "
+                                 "this frame alone")
+            try:
+                geo = trial.estimate([self._raw], calibration)
+            except GeometryError as e:
+                raise GeometryError(f"{label}: {e}") from None
+            source = f"this frame alone ({label})"
+        if geo.low_confidence and not opts.accept_low_confidence:
+            raise GeometryError(
+                f"{label}: the road geometry estimated from {source} has confidence "
+                f"{geo.confidence:.2f}, below {LOW_CONFIDENCE} ({'; '.join(geo.assumptions)}); "
+                "the points are unchanged: estimate from a clip with a longer straight stretch, "
+                "or pass accept_low_confidence=True to apply it, flagged")
+        self.set_geometry(geo, source)
+        return geo
+
+    def set_geometry(self, geo: RoadGeometry, source: str = "") -> PipelineConfig:
+        """Set the points of a road geometry (``geo.perspective_config()``); return the new config.
+
+        The src and dst points, the lane width, the visible length and the car's centre line
+        (``car_x_px``) become exactly those of ``geo`` (scaled to the picked item when ``geo``
+        was estimated on frames of another size). The readout shows ``geo``'s summary, what it
+        assumed and, below ``geometry.LOW_CONFIDENCE``, a "low confidence" flag; the preview
+        draws its horizon and vanishing point. ``source`` says in the readout where ``geo``
+        came from (e.g. "out/geometry.json").
+        """
+        pc = geo.perspective_config()
+        size = (self._raw.shape[1], self._raw.shape[0])
+        if tuple(pc.size_px) != size:
+            pc = scaled(pc, size)
+        Perspective(pc)  # refuses collinear points with a ConfigError
+        self.error = ""
+        self._pending = []
+        self.geometry = geo
+        self._geometry = (self.image, pc, source)
+        self._show(replace(self.config, perspective=pc))
+        self._focal_px = implied_focal_px(pc)
         self._update(None)
         self._refresh()
         return self.config
@@ -204,9 +336,18 @@ class PerspectiveTuner(Tuner):
         self._events = ipyevents.Event(source=self.preview, watched_events=["click"],
                                        prevent_default_action=True)
         self._events.on_dom_event(self._on_click)
+        self.geometry_options = runs.GeometryOptions(accept_low_confidence=True)
+        self.geometry: RoadGeometry | None = None  # the last estimate for the picked item
+        self._geometry: tuple[str, PerspectiveConfig, str] | None = None  # (item, its points, source)
+        self.estimate_button = widgets.Button(description=ESTIMATE_LABELS[False], icon="road",
+                                              tooltip="estimate the points from the road itself "
+                                                      "(vanishing point, horizon, lane width, dashes)",
+                                              layout=widgets.Layout(width="200px"))
+        self.estimate_button.add_class(f"lanelib-control-{ESTIMATE}")
+        self.estimate_button.on_click(self._on_estimate)
         return [row(sl("top_y", "top y (px)"), sl("centre_x", "centre x (px)")),
                 row(sl("top_width", "top width (px)"), sl("bottom_width", "bottom width (px)")),
-                row(sl("dst_margin", "dst margin (px)"), self.place),
+                row(sl("dst_margin", "dst margin (px)"), self.place, self.estimate_button),
                 points]
 
     def _sync(self) -> None:
@@ -224,6 +365,9 @@ class PerspectiveTuner(Tuner):
         self._focal_px = implied_focal_px(self.config.perspective)
         self._small = shrink(self.undistorted, self._tile_size())
         self._pending = []
+        self.estimate_button.description = ESTIMATE_LABELS[self.is_video]
+        if self._geometry is not None and self._geometry[0] != self.image:
+            self.geometry, self._geometry = None, None  # another item: perhaps another camera
 
     def _apply(self, key: str) -> PipelineConfig:
         pc = self.config.perspective
@@ -255,10 +399,8 @@ class PerspectiveTuner(Tuner):
         self.perspective = Perspective(self.config.perspective)
         self.birdseye = self._canvas.birdseye(self._raw, self.perspective)
         self.binary = thresholds.combine(self.birdseye, self.config.thresholds)
-        w, h = self.config.perspective.size_px
-        car_x = float(self.perspective([(w / 2, h - 1)])[0, 0])
         self.check = straight_line_check(self.binary, self.perspective.xm_per_px,
-                                         self.config.search, car_x)
+                                         self.config.search, self.perspective.car_x_px)
 
     def render(self) -> dict[str, np.ndarray | None]:
         """Return the undistorted frame with the src corners, the bird's-eye view, and its mask."""
@@ -266,6 +408,8 @@ class PerspectiveTuner(Tuner):
         h, w = self.undistorted.shape[:2]
         s = np.array([tw / w, th / h])
         road = self._small.copy()
+        if self.geometry is not None:
+            self._draw_horizon(road)
         src = np.round(np.asarray(self.config.perspective.src_px) * s).astype(np.int32)
         cv2.polylines(road, [src.reshape(-1, 1, 2)], True, (255, 0, 0), 2, cv2.LINE_AA)
         for x, y in self._pending:
@@ -290,6 +434,8 @@ class PerspectiveTuner(Tuner):
             corner = CORNERS[len(self._pending)]
             text += (f"\nplacing points: click the {CORNER_NAMES[corner]} corner on the undistorted "
                      f"frame ({len(self._pending) + 1} of 4)")
+        if self.geometry is not None:
+            text += "\n" + "\n".join(self._geometry_lines())
         return text
 
     # ---- points and clicks ----------------------------------------------------------------
@@ -302,8 +448,9 @@ class PerspectiveTuner(Tuner):
         if visible_length_m is None:
             visible_length_m = round(road_length_m(src, pc.lane_width_m, self._focal_px), 3)
         new = PerspectiveConfig(src, dst, pc.size_px, pc.lane_width_m, visible_length_m)
-        Perspective(new)  # refuses collinear points with a ConfigError
-        return new
+        warp = Perspective(new)  # refuses collinear points with a ConfigError
+        car_x = carried_car_x(pc, warp)
+        return new if car_x is None else replace(new, car_x_px=car_x)
 
     def _set_controls(self, pc: PerspectiveConfig, skip: str | None) -> None:
         """Show ``pc`` in every point control but ``skip`` (the one the user moved), quietly."""
@@ -346,3 +493,62 @@ class PerspectiveTuner(Tuner):
         except LaneLibError as e:
             self.error = f"placed points {src}: {e}"
             self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+
+    # ---- the estimate -----------------------------------------------------------------------
+
+    def _low_confidence_line(self) -> str:
+        geo = self.geometry
+        if geo is None or not geo.low_confidence:
+            return ""
+        n = len(geo.frames_used)
+        return (f"low confidence: {geo.confidence:.2f}, below {LOW_CONFIDENCE} ({n} frame"
+                f"{'' if n == 1 else 's'} on straight road) - check the points before saving")
+
+    def _geometry_lines(self) -> list[str]:
+        """Return the readout's lines about the last estimate (``self.geometry``)."""
+        geo = self.geometry
+        _, applied, source = self._geometry
+        lines = [f"road geometry estimated from {source}:" if source else "road geometry estimated:"]
+        flag = self._low_confidence_line()
+        if flag:
+            lines.append(flag)
+        lines += ["  " + line for line in geo.summary().splitlines()]
+        lines.append("  assumed: " + "; ".join(geo.assumptions))
+        if self.config.perspective != applied:
+            lines.append("  (the points have been changed since this estimate)")
+        return lines
+
+    def _draw_horizon(self, tile: np.ndarray) -> None:
+        """Draw the estimate's horizon and vanishing point on the undistorted tile, in place."""
+        geo = self.geometry
+        th, tw = tile.shape[:2]
+        gw, gh = geo.size_px
+        sx, sy = tw / gw, th / gh
+        ends = [(x, geo.horizon_row_px + geo.horizon_slope * (x - gw / 2)) for x in (0.0, float(gw))]
+        (x0, y0), (x1, y1) = ((round(x * sx), round(y * sy)) for x, y in ends)
+        cv2.line(tile, (x0, y0), (x1, y1), (0, 255, 255), 1, cv2.LINE_AA)
+        vx, vy = geo.vanishing_point_px
+        cv2.drawMarker(tile, (round(vx * sx), round(vy * sy)), (0, 255, 255), cv2.MARKER_CROSS, 14, 2,
+                       cv2.LINE_AA)
+
+    def _on_estimate(self, button=None) -> None:
+        """Estimate from the picked item (``estimate``), or show why it failed in red."""
+        what = "clip" if self.is_video else "frame"
+        self.message.value = (f'<pre style="margin:0">estimating the road geometry from this {what} '
+                              "...</pre>")
+        self.estimate_button.disabled = True
+        try:
+            self.estimate()
+        except LaneLibError as e:
+            self.error = str(e)
+            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+        finally:
+            self.estimate_button.disabled = False
+
+    def _refresh(self) -> None:
+        super()._refresh()
+        flag = self._low_confidence_line()
+        if flag:  # the flag in orange, the rest as the base shows it
+            text = html.escape(self.readout()).replace(
+                html.escape(flag), f'<b style="color:#c60">{html.escape(flag)}</b>')
+            self.message.value = f'<pre style="margin:0">{text}</pre>'
