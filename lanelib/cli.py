@@ -217,7 +217,8 @@ def _add_video(sub) -> None:
     p.add_argument("--debug", action="store_true",
                    help="write the 2x2 debug composite (undistorted, binary, search, result)")
     p.add_argument("--log", type=Path, metavar="CSV",
-                   help="per-frame CSV: frame, time_s, found, left_conf, right_conf, radius_m, "
+                   help="per-frame CSV: frame, time_s, found, method (windows, prior, or hold: "
+                        "held from earlier frames, drawn in amber), left_conf, right_conf, radius_m, "
                         "offset_m, lane_width_m, left_a..c, right_a..c (bird's-eye pixel fits)")
     _range_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")

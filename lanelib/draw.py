@@ -29,9 +29,12 @@ class DrawConfig:
     ``video_undistorted``: the ``video`` command draws on the RAW frame by default, the lane
     mapped through the lens model (what the camera saw, and one full-frame remap per frame
     cheaper); true draws on the undistorted frame, as the ``images`` command does.
+    ``held_color``: the lane area and both lines of a lane held from earlier frames (not seen in
+    this one), so it never looks like a lane seen now.
     """
 
     lane_color: Color = (0, 200, 90)
+    held_color: Color = (255, 170, 0)
     left_color: Color = (255, 60, 40)
     right_color: Color = (40, 110, 255)
     lane_alpha: float = 0.3
@@ -53,7 +56,8 @@ def _to_int(pts: np.ndarray) -> np.ndarray:
 
 def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
                  to_image: Callable[[np.ndarray], np.ndarray] | None,
-                 config: DrawConfig = DrawConfig(), height_px: int | None = None) -> np.ndarray:
+                 config: DrawConfig = DrawConfig(), height_px: int | None = None,
+                 held: bool = False) -> np.ndarray:
     """Return ``image`` with the lane area and lines drawn, the fits mapped by ``to_image``.
 
     Parameters
@@ -67,6 +71,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
         bird's-eye view itself. Only the polygon's points are mapped.
     config : colours, opacity, line width, samples per line.
     height_px : height of the bird's-eye view (default: the image's).
+    held : the lane is held from earlier frames: area and lines in ``config.held_color``.
     """
     if isinstance(to_image, np.ndarray):
         raise InputError("lane_overlay: to_image is a transform of points, not a matrix; pass "
@@ -88,10 +93,11 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
         if x0 < x1 and y0 < y1:
             box = out[y0:y1, x0:x1]
             fill = box.copy()
-            cv2.fillPoly(fill, [poly], config.lane_color, lineType=cv2.LINE_AA, offset=(-x0, -y0))
+            cv2.fillPoly(fill, [poly], config.held_color if held else config.lane_color,
+                         lineType=cv2.LINE_AA, offset=(-x0, -y0))
             cv2.addWeighted(fill, config.lane_alpha, box, 1 - config.lane_alpha, 0, dst=box)
     for side, pts in mapped.items():
-        color = config.left_color if side == "left" else config.right_color
+        color = config.held_color if held else config.left_color if side == "left" else config.right_color
         cv2.polylines(out, [_to_int(pts)], False, color, config.line_thickness_px, cv2.LINE_AA)
     return out
 
@@ -115,15 +121,19 @@ STRAIGHT_M = 10_000.0  # a radius at least this long is reported as "straight"
 
 
 def measurement_lines(radius_m: float, offset_m: float, lane_width_m: float, found: bool,
-                      reason: str = "") -> list[str]:
-    """Return the text lines that report a lane's measurements ("no lane found" when not found)."""
+                      reason: str = "", held: bool = False) -> list[str]:
+    """Return the text lines that report a lane's measurements ("no lane found" when not found;
+    a last line "Held: ..." for a lane held from earlier frames, not seen in this one)."""
     if not found or any(math.isnan(v) for v in (radius_m, offset_m, lane_width_m)):
         return ["No lane found" + (f": {reason}" if reason else "")]
     side = "right" if offset_m > 0 else "left"
     rad = "straight" if radius_m >= STRAIGHT_M else f"{radius_m:,.0f} m"
-    return [f"Radius of curvature: {rad}",
-            f"Vehicle is {abs(offset_m):.2f} m {side} of centre",
-            f"Lane width: {lane_width_m:.2f} m"]
+    lines = [f"Radius of curvature: {rad}",
+             f"Vehicle is {abs(offset_m):.2f} m {side} of centre",
+             f"Lane width: {lane_width_m:.2f} m"]
+    if held:
+        lines.append("Held: not seen in this frame")
+    return lines
 
 
 def mask_to_rgb(mask: np.ndarray) -> np.ndarray:

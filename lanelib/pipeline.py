@@ -251,11 +251,12 @@ class LanePipeline:
         through the lens model onto it (no full-frame undistortion needed).
         """
         to_frame = self.birdseye_to_raw if raw else self.perspective.inverse
+        held = result.method == "hold"  # held from earlier frames: drawn in the held colour
         out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px, to_frame,
-                                self.config.draw, self.size[1])
+                                self.config.draw, self.size[1], held=held)
         return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
                                                           result.lane_width_m, result.found,
-                                                          result.reason), self.config.draw)
+                                                          result.reason, held), self.config.draw)
 
     def draw_views(self, result: FrameResult, raw: np.ndarray) -> dict:
         """Return ``result.images`` with the drawn views added: undistorted, result and search.

@@ -493,17 +493,20 @@ def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLik
     return run_images([Path(f) for f in files], out_dir, process)
 
 
-VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
+VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
                      "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c")
 
 
 def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
     """Return one row of the per-frame video log (``VIDEO_LOG_COLUMNS``; NaN where not found).
 
-    The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c.
+    The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c. ``method``
+    is how the lane was found: ``windows`` or ``prior`` (seen in this frame), ``hold`` (held
+    from earlier frames, not seen in this one), or the search tried when none was found.
     """
     nan = float("nan")
     row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),
+           "method": result.method,
            "left_conf": result.left_conf, "right_conf": result.right_conf,
            "radius_m": result.radius_m, "offset_m": result.offset_m,
            "lane_width_m": result.lane_width_m}

@@ -234,3 +234,25 @@ def test_remembered_bases_restart_the_windows_after_a_reset(pipe, history):
 def test_a_base_history_needs_a_count():
     with pytest.raises(ConfigError, match="base_history_frames must be 0"):
         TrackerConfig(base_history_frames=-1)
+
+
+def test_a_held_lane_is_drawn_and_logged_apart_from_a_seen_one(pipe):
+    from lanelib import draw
+    from lanelib.runs import video_log_row
+    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=3))
+    seen = tracker.update(frame(pipe))
+    blank = frame(pipe, left_x=None, right_x=None)
+    held = tracker.update(blank)
+    assert held.method == "hold" and seen.method != "hold"
+    canvas = np.full((H, W, 3), 100, np.uint8)
+    cfg = pipe.config.draw
+    mid = pipe.perspective.inverse([((LEFT_X + RIGHT_X) / 2, H - 60)])[0].round().astype(int)
+    px = {name: pipe.annotate(canvas, r)[mid[1], mid[0]].astype(int) for name, r in
+          (("seen", seen), ("held", held))}
+    a = cfg.lane_alpha  # the area is the lane colour blended over the grey frame
+    for name, colour in (("seen", cfg.lane_color), ("held", cfg.held_color)):
+        assert np.abs(px[name] - (a * np.array(colour) + (1 - a) * 100)).max() <= 2, name
+    assert draw.measurement_lines(1000, 0.1, 3.7, True, held=True)[-1] == "Held: not seen in this frame"
+    assert "Held" not in " ".join(draw.measurement_lines(1000, 0.1, 3.7, True))
+    assert video_log_row(1, 0.04, held)["method"] == "hold"
+    assert video_log_row(0, 0.0, seen)["method"] in ("windows", "prior")

@@ -22,7 +22,7 @@ from lanelib.errors import ConfigError, DecodeStoppedError
 from lanelib.pipeline import LanePipeline
 from lanelib.runs import VIDEO_LOG_COLUMNS, process_video
 
-COLUMNS = ["frame", "time_s", "found", "left_conf", "right_conf", "radius_m", "offset_m",
+COLUMNS = ["frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
            "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c"]
 
 

@@ -81,7 +81,10 @@ def test_video_start_2_end_3_tracks_frames_50_to_74(project_frames, tmp_path, ca
     for i, row in zip(range(50, 75), rows):
         expected = video_log_row(i, i / 25, tracker.update(project_frames[i]))
         for k, v in expected.items():
-            assert float(row[k]) == pytest.approx(v, rel=1e-5, abs=1e-9), (i, k)
+            if isinstance(v, str):  # the method
+                assert row[k] == v, (i, k)
+            else:
+                assert float(row[k]) == pytest.approx(v, rel=1e-5, abs=1e-9), (i, k)
 
 
 def test_a_start_alone_runs_to_the_end_and_an_end_alone_from_the_start(tmp_path, capsys):
