@@ -464,9 +464,12 @@ def _add_synth(sub) -> None:
     k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
     k.add_argument("--seed", type=int, help="random seed (default: the bundled one)")
     k = kinds.add_parser("video", help="one video with its per-frame CSV and JSON truth")
-    k.add_argument("--set", dest="video_set", choices=("project", "challenge", "harder"), default="project",
+    k.add_argument("--set", dest="video_set", choices=tuple(synth.video_sets()), default="project",
                    help="project: clean highway in sun; challenge: tar seams, an underpass, low "
-                        "contrast; harder: tight curves, strong light changes (default: project)")
+                        "contrast; harder: tight curves, strong light changes; shadows: overpasses, "
+                        "hard shadows, exposure jumps, missing paint; seams: seams and repaved "
+                        "edges beside the lines, a barrier; glare: low sun, glare, a wet sheen; "
+                        "country: hairpins on a two-lane road with slopes (default: project)")
     k.add_argument("-o", "--output", type=Path, required=True, metavar="FILE", help="video (mp4) to write")
     k.add_argument("--seconds", type=float, default=10.0,
                    help="length in seconds, up to 20 (default: 10); a shorter clip is the start of "

@@ -140,7 +140,7 @@ def test_centred_straight_lane_maps_to_the_dst_columns():
 
 def test_truth_matches_the_scene_parameters(scenes):
     for name, item in scenes.items():
-        lane = load_image_truth(IMAGE_DIR / f"{name}.jpg").lane
+        lane = load_image_truth(IMAGE_DIR / item.folder / f"{name}.jpg").lane
         k = item.scene.profile.knots[0][1]
         assert lane.lane_width_m == item.scene.layout.lane_width_m
         assert lane.offset_m == pytest.approx(item.pose.offset_m)

@@ -42,6 +42,24 @@ class CurvatureProfile:
         return CurvatureProfile(tuple(knots))
 
 
+def grade(grades: tuple[tuple[float, float], ...], s_m) -> np.ndarray:
+    """Return the road's grade (rise / run) at arc lengths ``s_m`` from (s_m, grade) knots (0 if none)."""
+    if not grades:
+        return np.zeros_like(np.asarray(s_m, dtype=np.float64))
+    s, g = np.asarray(grades, dtype=np.float64).T
+    return np.interp(s_m, s, g)
+
+
+def heights(grades: tuple[tuple[float, float], ...], s_m: np.ndarray) -> np.ndarray:
+    """Return the road's height (m, up; 0 at s = 0) at increasing arc lengths ``s_m``: the exact
+    integral of the piecewise-linear grade (trapezoids between samples, exact for linear pieces
+    when every knot is a sample; the tables sample every SAMPLE_STEP_M)."""
+    s = np.asarray(s_m, dtype=np.float64)
+    g = grade(grades, s)
+    h = np.concatenate([[0.0], np.cumsum((g[1:] + g[:-1]) / 2 * np.diff(s))])
+    return h - np.interp(0.0, s, h)
+
+
 @dataclass(frozen=True)
 class Road:
     """The lane centre line sampled every SAMPLE_STEP_M: arc length, position, heading, curvature."""
@@ -50,10 +68,13 @@ class Road:
     xy_m: np.ndarray         # (N, 2) world X, Y
     heading_rad: np.ndarray  # clockwise from north
     curvature_per_m: np.ndarray
+    height_m: np.ndarray | None = None   # (N,) road height (m, up); None on a flat road
 
     @staticmethod
-    def build(profile: CurvatureProfile, s_start_m: float, s_end_m: float) -> "Road":
-        """Return the centre line between two arc lengths (m), integrated from the profile."""
+    def build(profile: CurvatureProfile, s_start_m: float, s_end_m: float,
+              grades: tuple[tuple[float, float], ...] = ()) -> "Road":
+        """Return the centre line between two arc lengths (m), integrated from the profile, with
+        its heights from the ``grades`` knots (none: flat)."""
         s = np.arange(s_start_m, s_end_m + SAMPLE_STEP_M / 2, SAMPLE_STEP_M)
         k = profile.curvature(s)
         heading = np.concatenate([[0.0], np.cumsum((k[1:] + k[:-1]) / 2 * np.diff(s))])
@@ -61,7 +82,7 @@ class Road:
         mid = (heading[1:] + heading[:-1]) / 2
         step = np.column_stack([np.sin(mid), np.cos(mid)]) * np.diff(s)[:, None]
         xy = np.vstack([[0.0, 0.0], np.cumsum(step, axis=0)])
-        return Road(s, xy, heading, k)
+        return Road(s, xy, heading, k, heights(grades, s) if grades else None)
 
     def index(self, s_m: float) -> float:
         """Return the fractional sample index of arc length ``s_m``."""

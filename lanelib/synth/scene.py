@@ -35,6 +35,13 @@ class Layout:
     left_shoulder_m, right_shoulder_m : paved width beyond the outermost lines.
     line_width_m : width of every painted line.
     dash_m, gap_m : the dashed lines' paint and gap lengths.
+    centre_gap_m : 0 for a single yellow line on the ego lane's left; above 0 a double yellow
+        centre line: a second yellow stripe this far (clear gap, m) left of the first. The ego
+        lane's left line (its truth) is the inner, right-hand stripe at -lane_width_m / 2.
+    right_line : False leaves the outermost white edge line unpainted: with ``right_lanes=0`` and
+        ``right_shoulder_m=0`` the ego lane ends at the asphalt edge, at +lane_width_m / 2 (its
+        truth line).
+    extra_lines : further painted lines (e.g. the oncoming lane's edge line).
     """
 
     lane_width_m: float = 3.7
@@ -44,15 +51,21 @@ class Layout:
     line_width_m: float = 0.15
     dash_m: float = 3.0
     gap_m: float = 9.0
+    centre_gap_m: float = 0.0
+    right_line: bool = True
+    extra_lines: tuple[Line, ...] = ()
 
     def lines(self) -> tuple[Line, ...]:
-        """Return the painted lines from left to right."""
+        """Return the painted lines (left to right, then ``extra_lines``)."""
         w, half = self.lane_width_m, self.lane_width_m / 2
         out = [Line(-half, self.line_width_m, yellow=True)]
+        if self.centre_gap_m > 0:
+            out.insert(0, Line(-half - self.line_width_m - self.centre_gap_m, self.line_width_m, yellow=True))
         out += [Line(half + i * w, self.line_width_m, False, self.dash_m, self.gap_m)
                 for i in range(self.right_lanes)]
-        out.append(Line(half + self.right_lanes * w, self.line_width_m, yellow=False))
-        return tuple(out)
+        if self.right_line:
+            out.append(Line(half + self.right_lanes * w, self.line_width_m, yellow=False))
+        return tuple(out + list(self.extra_lines))
 
     @property
     def paved_m(self) -> tuple[float, float]:
@@ -93,6 +106,28 @@ class Bridge:
 
 
 @dataclass(frozen=True)
+class Barrier:
+    """A vertical face along the road (concrete barrier, kerb, guard rail) at offset ``t_m``.
+
+    The face spans heights ``bottom_m`` to ``height_m`` above the road, its top ``top_m`` lit
+    brighter (``top_grey``: the bright edge), between arc lengths ``s_from_m`` and ``s_to_m``. It is
+    drawn where a pixel's ray crosses t = ``t_m`` before it meets the road, with the crossing
+    found along the ray as if the road were straight there (exact on straights; on bends the
+    face is placed approximately and never hides the road on the car's side of it, so it never
+    covers a truth line). Light: the s-profile's light (clouds, bridges), not the tree shadows.
+    """
+
+    t_m: float
+    height_m: float = 0.81
+    bottom_m: float = 0.0
+    grey: float = 168.0
+    top_grey: float = 240.0
+    top_m: float = 0.07
+    s_from_m: float = -1e9
+    s_to_m: float = 1e9
+
+
+@dataclass(frozen=True)
 class Look:
     """How the surface, the paint and the light look (grey levels under full sun, exposure 1).
 
@@ -115,6 +150,15 @@ class Look:
     haze_m : distance at which 63 % of a surface's colour has faded to the haze colour.
     sensor_noise : standard deviation of the camera noise (grey levels).
     exposure : camera gain (the video's auto exposure starts from it).
+    paint_missing_m : (s_from, s_to, t_from, t_to) stretches where the paint is gone entirely.
+    barriers : concrete barriers, kerbs and guard rails beside the road.
+    exposure_steps_m : (s, factor) sudden camera gain changes once the car passes s (a video's auto
+        exposure then recovers at its own rate).
+    sun_azimuth_deg, sun_elevation_deg : the sun's direction for glare and sheen, azimuth clockwise
+        from the road's initial direction.
+    glare : veiling glare (grey levels at the sun, falling off with the angle from it; a tenth of
+        it everywhere, which lowers contrast); 0 for none.
+    wet : the wet road's specular sheen (grey levels at the sun's mirror direction); 0 for none.
     """
 
     asphalt_grey: float = 92.0
@@ -143,6 +187,13 @@ class Look:
     hood_rgb: RGB = (92, 52, 46)
     sensor_noise: float = 1.5
     exposure: float = 1.0
+    paint_missing_m: tuple[tuple[float, float, float, float], ...] = ()
+    barriers: tuple[Barrier, ...] = ()
+    exposure_steps_m: tuple[tuple[float, float], ...] = ()
+    sun_azimuth_deg: float = 0.0
+    sun_elevation_deg: float = 8.0
+    glare: float = 0.0
+    wet: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -151,6 +202,8 @@ class Scene:
 
     The road exists from ``s_from_m`` to ``s_to_m``; a car may stand anywhere that leaves
     ``render.LOOK_AHEAD_M`` of road ahead of it and ``render.LOOK_BEHIND_M`` behind.
+    ``grades`` is the vertical profile: knots (s_m, grade) joined linearly (grade = rise / run,
+    0.06 for 6 % up); the road's height is its integral (``road.heights``). Empty: a flat road.
     """
 
     profile: CurvatureProfile = field(default_factory=CurvatureProfile)
@@ -159,3 +212,4 @@ class Scene:
     s_from_m: float = -20.0
     s_to_m: float = 300.0
     seed: int = 0
+    grades: tuple[tuple[float, float], ...] = ()

@@ -138,6 +138,8 @@ def surface_map(scene: Scene, rng: np.random.Generator) -> SurfaceMap:
     _draw_tree_shadows(light, rng, scene, float(s_rows[0]), float(t_cols[0]))
     wear = _smooth_noise(rng, shape, 2.5) + 0.8 * _smooth_noise(rng, shape, 25.0)
     paint = np.clip(1.0 - look.paint_wear * (1.0 + 0.9 * wear), 0.0, 1.0)
+    for s0, s1, t0, t1 in look.paint_missing_m:   # stretches where the paint is gone
+        paint[slice(*np.searchsorted(s_rows, (s0, s1))), slice(*np.searchsorted(t_cols, (t0, t1)))] = 0.0
     maps = np.stack([np.clip(tone * 128.0, 0, 255), light * 255.0, paint * 255.0], axis=-1)
     image = np.round(maps).astype(np.uint8)
     return SurfaceMap(Mipmap.build(image, MAP_TEXEL_M), float(s_rows[0]), float(t_cols[0]))

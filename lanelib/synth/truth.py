@@ -8,6 +8,13 @@ lane centre. Line positions are the centres of the painted lines in the RAW (dis
 fixed rows (TuSimple's h_samples), -2 where the line is not visible: outside the image, under the
 hood, farther than ``TRUTH_RANGE_M`` ahead, or beyond where the road turns out of the renderer's
 reach. Dashed lines are reported through their gaps, as TuSimple marks lane boundaries.
+
+The ego lane's lines are at offsets -w/2 and +w/2 (w = ``Layout.lane_width_m``): under a double
+yellow centre line the left one is the inner (right-hand) stripe, and where the right edge is not
+painted (``Layout.right_line=False``) the right one is the asphalt edge. On a road with a vertical
+profile (``Scene.grades``) every line point is projected at the height of the surface the renderer
+draws (``Renderer.heights_ahead``); a point a crest hides is not reported (the first crossing of
+each row, going away from the car, is the visible one). The lane width stays the plan-view width.
 """
 from __future__ import annotations
 
@@ -255,7 +262,12 @@ def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
           & (pts[:, 1] <= TRUTH_RANGE_M))
     pts = pts[:len(ok) if ok.all() else int(np.argmin(ok))]
     pts = pts[pts[:, 1] > 0.5]
-    uv = camera.project(np.column_stack([pts[:, 0], np.zeros(len(pts)), pts[:, 1]]))
+    if road.height_m is None:
+        height = np.zeros(len(pts))
+    else:  # a pitched road: the surface the renderer draws (Renderer.heights_ahead), y is down
+        z_grid, above = renderer.heights_ahead(pose)
+        height = -np.interp(pts[:, 1], z_grid, above)
+    uv = camera.project(np.column_stack([pts[:, 0], height, pts[:, 1]]))
     w = camera.size_px[0]
     out = []
     for row in h_samples_px(camera.size_px):
