@@ -59,6 +59,10 @@ class SearchConfig:
         first: its pixels are cut into clusters of columns (split at empty columns) and it takes
         the cluster nearest the lane centre that holds ``minpix`` pixels (all its pixels when
         none does), so a verge or kerb beyond the line does not pull the window out.
+    candidates : 1 (off), or the histogram peaks tried on each side when the lane of the
+        strongest ones fails its checks (``candidate_bases``): the robust path of
+        ``LanePipeline.detect``, which runs sliding windows from each pair of them, strongest
+        first, and keeps the first pair that passes the checks.
     grow_margin_px : 0 (off), or px added to a window's half width for each empty window (fewer
         than ``minpix`` pixels) in a row below it; the margin is back to ``margin_px`` after a
         window with pixels. A line lost over a gap (a missing dash, a shadow) is caught again.
@@ -79,8 +83,11 @@ class SearchConfig:
     window_histogram: bool = False
     centre_first: bool = False
     grow_margin_px: int = 15
+    candidates: int = 1
 
     def __post_init__(self):
+        if self.candidates < 1:
+            raise ConfigError(f"search: candidates {self.candidates} must be 1 (off) or more")
         if not 0 <= self.trim_outliers_pct <= 100:
             raise ConfigError(f"search: trim_outliers_pct {self.trim_outliers_pct} must lie in 0-100 (0: off)")
         if self.grow_margin_px < 0:
@@ -235,6 +242,30 @@ def find_bases(hist: np.ndarray, car_x: float | None = None) -> tuple[float | No
     left = int(np.argmax(hist[:mid])) if hist[:mid].any() else None
     right = mid + int(np.argmax(hist[mid:])) if hist[mid:].any() else None
     return (None if left is None else float(left), None if right is None else float(right))
+
+
+def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
+                    min_gap_px: float) -> tuple[list[float], list[float]]:
+    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``.
+
+    A peak is a column that holds the most pixels within ``min_gap_px`` either side (one per
+    line, however wide); columns with no pixels are never peaks.
+    """
+    mid = int(car_x if car_x is not None else len(hist) / 2)
+    r = max(1, int(min_gap_px))
+    kernel = np.ones((1, 2 * r + 1), np.uint8)
+    local_max = cv2.dilate(hist.astype(np.float32).reshape(1, -1), kernel).ravel()
+    peaks = np.flatnonzero((hist > 0) & (hist >= local_max))
+    out = []
+    for side in (peaks[peaks < mid], peaks[peaks >= mid]):
+        chosen: list[float] = []
+        for x in side[np.argsort(-hist[side], kind="stable")]:
+            if all(abs(x - c) >= min_gap_px for c in chosen):
+                chosen.append(float(x))
+            if len(chosen) == count:
+                break
+        out.append(chosen)
+    return out[0], out[1]
 
 
 def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:

@@ -10,6 +10,8 @@ per-frame engine only: runs over image folders and videos are ``runs.process_ima
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 
@@ -207,7 +209,33 @@ class LanePipeline:
         checks is not found, and is kept apart in ``rejected``.
         """
         search, images = self.search_frame(raw, prior, keep_images)
-        return self.result(search, images if keep_images else {})
+        result = self.result(search, images if keep_images else {})
+        if result.found or prior is not None or self.config.search.candidates < 2:
+            return result
+        robust = self.robust_search(images["binary"], search)
+        return self.result(robust, images if keep_images else {}) if robust is not None else result
+
+    def robust_search(self, binary: np.ndarray, first: LaneSearch) -> LaneSearch | None:
+        """Return the first search from other histogram peaks whose lane passes the checks, or None.
+
+        The robust path (``SearchConfig.candidates``), for a frame whose search from the
+        strongest peaks failed its checks (a seam, a kerb or a shadow edge took a line): sliding
+        windows from each pair of the ``candidates`` strongest peaks on each side
+        (``lanes.candidate_bases``), the pairs with the stronger peaks first, skipping the pair
+        already tried. Its search's ``method`` is "robust".
+        """
+        sc = self.config.search
+        hist = lanes.histogram(binary, sc.histogram_fraction)
+        lefts, rights = lanes.candidate_bases(hist, self.car_x_px, sc.candidates, sc.margin_px)
+        pairs = sorted(((l, r) for l in lefts for r in rights),
+                       key=lambda p: -(int(hist[int(p[0])]) + int(hist[int(p[1])])))
+        for bases in pairs:
+            if first.bases_px == bases:
+                continue
+            search = lanes.sliding_windows(binary, sc, bases=bases, car_x=self.car_x_px)
+            if self.check(search).ok and search.left.found and search.right.found:
+                return replace(search, method="robust")
+        return None
 
     def result(self, search: LaneSearch, images: dict | None = None) -> FrameResult:
         """Return the FrameResult of a search: its fits if they pass ``check``, else not found.

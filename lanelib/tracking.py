@@ -201,6 +201,14 @@ class LaneTracker:
             if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
                 search, left, right, why, failed = retry, l2, r2, why2, failed2
                 why.append("windows started from the remembered bases (weak histogram peak)")
+        if track is None and left is None and pipe.config.search.candidates > 1:
+            # no track and the strongest peaks gave no lane: the robust path (other peaks)
+            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
+            robust = pipe.robust_search(binary, search)
+            if robust is not None:
+                l2, r2, why2, failed2 = self._check(robust.left, robust.right, track, self._band_px(robust))
+                if l2 is not None and r2 is not None:
+                    search, left, right, why, failed = robust, l2, r2, why2, failed2
         images = det_images if keep_images else {}
         result = self._advance(search, left, right, why, track, images)
         if not failed:

@@ -147,7 +147,7 @@ def test_override_sets_dotted_keys_with_their_types():
 
 @pytest.mark.parametrize("setting, message", [
     ("search.trim_outliers_pct", "write it as part.key=value"),
-    ("search.trim=95", "search.trim is not a key; known keys in search: centre_first"),
+    ("search.trim=95", "search.trim is not a key; known keys in search: candidates, centre_first"),
     ("serch.margin_px=3", "serch is not a part of the config; its parts: checks, draw"),
     ("search.margin_px.x=3", "search.margin_px is not a part of search"),
     ("search.margin_px=wide", "search.margin_px: expected a whole number, got 'wide'"),

@@ -160,3 +160,27 @@ def test_lane_drawn_on_the_raw_frame_lands_where_the_undistorted_drawing_does():
     on_raw[:200], on_und[:200] = False, False  # leave out the text
     iou = (on_raw & on_und).sum() / (on_raw | on_und).sum()
     assert iou > 0.9
+
+
+def test_the_robust_path_tries_other_peaks_when_the_strongest_fail_the_checks():
+    """A solid bright edge (a kerb, a barrier's foot) right of a dashed right line wins the
+    histogram: the lane of the strongest peaks is too wide; with candidates the windows start
+    from the next peak and find the lane."""
+    from dataclasses import replace as _replace
+
+    from lanelib.config import PipelineConfig
+    h, w = 720, 1280
+    bird = np.full((h, w, 3), 70, np.uint8)
+    cv2.line(bird, (320, 0), (320, h - 1), (235, 235, 235), 24)
+    for y in range(0, h, 240):  # a dashed right line: 3 m paint, 9 m gap, roughly
+        cv2.line(bird, (960, y), (960, y + 80), (235, 235, 235), 24)
+    cv2.line(bird, (1150, 0), (1150, h - 1), (235, 235, 235), 24)  # the kerb's bright edge
+    plain = LanePipeline(PipelineConfig())
+    raw = plain.perspective.unwarp(bird)
+    cheap = plain.detect(raw)
+    assert not cheap.found and cheap.search.bases_px[1] > 1100 and "width" in cheap.reason
+    robust_cfg = _replace(PipelineConfig(), search=_replace(PipelineConfig().search, candidates=3))
+    r = LanePipeline(robust_cfg).detect(raw)
+    assert r.found and r.method == "robust"
+    assert np.polyval(r.right.coeffs_px, h - 1) == pytest.approx(960, abs=6)
+    assert r.lane_width_m == pytest.approx(3.7, abs=0.1)
