@@ -470,10 +470,21 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
         If the video or its truth is missing or unreadable, the video stops decoding before the
         frames to score (a truncated file), or it holds more frames than its truth.
     """
+    return evaluate_video_many(path, [pipeline], use_tracker, max_frames)[0]
+
+
+def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracker: bool = True,
+                        max_frames: int | None = None) -> list[EvalReport]:
+    """Return ``evaluate_video`` of each pipeline on one video, decoding it once for all.
+
+    Each pipeline runs on its own (its own ``LaneTracker``) over the same frames, in step; the
+    reports are those ``evaluate_video`` gives one by one (``compare_methods`` uses this).
+    """
     truth = load_video_truth(path)
     frames = truth.frames[:max_frames]
-    tracker = LaneTracker(pipeline) if use_tracker else None
-    col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
+    runners = [(p, LaneTracker(p) if use_tracker else None,
+                _Collector(p, str(path), "tracker" if use_tracker else "frame")) for p in pipelines]
+    n = 0
     with VideoReader(path) as reader:
         try:
             for i, raw in enumerate(reader):
@@ -483,18 +494,20 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
                                          f"{Path(path).with_suffix('.csv')} ({len(truth.frames)}); "
                                          "regenerate the truth with `python -m lanelib synth --all`")
                     break
-                result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
-                col.add(str(i), result, frames[i])
+                for pipeline, tracker, col in runners:
+                    result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+                    col.add(str(i), result, frames[i])
+                n += 1
                 if max_frames is not None and i + 1 >= max_frames:
                     break  # not one frame more: the video may end (or break off) right here
         except DecodeStoppedError as e:
             raise InputError(f"{e}; only {e.frames} of the {len(frames)} frames to score could be "
                              "read: pass a complete video, or --max-frames up to that") from None
-    if len(col.rows) < len(frames):
-        raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
+    if n < len(frames):
+        raise InputError(f"{path}: the video has {n} frames but its truth "
                          f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
                          "regenerate both with `python -m lanelib synth --all`")
-    return col.report()
+    return [col.report() for _, _, col in runners]
 
 
 def calibration_from_truth(path: str | os.PathLike) -> Calibration:
@@ -564,14 +577,16 @@ def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str 
         path = Path(source)
         camera = calibration_from_truth(path)
         detector = "frame" if path.is_dir() else "tracker"
+        run = [n for n, settings in methods.items() if applies(settings, detector)]
+        pipes = [LanePipeline(configs[n], camera, size=camera.image_size) for n in run]
+        if detector == "frame":
+            reports = [evaluate_images(path, p, max_frames) for p in pipes]
+        else:  # the clip decoded once, every method tracking it in step
+            reports = evaluate_video_many(path, pipes, True, max_frames)
+        got = dict(zip(run, reports))
         for name, settings in methods.items():
-            if not applies(settings, detector):
-                out.append(MethodScore(str(path), name, tuple(settings), None, "tracker only"))
-                continue
-            pipe = LanePipeline(configs[name], camera, size=camera.image_size)
-            report = (evaluate_images(path, pipe, max_frames) if detector == "frame"
-                      else evaluate_video(path, pipe, True, max_frames))
-            out.append(MethodScore(str(path), name, tuple(settings), report))
+            out.append(MethodScore(str(path), name, tuple(settings), got.get(name),
+                                   "" if name in got else "tracker only"))
     return out
 
 
