@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -537,6 +538,7 @@ def main(argv: list[str] | None = None) -> int:
         or empty input folder, unreadable or empty video, bad config or calibration, an output
         over an input); one line on stderr, nothing written.
     130 : interrupted (Ctrl-C); no half-written output is left.
+    141 : the reader of the output went away (``... | head``); no traceback.
     """
     args = build_parser().parse_args(argv)
     try:
@@ -550,3 +552,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted; no partial output was left behind", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of our output went away (`... | head`): stop quietly, as Unix tools do;
+        # stdout goes to /dev/null so Python's own flush at exit does not complain again
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141  # 128 + SIGPIPE

@@ -201,3 +201,15 @@ def test_every_subcommand_documents_its_exit_codes(capsys):
         assert "130 interrupted by Ctrl-C" in text
         assert ("every input ran; 1 " in text) == (name in ("images", "hough", "video", "evaluate"))
     assert "1 : the run finished but some inputs failed" in main.__doc__
+
+
+def test_a_reader_that_goes_away_ends_the_run_quietly():
+    """`python -m lanelib evaluate ... | true`: the reader is gone before the table is printed;
+    the run ends with 141 (128 + SIGPIPE) and no BrokenPipeError traceback."""
+    p = subprocess.Popen([sys.executable, "-m", "lanelib", "evaluate", "images", "test_images"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         cwd=Path(__file__).resolve().parents[1])
+    p.stdout.close()  # the reader goes away at once; the evaluation takes about a second
+    err = p.stderr.read()
+    assert p.wait() == 141
+    assert "Traceback" not in err and "BrokenPipe" not in err
