@@ -185,30 +185,35 @@ class LaneTracker:
         if track is not None and self._lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
         search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None)
-        left, right, why, failed = self._check(search.left, search.right, track, self._band_px(search))
-        if track is not None and (left is None or right is None):
+        best = (search, *self._check(search.left, search.right, track, self._band_px(search)))
+
+        def mask() -> np.ndarray:
+            if "binary" not in det_images:  # a band-only search: threshold the whole view once
+                det_images["binary"] = pipe.binary(pipe.birdseye(raw))
+            return det_images["binary"]
+
+        def better(retry: LaneSearch | None, note: str = "") -> None:
+            """Keep ``retry`` when more of its lines pass the checks than of the best so far."""
+            nonlocal best
+            if retry is None:
+                return
+            checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry)))
+            if sum(c is not None for c in checked[1:3]) > sum(c is not None for c in best[1:3]):
+                best = checked
+                if note:
+                    best[3].append(note)
+
+        if track is not None and (best[1] is None or best[2] is None):
             # the search missed: look again with windows started from the tracked lines
-            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
-            retry = pipe.search(binary, bases=self._bases(track))
-            l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
-            if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
-                search, left, right, why, failed = retry, l2, r2, why2, failed2
-        elif track is None and left is None and (bases := self._weak_bases(search)) is not None:
+            better(pipe.search(mask(), bases=self._bases(track)))
+        elif track is None and best[1] is None and (bases := self._weak_bases(search)) is not None:
             # no track and a weak histogram peak: start that side from the remembered base
-            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
-            retry = pipe.search(binary, bases=bases)
-            l2, r2, why2, failed2 = self._check(retry.left, retry.right, track, self._band_px(retry))
-            if (l2 is not None) + (r2 is not None) > (left is not None) + (right is not None):
-                search, left, right, why, failed = retry, l2, r2, why2, failed2
-                why.append("windows started from the remembered bases (weak histogram peak)")
-        if track is None and left is None and pipe.config.search.candidates > 1:
+            better(pipe.search(mask(), bases=bases),
+                   "windows started from the remembered bases (weak histogram peak)")
+        if track is None and best[1] is None and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
-            binary = det_images["binary"] if "binary" in det_images else pipe.binary(pipe.birdseye(raw))
-            robust = pipe.robust_search(binary, search)
-            if robust is not None:
-                l2, r2, why2, failed2 = self._check(robust.left, robust.right, track, self._band_px(robust))
-                if l2 is not None and r2 is not None:
-                    search, left, right, why, failed = robust, l2, r2, why2, failed2
+            better(pipe.robust_search(mask(), best[0]))
+        search, left, right, why, failed = best
         images = det_images if keep_images else {}
         result = self._advance(search, left, right, why, track, images)
         if not failed:

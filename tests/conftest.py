@@ -9,6 +9,7 @@ import imageio_ffmpeg
 import pytest
 
 from lanelib import data
+from lanelib.camera import calibrate
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -82,3 +83,9 @@ def readme_table():
         return [dict(zip(head, _cells(line))) for line in block[2:]]
 
     return table
+
+
+@pytest.fixture(scope="session")
+def camera():
+    """The calibration of the bundled (synthetic) camera, from ``camera_cal/`` (once per session)."""
+    return calibrate(REPO / "camera_cal")

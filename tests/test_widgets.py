@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from lanelib import draw, io, perspective, thresholds, widgets
-from lanelib.camera import calibrate
 from lanelib.config import PipelineConfig, load_config, save_config, to_dict
 from lanelib.errors import ConfigError, InputError
 from lanelib.hough import HoughConfig
@@ -34,11 +33,6 @@ def road():
     folder = REPO / "test_images"
     return {STRAIGHT: folder / STRAIGHT, CURVED: folder / CURVED}
 
-
-@pytest.fixture(scope="module")
-def camera():
-    """The calibration of the bundled (synthetic) camera."""
-    return calibrate(REPO / "camera_cal")
 
 
 def _decode(jpeg: bytes) -> np.ndarray:

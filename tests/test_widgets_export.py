@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from lanelib import io, runs, widgets
-from lanelib.camera import calibrate
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline
@@ -25,11 +24,6 @@ CLIP = REPO / "videos" / "project.mp4"
 STRAIGHT = "straight_1"
 CURVED = "curve_left_600m"
 
-
-@pytest.fixture(scope="module")
-def camera():
-    """The calibration of the bundled (synthetic) camera."""
-    return calibrate(REPO / "camera_cal")
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from lanelib import io, runs, widgets
-from lanelib.camera import calibrate
 from lanelib.errors import GeometryError, InputError
 from lanelib.geometry import estimate_geometry
 from lanelib.perspective import Perspective, PerspectiveConfig
@@ -20,11 +19,6 @@ REPO = Path(__file__).resolve().parents[1]
 CLIP = "videos/project.mp4"
 STRAIGHT = "straight_1.jpg"
 
-
-@pytest.fixture(scope="module")
-def camera():
-    """The calibration of the bundled (synthetic) camera."""
-    return calibrate(REPO / "camera_cal")
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,6 @@ import ipyevents
 import pytest
 
 from lanelib import widgets
-from lanelib.camera import calibrate
 from lanelib.perspective import PerspectiveConfig, trapezoid_src
 from lanelib.widgets.perspective import click_to_frame
 
@@ -27,11 +26,6 @@ PUBLISHED = [
 def _dst(left_x: float, right_x: float) -> tuple:
     return ((left_x, 0), (left_x, 720), (right_x, 720), (right_x, 0))
 
-
-@pytest.fixture(scope="module")
-def camera():
-    """The calibration of the bundled (synthetic) camera."""
-    return calibrate(REPO / "camera_cal")
 
 
 @pytest.fixture()

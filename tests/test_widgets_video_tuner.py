@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from lanelib import io, widgets
-from lanelib.camera import calibrate
 from lanelib.config import PipelineConfig, load_config, save_config
 from lanelib.errors import InputError
 from lanelib.lanes import SearchConfig
@@ -20,11 +19,6 @@ CLIP = REPO / "videos" / "project.mp4"
 STRAIGHT = REPO / "test_images" / "straight_1.jpg"
 N = 30  # frames tracked: enough for the tracker, fast for the tests
 
-
-@pytest.fixture(scope="module")
-def camera():
-    """The calibration of the bundled (synthetic) camera."""
-    return calibrate(REPO / "camera_cal")
 
 
 @pytest.fixture
