@@ -188,3 +188,27 @@ def test_bad_switch_parameters():
 def test_the_switches_are_not_mask_names():
     assert th.mask_names(th.ThresholdConfig()) == ("yellow", "white", "lab_b", "s_channel", "line_tophat",
                                                    "sobel_x", "sobel_y", "sobel_mag", "sobel_dir")
+
+
+def test_the_top_hat_drops_a_light_seam_narrower_than_paint_and_keeps_the_paint():
+    """A light seam 8 px wide (5 cm at the default view's 5.8 mm/px) beside paint 26 px wide
+    (15 cm): both are brighter than the road on both sides; the default least width (12 px)
+    keeps the paint whole and drops the seam, and with the least width off both pass."""
+    img = np.zeros((60, 400, 3), np.uint8)
+    img[:] = ASPHALT
+    img[:, 150:158] = (200, 200, 200)  # the seam
+    img[:, 200:226] = WHITE  # the paint
+    spec = th.ThresholdConfig().line_tophat
+    assert spec.min_width_px == 12
+    assert cols(th.tophat_mask(img, spec)) == set(range(200, 226))
+    off = th.TopHatMask(spec.space, spec.channel, spec.width_px, spec.low, spec.high, min_width_px=1)
+    assert cols(th.tophat_mask(img, off)) == set(range(150, 158)) | set(range(200, 226))
+
+
+def test_the_top_hat_least_width_is_checked_and_widens_the_context():
+    with pytest.raises(ConfigError, match="min_width_px 61 must be 1"):
+        th.TopHatMask(width_px=61, min_width_px=61)
+    with pytest.raises(ConfigError, match="min_width_px 0"):
+        th.TopHatMask(min_width_px=0)
+    assert th.mask_context_px(th.TopHatMask(width_px=61, min_width_px=12)) == (60 + 11, 0)
+    assert th.mask_context_px(th.TopHatMask(width_px=61, min_width_px=1)) == (60, 0)

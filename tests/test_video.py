@@ -343,7 +343,8 @@ def test_a_crop_grown_by_context_px_thresholds_exactly(config_name):
         assert np.array_equal(crop[y0 - b0:y1 - b0, x0 - a0:x1 - a0], full[y0:y1, x0:x1])
     if config_name == "default":  # the top-hat's border is tight: one pixel short is not enough
         spec = tconf.line_tophat
-        r = thresholds.mask_context_px(spec)[0]
+        r = 2 * (spec.width_px // 2)  # the top-hat's own part of mask_context_px
+        assert thresholds.mask_context_px(spec)[0] == r + spec.min_width_px - 1
         kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (spec.width_px, 1))
         light = thresholds.channel(img, spec.space, spec.channel)
         tophat = lambda a: cv2.morphologyEx(a, cv2.MORPH_TOPHAT, kernel)  # noqa: E731

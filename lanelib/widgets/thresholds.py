@@ -32,8 +32,8 @@ class ThresholdTuner(Tuner):
 
     For each mask: an on/off box (``<mask>.enabled``), the colour space (``<mask>.space``) and
     channel (``<mask>.channel``), the low/high range (``<mask>.range``; a colour range has one
-    per channel, ``<mask>.range0..2``), the Sobel kernel (``<mask>.kernel_px``) and the top-hat
-    width (``<mask>.width_px``), the opening of a colour or channel mask alone
+    per channel, ``<mask>.range0..2``), the Sobel kernel (``<mask>.kernel_px``), the top-hat's
+    width (``<mask>.width_px``) and least width (``<mask>.min_width_px``), the opening of a colour or channel mask alone
     (``<mask>.open_px``); then the rule (``rule``), the clean-up (``open_px``, ``close_px``) and
     CLAHE on the lightness before every mask (``clahe`` on/off, ``clahe_clip_limit``,
     ``clahe_tile_px``). The preview shows the bird's-eye view (equalised when CLAHE is on), every
@@ -90,6 +90,10 @@ class ThresholdTuner(Tuner):
                             value=spec.width_px, min=3, max=201, step=2, description="width px",
                             layout=widgets.Layout(width="260px"),
                             style={"description_width": "60px"})))
+                        parts.append(self._control(f"{name}.min_width_px", widgets.IntSlider(
+                            value=spec.min_width_px, min=1, max=41, step=1, description="min width",
+                            layout=widgets.Layout(width="260px"),
+                            style={"description_width": "70px"})))
                     else:
                         parts.append(self._open_control(name, spec))
             rows.append(row(*parts))
@@ -170,8 +174,9 @@ class ThresholdTuner(Tuner):
         top = _channel_max(space, channel)
         low, high = min(int(low), top), min(int(high), top)
         if isinstance(old, thresholds.TopHatMask):
-            return thresholds.TopHatMask(space, channel, int(c[f"{name}.width_px"].value),
-                                         low, high, enabled)
+            width = int(c[f"{name}.width_px"].value)
+            return thresholds.TopHatMask(space, channel, width, low, high, enabled,
+                                         min(int(c[f"{name}.min_width_px"].value), width - 1))
         return thresholds.ChannelMask(space, channel, low, high, enabled, int(c[f"{name}.open_px"].value))
 
     def _apply(self, key: str) -> PipelineConfig:
@@ -225,6 +230,7 @@ class ThresholdTuner(Tuner):
             c[f"{name}.range"].description = spec.channel
             if isinstance(spec, thresholds.TopHatMask):
                 c[f"{name}.width_px"].value = spec.width_px
+                c[f"{name}.min_width_px"].value = spec.min_width_px
         c[f"{name}.range"].value = (spec.low, spec.high)
 
     # ---- views ----------------------------------------------------------------------------
