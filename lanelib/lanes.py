@@ -25,7 +25,7 @@ synthetic ground truth is given at the car, so ``evaluate`` counts that term as 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -59,6 +59,15 @@ class SearchConfig:
         first: its pixels are cut into clusters of columns (split at empty columns) and it takes
         the cluster nearest the lane centre that holds ``minpix`` pixels (all its pixels when
         none does), so a verge or kerb beyond the line does not pull the window out.
+    short_views : shares of the view's height, from its bottom row, tried in order as the
+        look-ahead when the lane of the whole view fails its checks and there is no track (off:
+        ``()``); see ``lookahead_top_px`` for why a shorter view finds a lane on a tight bend. The
+        defaults, 0.6 and 0.4 of the 23.5 m view (14 m and 9.4 m of road), keep the lane of a
+        60 m and of a 35 m bend in the view (a line 1.9 m from the view's side leaves it after
+        sqrt(2 * R * 1.9 m) of road, less the 4.8 m to the bottom row).
+    min_view_fraction : the shortest look-ahead, as a share of the view's height, that
+        ``lookahead_top_px`` gives a tracked lane; below about 9 m of road a dashed line (3 m
+        dashes, 12 m period) may show no dash at all.
     candidates : 1 (off), or the histogram peaks tried on each side when the lane of the
         strongest ones fails its checks (``candidate_bases``): the robust path of
         ``LanePipeline.detect``, which runs sliding windows from each pair of them, strongest
@@ -84,6 +93,8 @@ class SearchConfig:
     centre_first: bool = False
     grow_margin_px: int = 15
     candidates: int = 1
+    short_views: tuple[float, ...] = (0.6, 0.4)
+    min_view_fraction: float = 0.4
 
     def __post_init__(self):
         if self.candidates < 1:
@@ -92,6 +103,11 @@ class SearchConfig:
             raise ConfigError(f"search: trim_outliers_pct {self.trim_outliers_pct} must lie in 0-100 (0: off)")
         if self.grow_margin_px < 0:
             raise ConfigError(f"search: grow_margin_px {self.grow_margin_px} must be 0 (off) or more")
+        if not all(0 < v < 1 for v in self.short_views):
+            raise ConfigError(f"search: short_views {self.short_views} must be shares of the view "
+                              "between 0 and 1 (none: off)")
+        if not 0 < self.min_view_fraction <= 1:
+            raise ConfigError(f"search: min_view_fraction {self.min_view_fraction} must lie in (0, 1]")
 
 
 @dataclass(frozen=True)
@@ -120,7 +136,8 @@ class LaneChecks:
     ----------
     min_width_m, max_width_m : the lane width on the view's bottom row must lie in this range.
     max_width_spread_m : largest difference of the lane width between the check rows, top to
-        bottom (the two lines roughly parallel).
+        bottom (the two lines roughly parallel), over the whole view; a shorter look-ahead
+        (``LaneSearch.top_px``) allows its share of it, the same divergence per metre of road.
     max_curvature_diff_per_m : largest difference of the two lines' curvatures on the bottom
         row (1/m).
     max_band_fill : largest share of its search band (sliding window or prior band, over the
@@ -204,6 +221,8 @@ class LaneSearch:
     # (peak - mean) / mean of the histogram at each base (``base_peak_confidence``); None where
     # the bases were given or not found
     base_confidence: tuple[float | None, float | None] = (None, None)
+    # the look-ahead: the first row (px) of the view the search read (0: the whole view)
+    top_px: int = 0
 
 
 @dataclass(frozen=True)
@@ -292,17 +311,28 @@ def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
 
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     bases: tuple[float | None, float | None] | None = None,
-                    car_x: float | None = None) -> LaneSearch:
-    """Return the lane pixels found by sliding windows from the histogram bases, and their fits."""
+                    car_x: float | None = None, top_px: int = 0) -> LaneSearch:
+    """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
+
+    With ``top_px`` > 0 the search reads only the rows from ``top_px`` down (a shorter
+    look-ahead, ``lookahead_top_px``): the histogram covers the lower ``histogram_fraction`` of
+    those rows and the windows, as tall as in the whole view, stop there. The fits stay in the
+    view's coordinates and their span rules in its rows (``fit_line``).
+    """
     h = binary.shape[0]
+    top_px = int(min(max(top_px, 0), h - 1))
     ys, xs = lane_pixels(binary)
+    if top_px:
+        first = int(np.searchsorted(ys, top_px))
+        ys, xs = ys[first:], xs[first:]
+    seen = binary[top_px:] if top_px else binary
     confidence: tuple[float | None, float | None] = (None, None)
     if bases is None:
-        hist = histogram(binary, config.histogram_fraction)
+        hist = histogram(seen, config.histogram_fraction)
         bases = find_bases(hist, car_x)
         confidence = tuple(base_peak_confidence(hist, b) for b in bases)
         if None in bases:  # a dashed line may have no dash in the lower part: look at all rows
-            whole_hist = histogram(binary, 1.0)
+            whole_hist = histogram(seen, 1.0)
             whole = find_bases(whole_hist, car_x)
             confidence = tuple(c if b is not None else base_peak_confidence(whole_hist, w)
                                for b, c, w in zip(bases, confidence, whole))
@@ -319,7 +349,9 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
             if x is None:
                 break
             y_high = int(round(h - i * win_h))
-            y_low = int(round(h - (i + 1) * win_h))
+            y_low = max(top_px, int(round(h - (i + 1) * win_h)))
+            if y_high <= top_px:
+                break
             lo, hi = np.searchsorted(ys, [y_low, y_high])
             row_xs = xs[lo:hi]
             inside = np.nonzero((row_xs >= x - margin) & (row_xs < x + margin))[0]
@@ -344,15 +376,23 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
         picked[side] = (ys[idx], xs[idx])
     left = fit_line(*picked["left"], h, config, missing="no lane pixels left of the car")
     right = fit_line(*picked["right"], h, config, missing="no lane pixels right of the car")
+    left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
-                      confidence)
+                      confidence, top_px)
 
 
 def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
-                  config: SearchConfig = SearchConfig()) -> LaneSearch:
-    """Return the lane pixels within ``prior_margin_px`` of previous fits, and their new fits."""
+                  config: SearchConfig = SearchConfig(), top_px: int = 0) -> LaneSearch:
+    """Return the lane pixels within ``prior_margin_px`` of previous fits, and their new fits.
+
+    With ``top_px`` > 0 only the rows from ``top_px`` down are read (as in ``sliding_windows``).
+    """
     h = binary.shape[0]
+    top_px = int(min(max(top_px, 0), h - 1))
     ys, xs = lane_pixels(binary)
+    if top_px:
+        first = int(np.searchsorted(ys, top_px))
+        ys, xs = ys[first:], xs[first:]
     picked = {}
     for side, prior in (("left", left), ("right", right)):
         if not prior.found:
@@ -364,7 +404,67 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
                         if not left.found else "no lane pixels near the previous left fit")
     new_right = fit_line(*picked["right"], h, config, missing="no previous right fit to search around"
                          if not right.found else "no lane pixels near the previous right fit")
-    return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"])
+    new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
+    return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
+
+
+def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = SearchConfig()) -> int:
+    """Return the first row (px) of the look-ahead that keeps the tracked lines in the view.
+
+    On a tight bend the lane leaves the bird's-eye view sideways long before its top row (the
+    view is about 7.4 m wide: a line 1.9 m from its side leaves it after sqrt(2 * R * 1.9 m) of
+    road, 15 m on a 60 m bend); above that row the other line sweeps across into its search
+    windows and every check compares a line with the extrapolation of one that is gone. The
+    look-ahead ends on the lowest row where a line comes within ``margin_px / 2`` of the view's
+    side (about to leave it), but keeps at least ``min_view_fraction`` of the view's height. It
+    is a band of rows of the same view, not a second warp: the metric scale (``ym_per_px``) and
+    the fits' coordinates stay those of the view, so radius, offset and width read the same,
+    and the overlay and the evaluation map the fits as before.
+
+    Parameters
+    ----------
+    lines : pixel coefficients (a, b, c) of each tracked line (e.g. the tracked lane's two).
+    size_px : (width, height) of the bird's-eye view.
+    config : ``margin_px`` and ``min_view_fraction``.
+    """
+    w, h = size_px
+    rows = np.arange(h - 1, -1, -8, dtype=np.float64)  # bottom to top, every 8 rows
+    edge = config.margin_px / 2
+    out = np.zeros(len(rows), bool)
+    for coeffs in lines:
+        x = np.polyval(coeffs, rows)
+        out |= (x < edge) | (x > w - 1 - edge)
+    if not out.any():
+        return 0
+    top = int(rows[int(np.argmax(out))]) + 1
+    return int(min(top, round(h * (1.0 - config.min_view_fraction))))
+
+
+def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, height_px: int,
+                  config: SearchConfig = SearchConfig()) -> tuple[LineFit, LineFit]:
+    """Return the two fits with a short line's curvature taken from the other, longer line.
+
+    A line whose pixels span less than ``min_span_fraction`` of the view (one dash, the stub
+    of a line leaving the view on a bend) is fitted straight by ``fit_line``: its curvature is
+    not measured, and a straight line beside a curved one fails the pair's curvature check and
+    runs off the lane ahead. The lines of a lane are parallel, so it takes the second-order
+    coefficient of the other line when that one spans enough for a second-order fit, and only
+    its slope and position are fitted to its own pixels. Two long or two short lines are left
+    as they are.
+    """
+    if not (left.found and right.found):
+        return left, right
+    short = config.min_span_fraction * height_px
+    if (left.span_px < short) == (right.span_px < short):
+        return left, right
+    (line, pixels, other) = ((left, left_pixels, right) if left.span_px < short
+                             else (right, right_pixels, left))
+    ys, xs = pixels
+    a = float(other.coeffs_px[0])
+    y = ys.astype(np.float64)
+    _, b, c, rss = _least_squares(ys, xs - a * y * y, 1, float(height_px))
+    shared = replace(line, coeffs_px=(a, b, c), scatter_px=math.sqrt(rss / max(len(ys), 1)))
+    return (shared, right) if line is left else (left, shared)
 
 
 # --------------------------------------------------------------------------- fits
@@ -517,23 +617,26 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
 
 
 def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float, ym_per_px: float,
-                 checks: LaneChecks = LaneChecks()) -> str:
+                 checks: LaneChecks = LaneChecks(), top_px: int = 0) -> str:
     """Return why two found lines are not a plausible lane ("" when they are).
 
     The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; over
-    ``check_rows`` rows from the top to the bottom it may vary by at most ``max_width_spread_m``
-    (parallel lines); the two curvatures on the bottom row may differ by at most
-    ``max_curvature_diff_per_m``. Only a few rows are evaluated (cheap enough for every frame).
+    ``check_rows`` rows from the look-ahead's top row (``top_px``, 0: the view's) to the bottom
+    it may vary by at most ``max_width_spread_m`` times the share of the view's height those rows
+    cover (parallel lines: the same divergence per metre); the two curvatures on the
+    bottom row may differ by at most ``max_curvature_diff_per_m``. Only a few rows are
+    evaluated (cheap enough for every frame).
     """
-    rows = np.linspace(0.0, height_px - 1.0, checks.check_rows)
+    rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
     width = (np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)) * xm_per_px
     if not checks.min_width_m <= width[-1] <= checks.max_width_m:
         return (f"lane width {width[-1]:.2f} m at the car outside {checks.min_width_m}-"
                 f"{checks.max_width_m} m")
     spread = float(width.max() - width.min())
-    if spread > checks.max_width_spread_m:
+    limit = checks.max_width_spread_m * (height_px - 1.0 - top_px) / (height_px - 1.0)
+    if spread > limit:
         return (f"lines not parallel (width varies by {spread:.2f} m, "
-                f"limit {checks.max_width_spread_m} m)")
+                f"limit {round(limit, 2)} m)")
     y_m = (height_px - 1) * ym_per_px
     kl = curvature(fit_to_metres(left.coeffs_px, xm_per_px, ym_per_px), y_m)
     kr = curvature(fit_to_metres(right.coeffs_px, xm_per_px, ym_per_px), y_m)
@@ -567,7 +670,8 @@ class LaneCheck:
 
 
 def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], height_px: int,
-               xm_per_px: float, ym_per_px: float, checks: LaneChecks = LaneChecks()) -> LaneCheck:
+               xm_per_px: float, ym_per_px: float, checks: LaneChecks = LaneChecks(),
+               top_px: int = 0) -> LaneCheck:
     """Return the plausibility checks of two fits: ``line_problem`` of each, then ``pair_problem``.
 
     Parameters
@@ -577,12 +681,13 @@ def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], hei
     height_px : height of the bird's-eye view.
     xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
     checks : the limits.
+    top_px : the first row of the look-ahead the fits were made in (``LaneSearch.top_px``).
     """
     lp = line_problem(left, bands_px[0], checks, xm_per_px, "left")
     rp = line_problem(right, bands_px[1], checks, xm_per_px, "right")
     pp = ""
     if left.found and right.found and not (lp or rp):
-        pp = pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks)
+        pp = pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px)
     return LaneCheck(lp, rp, pp)
 
 
@@ -614,6 +719,6 @@ def search_bands_px(search: LaneSearch, size_px: tuple[int, int],
         if not fit.found:
             out.append(2.0 * half)
             continue
-        xs = fit.x_at(np.linspace(0.0, h - 1.0, 8))
+        xs = fit.x_at(np.linspace(float(search.top_px), h - 1.0, 8))
         out.append(float(np.mean(np.clip(xs + half, 0, w) - np.clip(xs - half, 0, w))))
     return out[0], out[1]

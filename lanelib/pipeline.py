@@ -76,15 +76,17 @@ class LanePipeline:
         return thresholds.combine(birdseye, self.config.thresholds, clahe=self._clahe)
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-               bases: tuple[float, float] | None = None) -> LaneSearch:
+               bases: tuple[float, float] | None = None, top_px: int = 0) -> LaneSearch:
         """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows.
 
         The windows start from ``bases``, the lines' x (px) on the bottom row, when given (e.g.
-        the tracked lane's), else from the histogram peaks nearest the car.
+        the tracked lane's), else from the histogram peaks nearest the car. ``top_px`` is the
+        first row of the look-ahead (0: the whole view; ``lanes.lookahead_top_px``).
         """
         if prior is not None:
-            return lanes.search_around(binary, prior[0], prior[1], self.config.search)
-        return lanes.sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px)
+            return lanes.search_around(binary, prior[0], prior[1], self.config.search, top_px)
+        return lanes.sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
+                                     top_px=top_px)
 
     def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
@@ -181,39 +183,58 @@ class LanePipeline:
         return thresholds.combine(join([grown[c] for c in cuts]), tconf, computed)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-                     keep_images: bool = False) -> tuple[LaneSearch, dict]:
+                     keep_images: bool = False, top_px: int = 0) -> tuple[LaneSearch, dict]:
         """Return the lane search of one RAW frame, unchecked, and the stage images kept.
 
         With a ``prior`` and no ``keep_images``, only the bands around the prior fits are
         remapped and thresholded (``band_binary``); the search sees the same pixels either way.
         ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
-        without a usable prior, or with ``keep_images``).
+        without a usable prior, or with ``keep_images``). ``top_px``: the look-ahead (``search``).
         """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
-            return self.search(self.band_binary(raw, prior), prior), {}
+            return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
         mask = self.binary(bird)
-        return self.search(mask, prior), {"birdseye": bird, "binary": mask}
+        return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
 
     def check(self, search: LaneSearch) -> LaneCheck:
         """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's fits."""
         p = self.perspective
         return lanes.check_lane(search.left, search.right, self.search_bands_px(search),
-                                self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks)
+                                self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks,
+                                search.top_px)
 
     def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                keep_images: bool = False) -> FrameResult:
         """Return the lane found in one RAW frame, checked, without drawing (the per-frame hot path).
 
         The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
-        checks is not found, and is kept apart in ``rejected``.
+        checks is not found, and is kept apart in ``rejected``. Without a ``prior``, a lane of
+        the whole view that fails is looked for again in shorter views (``short_view_search``),
+        then from other histogram peaks (``robust_search``, when ``candidates`` > 1).
         """
         search, images = self.search_frame(raw, prior, keep_images)
         result = self.result(search, images if keep_images else {})
-        if result.found or prior is not None or self.config.search.candidates < 2:
+        if result.found or prior is not None:
             return result
-        robust = self.robust_search(images["binary"], search)
-        return self.result(robust, images if keep_images else {}) if robust is not None else result
+        retry = self.short_view_search(images["binary"])
+        if retry is None and self.config.search.candidates > 1:
+            retry = self.robust_search(images["binary"], search)
+        return self.result(retry, images if keep_images else {}) if retry is not None else result
+
+    def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
+        """Return the first search in a shorter look-ahead whose lane passes the checks, or None.
+
+        For a frame without a track whose whole view failed its checks: sliding windows over the
+        lower ``SearchConfig.short_views`` shares of the view in turn (a tight bend's lane stays
+        in a shorter view; ``lanes.lookahead_top_px``). Its search's ``top_px`` says which.
+        """
+        h = self.size[1]
+        for share in self.config.search.short_views:
+            search = self.search(binary, top_px=int(round(h * (1.0 - share))))
+            if search.left.found and search.right.found and self.check(search).ok:
+                return search
+        return None
 
     def robust_search(self, binary: np.ndarray, first: LaneSearch) -> LaneSearch | None:
         """Return the first search from other histogram peaks whose lane passes the checks, or None.

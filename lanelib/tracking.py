@@ -7,7 +7,11 @@ debug composite work on it unchanged. Per frame:
 1. **Search.** Around the tracked lane when the previous frame was accepted (``method`` "prior");
    sliding windows when the tracker is lost or reset ("windows"), started from the tracked lines'
    positions when there is a track. A prior search that fails the checks is retried with sliding
-   windows on the same mask.
+   windows on the same mask. With a track the search reads only the look-ahead that keeps the
+   tracked lines in the view (``lanes.lookahead_top_px``: shorter on a tight bend), at most
+   ``lookahead_growth_m`` beyond the rows the track was measured on (``lookahead_top_px``), and
+   the checks compare the lines over those rows only. Without a track, a whole view that gives
+   no lane is searched again in shorter views (``LanePipeline.short_view_search``).
 2. **Checks.** The plausibility checks every found lane passes, image or video
    (``lanes.LaneChecks``, ``PipelineConfig.checks``), by the same functions ``LanePipeline.detect``
    uses. Each line alone (``lanes.line_problem``): its pixels may not fill more than
@@ -21,8 +25,10 @@ debug composite work on it unchanged. Per frame:
    When the pair fails but a track exists, the line with the higher confidence is kept. A
    detection that lost a line to the checks is kept in the result's ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one and the tracked lane: it is
-   the kept line plus the tracked difference between the two lines, i.e. the tracked lane width
-   at every row. Its confidence is half the kept line's.
+   the kept line moved sideways by the tracked lane width on the bottom row, the kept line's
+   shape (the lines of a lane are parallel; the tracked difference of their shapes was measured
+   on older frames, and on a bend that tightens or opens it bends the inferred line off the
+   lane ahead). Its confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
    ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
    Why a weighted average and not a Kalman filter on the coefficients: between frames the lane
@@ -78,6 +84,12 @@ class TrackerConfig:
     base_history_frames : 0 (off), or accepted frames whose line bases are remembered (step 6).
     min_base_peak : a histogram base whose (peak - mean) / mean is below this is weak, and the
         remembered base is tried instead (with ``base_history_frames``).
+    lookahead_growth_m : how far (m of road) the look-ahead may reach beyond the rows the tracked
+        lane was measured on, per frame (step 1). Beyond those rows the track is an
+        extrapolation: coming out of a tight bend it still curves as it did, and a search
+        around it, or a check against it, over the whole view would refuse the straightening
+        lane. A second-order fit extrapolated 3 m errs by about 3**2 * dk / 2, a few cm for the
+        curvature changes of a clothoid between frames; the view opens fully in 5 frames.
     """
 
     max_jump_m: float = 0.5
@@ -87,6 +99,7 @@ class TrackerConfig:
     hold_frames: int = 12
     base_history_frames: int = 0
     min_base_peak: float = 3.0
+    lookahead_growth_m: float = 3.0
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -97,16 +110,20 @@ class TrackerConfig:
             raise ConfigError("tracking: recency_decay must lie in (0, 1]")
         if min(self.max_jump_m, self.max_bend_m) <= 0:
             raise ConfigError("tracking: max_jump_m and max_bend_m must be positive")
+        if self.lookahead_growth_m <= 0:
+            raise ConfigError("tracking: lookahead_growth_m must be positive")
 
 
 @dataclass(frozen=True)
 class _Accepted:
-    """One frame's accepted lane: pixel coefficients and confidence of each line."""
+    """One frame's accepted lane: pixel coefficients and confidence of each line, and the
+    first row of the look-ahead it was measured in."""
 
     left: np.ndarray
     right: np.ndarray
     left_conf: float
     right_conf: float
+    top_px: int = 0
 
 
 class LaneTracker:
@@ -182,10 +199,12 @@ class LaneTracker:
         pipe = self.pipeline
         track = self.lane
         prior = None
+        top = 0 if track is None else self.lookahead_top_px(track)
         if track is not None and self._lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
-        search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None)
-        best = (search, *self._check(search.left, search.right, track, self._band_px(search)))
+        search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None,
+                                               top_px=top)
+        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
 
         def mask() -> np.ndarray:
             if "binary" not in det_images:  # a band-only search: threshold the whole view once
@@ -197,7 +216,8 @@ class LaneTracker:
             nonlocal best
             if retry is None:
                 return
-            checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry)))
+            checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry),
+                                           retry.top_px))
             if sum(c is not None for c in checked[1:3]) > sum(c is not None for c in best[1:3]):
                 best = checked
                 if note:
@@ -205,11 +225,14 @@ class LaneTracker:
 
         if track is not None and (best[1] is None or best[2] is None):
             # the search missed: look again with windows started from the tracked lines
-            better(pipe.search(mask(), bases=self._bases(track)))
+            better(pipe.search(mask(), bases=self._bases(track), top_px=top))
         elif track is None and best[1] is None and (bases := self._weak_bases(search)) is not None:
             # no track and a weak histogram peak: start that side from the remembered base
             better(pipe.search(mask(), bases=bases),
                    "windows started from the remembered bases (weak histogram peak)")
+        if track is None and best[1] is None and pipe.config.search.short_views:
+            # no track and the whole view gave no lane: shorter views (a tight bend)
+            better(pipe.short_view_search(mask()))
         if track is None and best[1] is None and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
             better(pipe.robust_search(mask(), best[0]))
@@ -221,6 +244,17 @@ class LaneTracker:
         rejected = Rejected(search.left, search.right, pipe.measure(search.left, search.right),
                             "; ".join(why))
         return replace(result, rejected=rejected)
+
+    def lookahead_top_px(self, track: tuple[np.ndarray, np.ndarray]) -> int:
+        """Return the first row (px) of this frame's look-ahead for the tracked lane ``track``.
+
+        Where the tracked lines stay in the view (``lanes.lookahead_top_px``), but no more than
+        ``lookahead_growth_m`` beyond the rows the tracked fits were measured on.
+        """
+        measured = max(acc.top_px for acc in self._history)
+        grow = int(round(self.config.lookahead_growth_m / self._ym))
+        top = lanes.lookahead_top_px(track, self.pipeline.size, self.pipeline.config.search)
+        return max(top, measured - grow, 0)
 
     def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
               band_px: float | tuple[float, float] | None = None
@@ -236,10 +270,15 @@ class LaneTracker:
         """
         return self._check(left, right, track, band_px)[:3]
 
-    def _check(self, left: LineFit, right: LineFit, track, band_px
+    def _check(self, left: LineFit, right: LineFit, track, band_px, top_px: int = 0
                ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
-        """Return ``check``'s answer and whether a check rejected a found line."""
+        """Return ``check``'s answer and whether a check rejected a found line.
+
+        The track checks and the pair's compare the lines over the look-ahead's rows, from
+        ``top_px`` down (``lanes.lookahead_top_px``).
+        """
         cfg = self.config
+        rows = self._rows if not top_px else np.linspace(float(top_px), self._bottom, len(self._rows))
         bands = band_px if isinstance(band_px, tuple) else (band_px or 0.0, band_px or 0.0)
         failed = False
         why: list[str] = []
@@ -254,7 +293,7 @@ class LaneTracker:
                 failed = True
                 continue
             if track is not None:
-                dx = (np.polyval(fit.coeffs_px, self._rows) - np.polyval(track[i], self._rows)) * self._xm
+                dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(track[i], rows)) * self._xm
                 if abs(dx[-1]) > cfg.max_jump_m:
                     why.append(f"{side} line jumped {abs(dx[-1]):.2f} m at the car "
                                f"(limit {cfg.max_jump_m} m)")
@@ -268,7 +307,7 @@ class LaneTracker:
             kept[side] = fit
         if kept["left"] is not None and kept["right"] is not None:
             problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
-                                         self._xm, self._ym, self.checks)
+                                         self._xm, self._ym, self.checks, top_px)
             if problem:
                 why.append(problem)
                 failed = True
@@ -323,10 +362,12 @@ class LaneTracker:
                     confs[side] = self._conf_of(fit)
             for side, other, i, j in (("left", "right", 0, 1), ("right", "left", 1, 0)):
                 if side not in coeffs:  # infer from the other line and the tracked lane width
-                    coeffs[side] = coeffs[other] + (track[i] - track[j])
+                    shift = np.polyval(track[i], self._bottom) - np.polyval(track[j], self._bottom)
+                    coeffs[side] = coeffs[other] + np.array([0.0, 0.0, shift])
                     confs[side] = round(0.5 * confs[other], 3)
                     notes.append(f"{side} line inferred from the {other} line and the tracked width")
-            self._history.append(_Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"]))
+            self._history.append(_Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
+                                           search.top_px))
             if self._base_history.maxlen:
                 self._base_history.append(self._bases((coeffs["left"], coeffs["right"])))
             self._lost = 0

@@ -1,0 +1,174 @@
+"""Tight bends (issue 16): the adaptive look-ahead, shorter views, parallel fits and the road presets.
+
+Known answers from drawn lanes: a bird's-eye view of a circular bend of known radius and lane
+width (the exact circle, not a parabola), unwarped into the camera frame.
+"""
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import lanes
+from lanelib.config import PipelineConfig, load_config_or_preset, preset, preset_names
+from lanelib.lanes import LaneChecks, LineFit, SearchConfig
+from lanelib.perspective import PerspectiveConfig
+from lanelib.pipeline import LanePipeline
+from lanelib.tracking import LaneTracker
+
+H, W = 720, 1280
+PC = PerspectiveConfig()
+XM, YM = PC.xm_per_px, PC.ym_per_px
+BOTTOM_M = 4.79  # the default view's bottom row is 4.79 m ahead of the camera
+
+
+def bend_birdseye(radius_m: float, width_m: float, offset_m: float = 0.0, car_x: float = W / 2) -> np.ndarray:
+    """Return a bird's-eye RGB view of a right bend of ``radius_m`` (circle), lines 0.15 m wide."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(H, dtype=np.float64)
+    d = BOTTOM_M + (H - 1 - ys) * YM
+    for lateral in (-width_m / 2 - offset_m, width_m / 2 - offset_m):
+        r = radius_m - lateral
+        ok = d < r
+        x_m = radius_m - np.sqrt(r * r - d[ok] ** 2)
+        pts = np.column_stack([car_x + x_m / XM, ys[ok]]).round().astype(np.int32)
+        cv2.polylines(bird, [pts], False, (235, 235, 235), int(round(0.15 / XM)))
+    return bird
+
+
+def true_x_px(radius_m: float, lateral_m: float, y_px: float, car_x: float = W / 2) -> float:
+    d = BOTTOM_M + (H - 1 - y_px) * YM
+    r = radius_m - lateral_m
+    return car_x + (radius_m - math.sqrt(r * r - d * d)) / XM
+
+
+@pytest.fixture(scope="module")
+def pipe() -> LanePipeline:
+    return LanePipeline(PipelineConfig())
+
+
+def test_a_50m_bend_is_found_in_a_short_view_and_not_in_the_whole_view(pipe):
+    bird = bend_birdseye(50.0, 3.6)
+    mask = pipe.binary(bird)
+    whole = pipe.search(mask)
+    assert not (whole.left.found and whole.right.found and pipe.check(whole).ok)
+    short = pipe.short_view_search(mask)
+    assert short is not None and short.top_px > 0
+    # the fits follow the true circle (within 0.15 m) over the rows their pixels span: the windows
+    # lose a line steeper than about one px per row (0.18 m per m of road, 9 m ahead on a 50 m
+    # bend), so that is not the whole look-ahead
+    for fit, lateral in ((short.left, -1.8), (short.right, 1.8)):
+        assert fit.span_px > 200
+        rows = np.linspace(H - 1 - fit.span_px, H - 1, 10)
+        err = [abs(fit.x_at(y) - true_x_px(50.0, lateral, y)) * XM for y in rows]
+        assert max(err) < 0.15
+    # ... and measure in metres: the scale of the view is unchanged by the shorter look-ahead
+    m = pipe.measure(short.left, short.right)
+    assert m.lane_width_m == pytest.approx(3.6, abs=0.1)
+    assert m.radius_m == pytest.approx(50.0, rel=0.4)
+    assert m.curvature_per_m > 0  # a right bend
+
+
+def test_detect_retries_the_short_view_and_off_turns_it_off(pipe):
+    raw = pipe.perspective.unwarp(bend_birdseye(50.0, 3.6))
+    r = pipe.detect(raw)
+    assert r.found and r.search.top_px > 0 and r.radius_m == pytest.approx(50.0, rel=0.4)
+    off = LanePipeline(PipelineConfig(search=SearchConfig(short_views=())))
+    assert not off.detect(raw).found
+
+
+def test_the_tracker_keeps_a_50m_bend_in_a_shortened_look_ahead(pipe):
+    raw = pipe.perspective.unwarp(bend_birdseye(50.0, 3.6))
+    tracker = LaneTracker(pipe)
+    results = [tracker.update(raw) for _ in range(4)]
+    assert all(r.found for r in results)
+    assert [r.method for r in results[1:]] == ["prior"] * 3
+    assert all(r.search.top_px >= H * (1 - 0.6) - 1 for r in results)
+    assert results[-1].lane_width_m == pytest.approx(3.6, abs=0.1)
+    assert results[-1].radius_m == pytest.approx(50.0, rel=0.4)
+
+
+def test_a_straight_road_keeps_the_whole_view(pipe):
+    straight = (np.array([0.0, 0.0, 320.0]), np.array([0.0, 0.0, 960.0]))
+    assert lanes.lookahead_top_px(straight, (W, H)) == 0
+    raw = pipe.perspective.unwarp(bend_birdseye(1e6, 3.7))
+    tracker = LaneTracker(pipe)
+    assert all(tracker.update(raw).search.top_px == 0 for _ in range(3))
+
+
+def test_lookahead_ends_where_a_line_leaves_the_view_but_not_below_the_shortest():
+    sc = SearchConfig()
+    # a line drifting right by 1 px per row from x=900 at the bottom reaches W - margin/2 at
+    # row 719 - (1280 - 1 - 40 - 900) = 380
+    lines = (np.array([0.0, -1.0, 600.0 + 719.0]), np.array([0.0, -1.0, 900.0 + 719.0]))
+    top = lanes.lookahead_top_px(lines, (W, H), sc)
+    assert 375 <= top <= 390
+    steep = (np.array([0.0, -5.0, 600.0 + 5 * 719.0]), np.array([0.0, -5.0, 900.0 + 5 * 719.0]))
+    assert lanes.lookahead_top_px(steep, (W, H), sc) == round(H * (1 - sc.min_view_fraction))
+
+
+def test_a_short_line_takes_the_curvature_of_the_long_one():
+    ys = np.arange(300, 720, dtype=np.int32)
+    a = 4e-4
+    left_xs = np.round(a * ys ** 2.0 - 0.5 * ys + 400).astype(np.int32)
+    dash = np.repeat(np.arange(620, 720, dtype=np.int32), 3)  # one dash: 100 rows, fitted straight alone
+    right_xs = np.round(a * dash ** 2.0 - 0.5 * dash + 1000).astype(np.int32)
+    sc = SearchConfig()
+    left = lanes.fit_line(ys, left_xs, H, sc)
+    right = lanes.fit_line(dash, right_xs, H, sc)
+    assert right.coeffs_px[0] == 0.0  # alone: a straight line
+    left2, right2 = lanes.parallel_fits(left, right, (ys, left_xs), (dash, right_xs), H, sc)
+    assert left2 == left
+    assert right2.coeffs_px[0] == pytest.approx(left.coeffs_px[0])
+    assert right2.x_at(300) == pytest.approx(a * 300 ** 2 - 0.5 * 300 + 1000, abs=2.0)
+    assert abs(right.x_at(300) - (a * 300 ** 2 - 0.5 * 300 + 1000)) > 30  # straight: far off
+
+
+def straight_pair(width_m: float) -> tuple[LineFit, LineFit]:
+    return (LineFit((0.0, 0.0, 640.0 - width_m / 2 / XM), 2000, 700.0),
+            LineFit((0.0, 0.0, 640.0 + width_m / 2 / XM), 2000, 700.0))
+
+
+def test_the_country_preset_accepts_a_4_6m_lane_the_highway_preset_refuses():
+    assert {"highway", "country"} <= set(preset_names())
+    highway, country = preset("highway").checks, preset("country").checks
+    left, right = straight_pair(4.6)
+    assert "lane width 4.60 m" in lanes.pair_problem(left, right, H, XM, YM, highway)
+    assert lanes.pair_problem(left, right, H, XM, YM, country) == ""
+    # both refuse what is no lane at all
+    for width in (1.5, 6.5):
+        assert lanes.pair_problem(*straight_pair(width), H, XM, YM, country).startswith("lane width")
+
+
+def test_the_country_preset_allows_the_curvature_difference_of_a_hairpin():
+    # a 4.8 m lane on a 30 m hairpin: the lines' curvatures differ by about w / R**2 = 0.0053 1/m
+    kl, kr = 1 / (30 - 2.4), 1 / (30 + 2.4)
+    assert abs(kl - kr) > LaneChecks().max_curvature_diff_per_m
+    assert abs(kl - kr) < preset("country").checks.max_curvature_diff_per_m
+
+
+def test_presets_load_by_name_and_keep_the_other_defaults():
+    highway = load_config_or_preset("highway")
+    assert highway.checks == LaneChecks()  # the highway preset spells out the defaults
+    country = load_config_or_preset("country")
+    assert country.perspective == PipelineConfig().perspective
+    assert country.search == PipelineConfig().search
+    assert (country.checks.min_width_m, country.checks.max_width_m) == (2.5, 5.0)
+
+
+def test_a_shorter_look_ahead_allows_its_share_of_the_width_spread():
+    # lines diverging by 1.4 m over the whole view: 0.56 m over its lower 40 %, still too much
+    left = LineFit((0.0, 0.0, 320.0), 2000, 700.0)
+    right = LineFit((0.0, -1.4 / XM / 719, 960.0 + 1.4 / XM), 2000, 700.0)
+    top = round(H * 0.6)
+    problem = lanes.pair_problem(left, right, H, XM, YM, LaneChecks(), top)
+    assert problem.startswith("lines not parallel")
+
+
+@pytest.mark.parametrize("kwargs", [dict(short_views=(0.0,)), dict(short_views=(1.0,)),
+                                    dict(min_view_fraction=0.0), dict(min_view_fraction=1.5)])
+def test_search_config_checks_the_look_ahead_shares(kwargs):
+    with pytest.raises(Exception, match="short_views|min_view_fraction"):
+        SearchConfig(**kwargs)
