@@ -19,6 +19,11 @@
   the raw frame (the video path) and the full-frame undistort the images path and --debug add;
   and the road geometry's per-frame vanishing point (``geometry.RoadLineFinder``), which
   ``--auto-geometry`` runs twice a second through a video.
+- ``fallbacks``: per clip (the benchmarked clip and each bundled synthetic clip), the
+  tracker's share of frames that needed a fallback search (``LaneTracker.retries``: windows
+  from the track, remembered bases, shorter views, other peaks), how often each ran, and the
+  median CPU time of ``LaneTracker.update`` (one thread) on the frames that needed none and on
+  those that did: how often the robust path runs and what it costs.
 - ``geometry_s``: ``--auto-geometry``'s estimate (``geometry.estimate_geometry``) from the frames
   it reads (up to 50 of the clip's first 20 s), CPU and wall seconds, without the decoding.
 
@@ -135,6 +140,39 @@ def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, d
             for k, v in samples.items()}
 
 
+FALLBACK_CLIPS = ("project", "challenge", "harder", "shadows", "seams", "glare", "country")
+
+
+def fallback_figures(clip: Path, calibration: Calibration | None, config: PipelineConfig,
+                     max_frames: int | None = None) -> dict:
+    """Return how often the tracker needed a fallback search on ``clip`` and what it cost.
+
+    ``LaneTracker.update`` runs on every frame (up to ``max_frames``) on one thread; each frame
+    counts as "fallback" when ``LaneTracker.retries`` is not empty. CPU times are medians
+    (``time.thread_time``); a share with no frames gives None.
+    """
+    cheap, fallback = [], []
+    counts: dict[str, int] = {}
+    with one_thread(), io.VideoReader(clip) as reader:
+        tracker = LaneTracker(LanePipeline(config, calibration, size=reader.info.size))
+        for i, raw in enumerate(reader):
+            if max_frames is not None and i >= max_frames:
+                break
+            cpu, _ = _timed(lambda: tracker.update(raw))
+            (fallback if tracker.retries else cheap).append(cpu)
+            for name in tracker.retries:
+                counts[name] = counts.get(name, 0) + 1
+    n = len(cheap) + len(fallback)
+
+    def med(v):
+        return round(statistics.median(v), 2) if v else None
+
+    return {"frames": n, "fallback_pct": round(100.0 * len(fallback) / max(n, 1), 1),
+            "cpu_ms_cheap": med(cheap), "cpu_ms_fallback": med(fallback),
+            "cpu_ms_mean": round(statistics.fmean(cheap + fallback), 2) if n else None,
+            "runs": counts}
+
+
 def _clock() -> tuple[float, float]:
     """Return (wall s, CPU s of this process and its finished children, ffmpeg included)."""
     me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -168,8 +206,13 @@ def video_run(clip: Path, out: Path, config: PipelineConfig,
 
 def run(video: Path | None = None, calibration: Calibration | None = None,
         config: PipelineConfig = PipelineConfig(), clip_frames: int = 250, stage_frames: int = 60,
-        repeats: int = 3, video_rounds: int = 2) -> dict:
-    """Return the benchmark figures (see the module docstring) as a JSON-able dict."""
+        repeats: int = 3, video_rounds: int = 2, fallback_clips: tuple[str, ...] = FALLBACK_CLIPS,
+        fallback_frames: int | None = None) -> dict:
+    """Return the benchmark figures (see the module docstring) as a JSON-able dict.
+
+    ``fallback_clips`` names the bundled clips (``videos/NAME.mp4``) whose fallback figures are
+    measured beside the benchmarked clip's, each on up to ``fallback_frames`` frames (all).
+    """
     if video is None:
         video, cal = default_video()
         calibration = calibration or cal
@@ -197,6 +240,12 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         geometry_s = {"cpu_s": round(time.process_time() - c0, 2),
                       "wall_s": round(time.perf_counter() - w0, 2), "frames": len(sampled),
                       "result": geometry_note}
+        fallbacks = {video.name: fallback_figures(video, calibration, config, fallback_frames)}
+        for name in fallback_clips:
+            synth = data.bundled("videos") / f"{name}.mp4"
+            if synth.is_file() and synth.resolve() != Path(video).resolve():
+                fallbacks[synth.name] = fallback_figures(synth, calibration_from_truth(synth), config,
+                                                         fallback_frames)
         codec, vid = [], []
         for _ in range(video_rounds):
             codec.append(codec_run(clip, Path(tmp) / "codec.mp4"))
@@ -213,7 +262,7 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         "video_cpu_ms_per_frame": round(video_cpu, 1), "codec_cpu_ms_per_frame": round(codec_cpu, 1),
         "cpu_codec_to_video": round(codec_cpu / video_cpu, 2),
         "stages_ms": {k: {kk: round(vv, 2) for kk, vv in v.items()} for k, v in stages.items()},
-        "geometry_s": geometry_s,
+        "geometry_s": geometry_s, "fallbacks": fallbacks,
         "video_fps_runs": [round(v[0], 1) for v in vid], "codec_fps_runs": [round(c[0], 1) for c in codec],
         "load_average": [round(v, 2) for v in os.getloadavg()],
         "clip_frames": clip_frames, "stage_frames": len(frames), "cpu_count": os.cpu_count(),
@@ -253,4 +302,15 @@ def format_report(f: dict) -> str:
              f"{'stage (one thread)':28s} {'cpu ms':>8s} {'wall ms':>8s}  x remap"]
     for name, v in f["stages_ms"].items():
         lines.append(f"{name:28s} {v['cpu_ms']:8.2f} {v['wall_ms']:8.2f}  {v['cpu_ms'] / f['remap_ms']:6.2f}")
+    lines += ["", "fallback searches of the tracker (LaneTracker.retries), CPU ms per update, one thread",
+              f"{'clip':22s} {'frames':>6s} {'fallback %':>10s} {'ms cheap':>9s} {'ms fallback':>11s} "
+              f"{'ms mean':>8s}  runs"]
+
+    def ms(v):
+        return f"{v:.2f}" if v is not None else "-"
+
+    for name, v in f["fallbacks"].items():
+        runs = ", ".join(f"{k} {n}" for k, n in v["runs"].items()) or "-"
+        lines.append(f"{name:22s} {v['frames']:6d} {v['fallback_pct']:10.1f} {ms(v['cpu_ms_cheap']):>9s} "
+                     f"{ms(v['cpu_ms_fallback']):>11s} {ms(v['cpu_ms_mean']):>8s}  {runs}")
     return "\n".join(lines)

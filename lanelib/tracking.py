@@ -136,7 +136,10 @@ class LaneTracker:
     checks : the plausibility checks; defaults to ``pipeline.config.checks``, those of
         ``pipeline.detect``.
 
-    Call ``update`` once per frame, in order; ``reset`` before a new video.
+    Call ``update`` once per frame, in order; ``reset`` before a new video. After each
+    ``update``, ``retries`` names the fallback searches that frame needed, in the order they
+    ran (none when the cheap search passed): "windows from the track", "remembered bases",
+    "shorter views", "other peaks". ``python -m lanelib bench`` counts them and times them.
     """
 
     def __init__(self, pipeline: "LanePipeline", config: TrackerConfig | None = None,
@@ -157,6 +160,7 @@ class LaneTracker:
         """Forget the track and the remembered bases (a new video): the next frame is searched
         with sliding windows from the histogram."""
         self._forget_track()
+        self.retries: tuple[str, ...] = ()
         self._base_history: deque[tuple[float, float]] = deque(maxlen=self.config.base_history_frames)
 
     def _forget_track(self) -> None:
@@ -204,6 +208,7 @@ class LaneTracker:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
         search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None,
                                                top_px=top)
+        ran: list[str] = []  # the fallback searches this frame needed (``retries``)
         best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
 
         def mask() -> np.ndarray:
@@ -211,9 +216,10 @@ class LaneTracker:
                 det_images["binary"] = pipe.binary(pipe.birdseye(raw))
             return det_images["binary"]
 
-        def better(retry: LaneSearch | None, note: str = "") -> None:
+        def better(retry: LaneSearch | None, name: str, note: str = "") -> None:
             """Keep ``retry`` when more of its lines pass the checks than of the best so far."""
             nonlocal best
+            ran.append(name)
             if retry is None:
                 return
             checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry),
@@ -225,17 +231,18 @@ class LaneTracker:
 
         if track is not None and (best[1] is None or best[2] is None):
             # the search missed: look again with windows started from the tracked lines
-            better(pipe.search(mask(), bases=self._bases(track), top_px=top))
+            better(pipe.search(mask(), bases=self._bases(track), top_px=top), "windows from the track")
         elif track is None and best[1] is None and (bases := self._weak_bases(search)) is not None:
             # no track and a weak histogram peak: start that side from the remembered base
-            better(pipe.search(mask(), bases=bases),
+            better(pipe.search(mask(), bases=bases), "remembered bases",
                    "windows started from the remembered bases (weak histogram peak)")
         if track is None and best[1] is None and pipe.config.search.short_views:
             # no track and the whole view gave no lane: shorter views (a tight bend)
-            better(pipe.short_view_search(mask()))
+            better(pipe.short_view_search(mask()), "shorter views")
         if track is None and best[1] is None and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
-            better(pipe.robust_search(mask(), best[0]))
+            better(pipe.robust_search(mask(), best[0]), "other peaks")
+        self.retries = tuple(ran)
         search, left, right, why, failed = best
         images = det_images if keep_images else {}
         result = self._advance(search, left, right, why, track, images)

@@ -457,7 +457,7 @@ def test_bench_reports_every_figure_consistently(capsys):
 
     clip = SYNTH / "project.mp4"  # bundled with the repo
     f = bench.run(clip, calibration_from_truth(clip), clip_frames=12, stage_frames=4, repeats=1,
-                  video_rounds=1)
+                  video_rounds=1, fallback_clips=("project", "harder"), fallback_frames=30)
     assert {"detect_ms", "remap_ms", "detect_to_remap", "video_fps", "codec_fps",
             "video_to_codec"} <= set(f)
     assert f["detect_to_remap"] == pytest.approx(f["detect_ms"] / f["remap_ms"], abs=0.01)
@@ -474,6 +474,16 @@ def test_bench_reports_every_figure_consistently(capsys):
     report = bench.format_report(f)
     assert "detect_to_remap" in report and "video_to_codec" in report and f"mask {rule[0]}" in report
     assert "--auto-geometry's estimate from 50 frames" in report
+    # the clean clip never needs a fallback; harder's first second (tree shade hides the dashes)
+    # does, and each fallback frame counts at least one run
+    fb = f["fallbacks"]
+    assert set(fb) == {"project.mp4", "harder.mp4"}  # the benchmarked clip is not measured twice
+    assert fb["project.mp4"]["frames"] == 30 and fb["project.mp4"]["fallback_pct"] == 0.0
+    assert fb["project.mp4"]["runs"] == {} and fb["project.mp4"]["cpu_ms_fallback"] is None
+    hard = fb["harder.mp4"]
+    assert hard["fallback_pct"] > 0 and hard["cpu_ms_fallback"] > 0
+    assert sum(hard["runs"].values()) >= round(hard["fallback_pct"] * 30 / 100)
+    assert "fallback searches of the tracker" in report and "harder.mp4" in report
 
 
 def test_bench_refuses_a_tiny_clip():
