@@ -26,7 +26,11 @@ FN / truth lines per frame, averaged over the frames.
 One difference from TuSimple, made because the pipeline only ever looks at its bird's-eye view:
 only the truth points that fall inside that view are scored (TuSimple scores every annotated
 point, up to the horizon). A truth line with no point inside the view is not a truth line for
-that frame; a line found there is a false positive.
+that frame; a line found there is a false positive. For the same reason a truth line's accuracy
+is the share of ITS points hit, where TuSimple's counts every row, a row where neither line has a
+point as a hit. The matching itself is the one ``lanelib.benchmarks.metrics.score_lines`` that
+the official TuSimple score uses (``every_row=False`` here, True there); the names
+``line_threshold_px``, ``line_accuracy``, ``score_lines`` and ``LineScores`` are imported from it.
 
 What the errors include: the truth gives the offset and the curvature AT THE CAR, while the
 pipeline (``lanes.measure``) takes the offset on the bird's-eye view's bottom row, about 4.8 m
@@ -45,6 +49,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from .benchmarks.metrics import (  # noqa: F401  (the point matching is shared; see above)
+    MATCH_ACCURACY, POINT_THRESHOLD_PX, LineScores, line_accuracy, line_threshold_px, score_lines)
 from .camera import Calibration
 from .config import PipelineConfig, override
 from .errors import DecodeStoppedError, InputError, LaneLibError, naming_the_file
@@ -53,95 +59,10 @@ from .pipeline import LanePipeline
 from .synth.truth import load_image_truth, load_video_truth
 from .tracking import LaneTracker
 
-POINT_THRESHOLD_PX = 20.0    # TuSimple ``pixel_thresh``
-MATCH_ACCURACY = 0.85        # TuSimple ``pt_thresh``: a truth line is matched at this accuracy
 RADIUS_SCORED_MAX_M = 3000.0  # radius error is scored on frames with a true radius up to this
 SUMMARY_KEYS = ("frames", "found_rate", "offset_err_cm_median", "offset_err_cm_p95",
                 "curvature_err_median", "radius_err_pct_median", "point_accuracy", "fp_rate",
                 "fn_rate", "files_failed")
-
-
-# --------------------------------------------------------------------------- point accuracy
-
-def line_threshold_px(gt_x: np.ndarray, rows: np.ndarray,
-                      threshold_px: float = POINT_THRESHOLD_PX) -> float:
-    """Return the horizontal hit distance (px) for a truth line: ``threshold_px / cos(slant)``.
-
-    Parameters
-    ----------
-    gt_x : truth x (px) at ``rows``; NaN where the line is not scored.
-    rows : image rows (px).
-    threshold_px : the hit distance across a vertical line (TuSimple: 20 px).
-    """
-    ok = np.isfinite(gt_x)
-    if ok.sum() < 2:
-        return float(threshold_px)
-    slope = np.polyfit(np.asarray(rows, float)[ok], np.asarray(gt_x, float)[ok], 1)[0]
-    return float(threshold_px / math.cos(math.atan(slope)))
-
-
-def line_accuracy(pred_x: np.ndarray, gt_x: np.ndarray, threshold_px: float) -> float:
-    """Return the share of a truth line's points hit by a predicted line (NaN if it has none).
-
-    Parameters
-    ----------
-    pred_x : predicted x (px) at the truth rows; NaN where the prediction does not reach.
-    gt_x : truth x (px) at the same rows; NaN where the line is not scored.
-    threshold_px : horizontal distance (px) below which a point is hit.
-    """
-    gt = np.asarray(gt_x, float)
-    pred = np.asarray(pred_x, float)
-    scored = np.isfinite(gt)
-    if not scored.any():
-        return float("nan")
-    with np.errstate(invalid="ignore"):
-        hit = np.abs(pred[scored] - gt[scored]) < threshold_px
-    return float(hit.sum() / scored.sum())
-
-
-@dataclass(frozen=True)
-class LineScores:
-    """How one frame's predicted lines match its truth lines (TuSimple rules).
-
-    ``accuracy`` holds one value per truth line (NaN where that line has no scored point);
-    ``pred_lines`` and ``gt_lines`` count the predicted lines and the truth lines with points;
-    ``fp_lines`` and ``fn_lines`` the unmatched ones.
-    """
-
-    accuracy: tuple[float, ...]
-    pred_lines: int
-    gt_lines: int
-    fp_lines: int
-    fn_lines: int
-
-
-def score_lines(pred_xs: Sequence[np.ndarray], gt_xs: Sequence[np.ndarray], rows: np.ndarray,
-                threshold_px: float = POINT_THRESHOLD_PX,
-                match_accuracy: float = MATCH_ACCURACY) -> LineScores:
-    """Return the TuSimple accuracy of each truth line and the frame's FP and FN line counts.
-
-    Parameters
-    ----------
-    pred_xs : one array per predicted line, its x (px) at ``rows`` (NaN where it does not reach).
-    gt_xs : one array per truth line, its x (px) at ``rows`` (NaN where not scored).
-    rows : the truth rows (px).
-    threshold_px : hit distance across the line (px).
-    match_accuracy : accuracy at which a predicted line matches a truth line.
-    """
-    accs = []
-    matched = 0
-    gt_lines = 0
-    for gt in gt_xs:
-        gt = np.asarray(gt, float)
-        if not np.isfinite(gt).any():
-            accs.append(float("nan"))
-            continue
-        gt_lines += 1
-        thr = line_threshold_px(gt, rows, threshold_px)
-        best = max((line_accuracy(p, gt, thr) for p in pred_xs), default=0.0)
-        accs.append(best)
-        matched += best >= match_accuracy
-    return LineScores(tuple(accs), len(pred_xs), gt_lines, len(pred_xs) - matched, gt_lines - matched)
 
 
 # --------------------------------------------------------------------------- raw-image mapping

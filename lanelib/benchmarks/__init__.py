@@ -1,0 +1,10 @@
+"""Public lane benchmarks: their file formats and their official metrics.
+
+``tusimple`` (JSON lines of lanes at ``h_samples``) and ``culane`` (list files and ``.lines.txt``
+lanes) read the labels, write predictions in the benchmark's own layout and score a prediction
+set; ``metrics`` holds the official TuSimple accuracy / FP / FN and CULane F1, which
+``lanelib.evaluate`` shares for its synthetic truth.
+"""
+from . import metrics
+
+__all__ = ["metrics"]
