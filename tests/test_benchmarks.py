@@ -2,15 +2,18 @@
 the benchmark files (read, write, round trips, bad input) and ``evaluate tusimple|culane``."""
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from lanelib import evaluate
-from lanelib.benchmarks import metrics
+from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.benchmarks.metrics import (CULaneCounts, culane_image, interpolate_lane, iou_matrix,
                                         lane_mask, matched_pairs, tusimple_image, tusimple_score)
+from lanelib.errors import InputError
 
 H = list(range(160, 720, 10))  # 56 rows, TuSimple's h_samples for 1280x720
 Y = np.asarray(H, float)
@@ -218,3 +221,171 @@ def test_culane_slanted_lane_shifted_along_x():
     near = iou_matrix([lane], [lane + [10.0, 0.0]])[0, 0]
     far = iou_matrix([lane], [lane + [30.0, 0.0]])[0, 0]
     assert near > 0.5 > far > 0.0
+
+
+# --------------------------------------------------------------------------- TuSimple files
+
+def label_line(raw_file: str, lanes) -> str:
+    return json.dumps({"lanes": lanes, "h_samples": H, "raw_file": raw_file})
+
+
+def write_tusimple_set(folder: Path) -> tuple[Path, Path]:
+    """Two labelled images and their predictions: one perfect, one missing a lane of two."""
+    folder.mkdir(parents=True, exist_ok=True)
+    a = [vertical(500, missing_top=10), vertical(800, missing_top=10)]
+    b = [slanted(300.0, -0.5), slanted(900.0, 0.5)]
+    labels = folder / "label_data_0531.json"
+    labels.write_text(label_line("clips/a/20.jpg", a) + "\n" + label_line("clips/b/20.jpg", b) + "\n")
+    preds = [tusimple.TuSimpleRecord("clips/a/20.jpg", tuple(map(tuple, a)), tuple(H), 12.5),
+             tusimple.TuSimpleRecord("clips/b/20.jpg", (tuple(b[0]),), tuple(H), 8.0)]
+    pred = tusimple.write_predictions(folder / "pred.json", preds, inputs=[labels])
+    return labels, pred
+
+
+def test_tusimple_files_round_trip_and_score(tmp_path):
+    labels, pred = write_tusimple_set(tmp_path)
+    first = json.loads(pred.read_text().splitlines()[0])
+    assert set(first) == {"raw_file", "lanes", "h_samples", "run_time"}
+    assert first["lanes"][0][:11] == [-2] * 10 + [500] and first["run_time"] == 12.5
+    read = tusimple.read_predictions(pred)
+    assert [r.raw_file for r in read] == ["clips/a/20.jpg", "clips/b/20.jpg"]
+    assert read[0].lanes[1][10] == 800.0 and read[1].run_time_ms == 8.0
+    gt = tusimple.read_labels(tmp_path)  # the folder: its label_data*.json
+    assert len(gt) == 2 and gt[0].run_time_ms is None and gt[0].h_samples == tuple(map(float, H))
+    s = tusimple.evaluate(labels, pred)
+    # a: 1, FP 0, FN 0; b: one lane of two, accuracy 1/2, FP 0, FN 1/2
+    assert (s.images, s.accuracy, s.fp, s.fn) == (2, 0.75, 0.0, 0.25)
+
+
+def test_tusimple_write_never_over_an_input(tmp_path):
+    labels, _ = write_tusimple_set(tmp_path)
+    before = labels.read_text()
+    with pytest.raises(InputError, match="would overwrite an input"):
+        tusimple.write_predictions(labels, tusimple.read_predictions(tmp_path / "pred.json"),
+                                   inputs=[labels])
+    assert labels.read_text() == before and not list(tmp_path.glob(".*part*"))
+
+
+@pytest.mark.parametrize("line, message", [
+    ("{not json", r"f.json:2: not a JSON object"),
+    ('{"raw_file": "x.jpg", "lanes": []}', r"f.json:2: no h_samples; each line needs raw_file, lanes, h_samples"),
+    ('{"raw_file": "x.jpg", "lanes": [[1, 2]], "h_samples": [1, 2, 3]}',
+     r"f.json:2: lane 1 has 2 x values for 3 h_samples; give one x per row"),
+    ('{"raw_file": "x.jpg", "lanes": [[1, "a"]], "h_samples": [1, 2]}',
+     r"f.json:2: lane 1 must be a list of numbers"),
+    ('{"raw_file": "x.jpg", "lanes": [], "h_samples": []}', r"f.json:2: h_samples is empty"),
+])
+def test_tusimple_bad_label_lines_name_file_and_line(tmp_path, line, message):
+    f = tmp_path / "f.json"
+    f.write_text(label_line("ok.jpg", [vertical(1)]) + "\n" + line + "\n")
+    with pytest.raises(InputError, match=message):
+        tusimple.read_labels(f)
+
+
+def test_tusimple_bad_prediction_sets(tmp_path):
+    labels, pred = write_tusimple_set(tmp_path)
+    lines = pred.read_text().splitlines()
+    no_time = tmp_path / "no_time.json"
+    no_time.write_text(json.dumps({"raw_file": "clips/a/20.jpg", "lanes": []}) + "\n")
+    with pytest.raises(InputError, match=r"no_time.json:1: no run_time"):
+        tusimple.read_predictions(no_time)
+    short = tmp_path / "short.json"
+    short.write_text(lines[0] + "\n")
+    with pytest.raises(InputError, match=r"short.json: no prediction for 1 of the 2 labelled images "
+                                         r"\(first: clips/b/20.jpg\)"):
+        tusimple.evaluate(labels, short)
+    twice = tmp_path / "twice.json"
+    twice.write_text(lines[0] + "\n" + lines[0] + "\n")
+    with pytest.raises(InputError, match=r"clips/a/20.jpg is given twice \(records 1 and 2\)"):
+        tusimple.read_predictions(twice)
+    wrong = tmp_path / "wrong.json"
+    rec = json.loads(lines[1])
+    rec["lanes"] = [[1, 2, 3]]
+    del rec["h_samples"]
+    wrong.write_text(lines[0] + "\n" + json.dumps(rec) + "\n")
+    with pytest.raises(InputError, match=r"wrong.json: clips/b/20.jpg: predicted lane 1 has 3 x values"):
+        tusimple.evaluate(labels, wrong)
+    with pytest.raises(InputError, match=r"missing.json: no such TuSimple prediction file"):
+        tusimple.evaluate(labels, tmp_path / "missing.json")
+
+
+# --------------------------------------------------------------------------- CULane files
+
+ENTRIES = ["/driver_23_30frame/05151640_0419.MP4/00000.jpg",
+           "/driver_23_30frame/05151640_0419.MP4/00030.jpg"]
+
+
+def write_culane_set(root: Path) -> Path:
+    """Two labelled images under ``root`` and their list: 2 lanes, then 1 lane."""
+    gt = [[strip(600), strip(1000)], [np.array([[400.0, 590.0], [550.0, 440.0], [700.0, 290.0]])]]
+    for entry, lanes in zip(ENTRIES, gt):
+        f = culane.lines_path(root, entry)
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_text(culane.format_lines(lanes))
+    (root / "list").mkdir(exist_ok=True)
+    lst = root / "list" / "test.txt"
+    lst.write_text("\n".join(ENTRIES) + "\n")
+    return lst
+
+
+def test_culane_paths_and_lines_round_trip(tmp_path):
+    assert culane.lines_path(tmp_path, ENTRIES[0]) == \
+        tmp_path / "driver_23_30frame" / "05151640_0419.MP4" / "00000.lines.txt"
+    lanes = [np.array([[1.5, 589.0], [20.25, 580.0]]), np.array([[100.0, 300.0], [110.0, 290.0],
+                                                                 [120.0, 280.0]])]
+    text = culane.format_lines(lanes)
+    assert text.splitlines()[0] == "1.5 589 20.25 580"
+    back = culane.parse_lines(text, "x.lines.txt")
+    assert len(back) == 2 and all(np.array_equal(a, b) for a, b in zip(back, lanes))
+
+
+def test_culane_write_predictions_mirrors_the_list_and_scores(tmp_path):
+    lst = write_culane_set(tmp_path / "CULane")
+    labels = culane.read_labels(tmp_path / "CULane", lst)
+    assert labels.entries == tuple(ENTRIES) and [len(l) for l in labels.lanes] == [2, 1]
+    # image 1: both lanes, one 10 px off (IoU 21/41 > 0.5); image 2: its lane and an extra one
+    preds = {ENTRIES[0]: [strip(600), strip(1010)],
+             ENTRIES[1]: [labels.lanes[1][0], strip(1400)]}
+    written = culane.write_predictions(tmp_path / "pred", preds, inputs=[lst])
+    assert written[0] == tmp_path / "pred" / "driver_23_30frame" / "05151640_0419.MP4" / "00000.lines.txt"
+    s = culane.evaluate(tmp_path / "CULane", lst, tmp_path / "pred")
+    assert s.counts == CULaneCounts(3, 1, 0, 2) and s.missing_predictions == 0
+    assert s.counts.f1 == pytest.approx(2 * 0.75 / 1.75)
+    # a wider IoU bar: the 10 px pair no longer counts
+    assert culane.evaluate(tmp_path / "CULane", lst, tmp_path / "pred", iou_threshold=0.6).counts == \
+        CULaneCounts(2, 2, 1, 2)
+
+
+def test_culane_missing_prediction_file_counts_as_no_lanes(tmp_path):
+    lst = write_culane_set(tmp_path / "CULane")
+    culane.write_predictions(tmp_path / "pred", {ENTRIES[0]: [strip(600), strip(1000)]})
+    s = culane.evaluate(tmp_path / "CULane", lst, tmp_path / "pred")
+    assert s.counts == CULaneCounts(2, 0, 1, 2) and s.missing_predictions == 1
+    assert "1 images had no prediction file" in s.table()
+    with pytest.raises(InputError, match=r"empty: holds no prediction for any listed image"):
+        (tmp_path / "empty").mkdir()
+        culane.evaluate(tmp_path / "CULane", lst, tmp_path / "empty")
+
+
+def test_culane_bad_inputs_name_the_file_and_the_fix(tmp_path):
+    root = tmp_path / "CULane"
+    lst = write_culane_set(root)
+    culane.lines_path(root, ENTRIES[1]).unlink()
+    with pytest.raises(InputError, match=r"test.txt: entry 2 \(/driver_23_30frame/05151640_0419.MP4/"
+                                         r"00030.jpg\) has no labels: .*00030.lines.txt is missing"):
+        culane.read_labels(root, lst)
+    write_culane_set(root)
+    bad = culane.lines_path(root, ENTRIES[0])
+    bad.write_text("600 0 600 590\n1000 0 1000\n")
+    with pytest.raises(InputError, match=r"00000.lines.txt:2: 3 numbers; each line is one lane as pairs"):
+        culane.read_labels(root, lst)
+    bad.write_text("600 0 600 abc\n")
+    with pytest.raises(InputError, match=r"00000.lines.txt:1: not a list of numbers"):
+        culane.read_labels(root, lst)
+    lst.write_text(ENTRIES[0] + "\n/driver_23_30frame/\n")
+    with pytest.raises(InputError, match=r"test.txt:2: '/driver_23_30frame/' is not an image path"):
+        culane.read_list(lst)
+    with pytest.raises(InputError, match=r"nowhere: no such folder; pass the CULane dataset root"):
+        culane.read_labels(tmp_path / "nowhere", lst)
+    with pytest.raises(InputError, match=r"no such CULane list file"):
+        culane.read_list(tmp_path / "none.txt")

@@ -5,6 +5,6 @@ lanes) read the labels, write predictions in the benchmark's own layout and scor
 set; ``metrics`` holds the official TuSimple accuracy / FP / FN and CULane F1, which
 ``lanelib.evaluate`` shares for its synthetic truth.
 """
-from . import metrics
+from . import culane, metrics, tusimple
 
-__all__ = ["metrics"]
+__all__ = ["culane", "metrics", "tusimple"]

@@ -1,0 +1,217 @@
+"""The TuSimple lane benchmark's files: labels, predictions, and scoring a prediction file.
+
+Labels (``label_data_0313.json``, ``label_data_0531.json``, ``label_data_0601.json``,
+``test_label.json``) are JSON lines, one image each::
+
+    {"lanes": [[-2, -2, 632, 625, ...], ...], "h_samples": [240, 250, ...], "raw_file": "clips/..."}
+
+``lanes`` holds one list per lane with one x (px) per ``h_samples`` row, -2 where the lane has
+no point. Predictions are JSON lines in the same layout with ``run_time`` (ms) added; the
+official script (``evaluate/lane.py`` of TuSimple/tusimple-benchmark) reads ``raw_file``,
+``lanes`` and ``run_time`` and takes the rows from the label. The metric is in ``metrics.py``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+from ..errors import InputError
+from ..io import write_text
+from .metrics import TuSimpleScore, tusimple_image, tusimple_score
+
+NO_POINT = -2  # the x TuSimple writes where a lane has no point
+
+
+@dataclass(frozen=True)
+class TuSimpleRecord:
+    """One image of a TuSimple label or prediction file.
+
+    Parameters
+    ----------
+    raw_file : the image path as the label names it (``clips/0530/.../20.jpg``).
+    lanes : one tuple per lane, one x (px) per ``h_samples`` row, ``NO_POINT`` (-2) for none.
+    h_samples : the rows (px).
+    run_time_ms : the prediction's time for this image (ms); None in a label.
+    """
+
+    raw_file: str
+    lanes: tuple[tuple[float, ...], ...]
+    h_samples: tuple[float, ...]
+    run_time_ms: float | None = None
+
+    def to_json(self) -> dict:
+        """Return the record as TuSimple writes it (``run_time`` only when it has one)."""
+        out = {"raw_file": self.raw_file, "lanes": [[_number(x) for x in lane] for lane in self.lanes],
+               "h_samples": [_number(y) for y in self.h_samples]}
+        if self.run_time_ms is not None:
+            out["run_time"] = _number(self.run_time_ms)
+        return out
+
+
+def _number(v: float):
+    """Return ``v`` as an int when it is whole (TuSimple's files hold whole pixels)."""
+    return int(v) if float(v).is_integer() else float(v)
+
+
+def _numbers(value, where: str, what: str) -> tuple[float, ...]:
+    """Return a JSON list of finite numbers as floats; anything else raises InputError."""
+    if not isinstance(value, list) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value):
+        raise InputError(f"{where}: {what} must be a list of numbers; fix the line or regenerate the file")
+    return tuple(float(v) for v in value)
+
+
+def parse_record(line: str, where: str, prediction: bool) -> TuSimpleRecord:
+    """Return one JSON line of a label or prediction file as a ``TuSimpleRecord``.
+
+    Parameters
+    ----------
+    line : the text of the line.
+    where : ``FILE:LINE``, named in every error.
+    prediction : True for a prediction line (``run_time`` is required, ``h_samples`` optional).
+    """
+    try:
+        obj = json.loads(line)
+    except json.JSONDecodeError as e:
+        raise InputError(f"{where}: not a JSON object ({e.msg}); each line of a TuSimple file is one "
+                         "JSON object with raw_file, lanes and h_samples") from None
+    need = ("raw_file", "lanes", "run_time") if prediction else ("raw_file", "lanes", "h_samples")
+    missing = [k for k in need if not isinstance(obj, dict) or k not in obj]
+    if missing:
+        raise InputError(f"{where}: no {', '.join(missing)}; each line needs {', '.join(need)}")
+    if not isinstance(obj["raw_file"], str) or not obj["raw_file"]:
+        raise InputError(f"{where}: raw_file must be the image path as text")
+    if not isinstance(obj["lanes"], list):
+        raise InputError(f"{where}: lanes must be a list of lanes, each a list of x values")
+    lanes = tuple(_numbers(lane, where, f"lane {i + 1}") for i, lane in enumerate(obj["lanes"]))
+    rows = _numbers(obj["h_samples"], where, "h_samples") if "h_samples" in obj else ()
+    if not prediction and not rows:
+        raise InputError(f"{where}: h_samples is empty; a label needs the rows its lanes are given at")
+    for i, lane in enumerate(lanes):
+        if rows and len(lane) != len(rows):
+            raise InputError(f"{where}: lane {i + 1} has {len(lane)} x values for {len(rows)} "
+                             "h_samples; give one x per row (-2 where the lane has no point)")
+    run_time = None
+    if prediction:
+        t = obj["run_time"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or t < 0:
+            raise InputError(f"{where}: run_time must be the time in ms (a number of 0 or more)")
+        run_time = float(t)
+    return TuSimpleRecord(obj["raw_file"], lanes, rows, run_time)
+
+
+def _read(path: Path, prediction: bool) -> list[TuSimpleRecord]:
+    what = "TuSimple prediction file" if prediction else "TuSimple label file"
+    if not path.is_file():
+        raise InputError(f"{path}: no such {what}; check the path")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not text; pass the {what} (JSON lines)") from None
+    except OSError as e:
+        raise InputError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
+    records = [parse_record(line, f"{path}:{n}", prediction)
+               for n, line in enumerate(text.splitlines(), 1) if line.strip()]
+    if not records:
+        raise InputError(f"{path}: holds no lines; pass a {what} with one JSON object per image")
+    seen: dict[str, int] = {}
+    for n, r in enumerate(records, 1):
+        if r.raw_file in seen:
+            raise InputError(f"{path}: {r.raw_file} is given twice (records {seen[r.raw_file]} and "
+                             f"{n}); keep one line per image")
+        seen[r.raw_file] = n
+    return records
+
+
+def label_files(path: str | os.PathLike) -> list[Path]:
+    """Return the label files at ``path``: the file itself, or a folder's ``label_data*.json``."""
+    p = Path(path)
+    if p.is_dir():
+        files = sorted(p.glob("label_data*.json"))
+        if not files:
+            raise InputError(f"{p}: holds no label_data*.json; pass a TuSimple label file or the "
+                             "folder that holds label_data_*.json")
+        return files
+    return [p]
+
+
+def read_labels(path: str | os.PathLike) -> list[TuSimpleRecord]:
+    """Return the labelled images of a TuSimple label file, or of every ``label_data*.json`` in a folder.
+
+    A malformed line, a lane whose length is not that of ``h_samples``, or an image given twice
+    raises ``InputError`` naming the file and line.
+    """
+    records = []
+    for f in label_files(path):
+        records.extend(_read(f, prediction=False))
+    seen = set()
+    for r in records:
+        if r.raw_file in seen:
+            raise InputError(f"{path}: {r.raw_file} is labelled in two files; pass one of them")
+        seen.add(r.raw_file)
+    return records
+
+
+def read_predictions(path: str | os.PathLike) -> list[TuSimpleRecord]:
+    """Return the predicted images of a TuSimple prediction file (JSON lines with ``run_time``)."""
+    return _read(Path(path), prediction=True)
+
+
+def write_predictions(path: str | os.PathLike, records: Iterable[TuSimpleRecord],
+                      inputs: Iterable[str | os.PathLike] = ()) -> Path:
+    """Write predictions as TuSimple JSON lines, atomically (never over one of ``inputs``).
+
+    Every record needs its ``run_time_ms``; a lane of another length than ``h_samples`` raises
+    ``InputError``.
+    """
+    lines = []
+    for r in records:
+        if r.run_time_ms is None:
+            raise InputError(f"{path}: the prediction of {r.raw_file} has no run_time; give each "
+                             "image's time in ms")
+        for i, lane in enumerate(r.lanes):
+            if len(lane) != len(r.h_samples):
+                raise InputError(f"{path}: lane {i + 1} of {r.raw_file} has {len(lane)} x values for "
+                                 f"{len(r.h_samples)} h_samples; give one x per row")
+        lines.append(json.dumps(r.to_json(), separators=(",", ":")))
+    return write_text(path, "".join(line + "\n" for line in lines), inputs=inputs)
+
+
+def score(labels: Sequence[TuSimpleRecord], predictions: Sequence[TuSimpleRecord],
+          pred_name: str = "predictions", label_name: str = "labels") -> TuSimpleScore:
+    """Return the official TuSimple Accuracy, FP and FN of ``predictions`` against ``labels``.
+
+    As TuSimple's ``bench_one_submit``: every labelled image needs one prediction and every
+    prediction a label (else ``InputError`` naming the images); the rows are the label's (a
+    prediction that gives other ``h_samples`` is an error here, where TuSimple ignores them).
+    """
+    gts = {r.raw_file: r for r in labels}
+    preds = {r.raw_file: r for r in predictions}
+    unlabelled = [f for f in preds if f not in gts]
+    if unlabelled:
+        raise InputError(f"{pred_name}: {len(unlabelled)} predictions have no label in {label_name} "
+                         f"(first: {unlabelled[0]}); predict the images of this label file")
+    missing = [f for f in gts if f not in preds]
+    if missing:
+        raise InputError(f"{pred_name}: no prediction for {len(missing)} of the {len(gts)} labelled "
+                         f"images (first: {missing[0]}); predict every image of {label_name}")
+    rows = []
+    for raw_file, p in preds.items():
+        gt = gts[raw_file]
+        if p.h_samples and tuple(p.h_samples) != tuple(gt.h_samples):
+            raise InputError(f"{pred_name}: {raw_file} is predicted at other h_samples than its label; "
+                             "predict x at the label's rows")
+        try:
+            rows.append((raw_file, tusimple_image(p.lanes, gt.lanes, gt.h_samples, p.run_time_ms or 0.0)))
+        except ValueError as e:
+            raise InputError(f"{pred_name}: {raw_file}: {e}; give one x per label row") from None
+    return tusimple_score(rows, len(gts))
+
+
+def evaluate(labels: str | os.PathLike, predictions: str | os.PathLike) -> TuSimpleScore:
+    """Return the official TuSimple figures of a prediction file against a label file (or folder)."""
+    return score(read_labels(labels), read_predictions(predictions), str(predictions), str(labels))
