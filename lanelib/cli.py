@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 from . import bench, data, evaluate, geometry, hough, runs, synth
+from .benchmarks import culane, metrics, tusimple
 from .camera import Calibration, calibrate, parse_pattern
 from .config import PipelineConfig, load_config_or_preset, override, save_parts
 from .draw import STRAIGHT_M
@@ -376,8 +377,10 @@ def _run_hough(args) -> int:
 
 def _add_evaluate(sub) -> None:
     p = sub.add_parser(
-        "evaluate", help="score the pipeline against ground truth",
-        description="Run the lane pipeline on synthetic data with ground truth and print one table: "
+        "evaluate", help="score the pipeline against ground truth, or predictions by a benchmark's "
+                         "official metric",
+        description="images|video: run the lane pipeline on synthetic data with ground truth and "
+                    "print one table: "
                     "frames, lane found (%), median and 95th-percentile |offset error| (cm), median "
                     "|curvature error| (1/m), median radius error (%, on curves of radius <= 3 km), "
                     "point accuracy (TuSimple: share of truth line points within 20 px across the "
@@ -385,36 +388,75 @@ def _add_evaluate(sub) -> None:
                     "false-negative line rates. See lanelib/evaluate.py for the exact rules. An "
                     "image that cannot be scored (unreadable, its truth missing or corrupt, another "
                     "size than the truth's camera) is left out of the scores, and the table says "
-                    "how many failed.",
+                    "how many failed. "
+                    "tusimple: score a TuSimple prediction file (JSON lines: raw_file, lanes, "
+                    "h_samples, run_time) against its labels and print the official Accuracy, FP "
+                    "and FN. culane: score a folder of CULane .lines.txt predictions against the "
+                    "labels of a list file and print the official TP, FP, FN, precision, recall "
+                    "and F1 (lanes 30 px wide on 1640x590, IoU above 0.5). See "
+                    "lanelib/benchmarks/metrics.py for the rules matched.",
         epilog=_exit_codes("1 images: some images could not be scored (one `error:` line each on "
                            "stderr; the table and the figures cover the rest; a video that stops "
                            "decoding before the frames to score counts as unreadable: 2);"))
-    p.add_argument("kind", choices=("images", "video"),
+    p.add_argument("kind", choices=("images", "video", "tusimple", "culane"),
                    help="images: PATH is a folder of images, each NAME.jpg with NAME.json beside it; "
-                        "video: PATH is a video with NAME.csv and NAME.json beside it")
-    p.add_argument("path", type=Path, metavar="PATH", help="folder of images, or video file")
-    p.add_argument("--config", type=Path, metavar="FILE",
+                        "video: PATH is a video with NAME.csv and NAME.json beside it; tusimple: "
+                        "--gt LABELS.json --pred PRED.json; culane: --gt ROOT --list LIST --pred DIR")
+    p.add_argument("path", type=Path, nargs="?", metavar="PATH",
+                   help="images|video: folder of images, or video file")
+    b = p.add_argument_group("benchmarks (tusimple, culane)")
+    b.add_argument("--gt", type=Path, metavar="PATH",
+                   help="tusimple: the label file (test_label.json), or a folder of label_data*.json; "
+                        "culane: the dataset root the list's paths are relative to")
+    b.add_argument("--pred", type=Path, metavar="PATH",
+                   help="tusimple: the prediction file; culane: the folder of .lines.txt predictions "
+                        "mirroring the list's paths (a missing file counts as no lanes)")
+    b.add_argument("--list", dest="list_file", type=Path, metavar="FILE",
+                   help="culane: the list of images to score (e.g. ROOT/list/test.txt)")
+    b.add_argument("--lane-width-px", type=int, default=metrics.CULANE_LANE_WIDTH_PX, metavar="PX",
+                   help=f"culane: thickness the lanes are drawn with (default: "
+                        f"{metrics.CULANE_LANE_WIDTH_PX}, the official)")
+    b.add_argument("--iou", type=float, default=metrics.CULANE_IOU, metavar="T",
+                   help=f"culane: IoU above which a pair is a true positive (default: "
+                        f"{metrics.CULANE_IOU}, the official; 0.3 is the other published one)")
+    g = p.add_argument_group("images and video")
+    g.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig, as for `images` (default: built-in)")
-    _set_arg(p)
-    p.add_argument("--calibration", type=Path, metavar="FILE",
+    _set_arg(g)
+    g.add_argument("--calibration", type=Path, metavar="FILE",
                    help="camera calibration JSON from `calibrate` (e.g. of camera_cal/); default: "
                         "the true camera recorded in the ground truth, so the score is the lane "
                         "finding's alone; pass your calibration to score calibration and lane "
                         "finding together")
-    p.add_argument("--detector", choices=("frame", "tracker"),
+    g.add_argument("--detector", choices=("frame", "tracker"),
                    help="frame: detect every frame on its own; tracker: LaneTracker through the "
                         "frames in order (video only). Default: frame for images, tracker for video")
-    p.add_argument("--max-frames", type=int, metavar="N",
+    g.add_argument("--max-frames", type=int, metavar="N",
                    help="score only the first N images (by name) or video frames")
     p.add_argument("--json", type=Path, metavar="OUT",
-                   help="also write the figures as JSON (frames, found_rate, offset_err_cm_median, "
+                   help="also write the figures as JSON; tusimple: benchmark, images, Accuracy, "
+                        "FP, FN; culane: benchmark, images, TP, FP, FN, precision, recall, F1, "
+                        "missing_predictions; images|video: frames, found_rate, offset_err_cm_median, "
                         "offset_err_cm_p95, curvature_err_median, radius_err_pct_median, "
-                        "point_accuracy, fp_rate, fn_rate, files_failed; rates as fractions, null "
+                        "point_accuracy, fp_rate, fn_rate, files_failed (rates as fractions, null "
                         "where nothing was scored)")
     p.set_defaults(func=_run_evaluate)
 
 
+_PIPELINE_ONLY = (("config", "--config"), ("settings", "--set"), ("calibration", "--calibration"),
+                  ("detector", "--detector"), ("max_frames", "--max-frames"))
+_BENCHMARK_ONLY = (("gt", "--gt"), ("pred", "--pred"), ("list_file", "--list"))
+
+
 def _run_evaluate(args) -> int:
+    if args.kind in ("tusimple", "culane"):
+        return _run_evaluate_benchmark(args)
+    if args.path is None:
+        raise InputError(f"evaluate {args.kind}: give the PATH to score (a folder of images, or a video)")
+    given = [flag for dest, flag in _BENCHMARK_ONLY if getattr(args, dest) is not None]
+    if given:
+        raise InputError(f"{', '.join(given)}: for `evaluate tusimple|culane` only; evaluate "
+                         f"{args.kind} scores the pipeline on PATH")
     if args.max_frames is not None and args.max_frames < 1:
         raise InputError(f"--max-frames {args.max_frames}: give a number of frames of 1 or more")
     detector = args.detector or ("tracker" if args.kind == "video" else "frame")
@@ -443,6 +485,41 @@ def _run_evaluate(args) -> int:
         write_json(args.json, report.to_dict(), inputs=inputs)
         print(f"figures written to {args.json}")
     return 1 if report.failed else 0
+
+
+def _run_evaluate_benchmark(args) -> int:
+    """``evaluate tusimple|culane``: print the official figures of a prediction set (and --json)."""
+    given = [flag for dest, flag in _PIPELINE_ONLY if getattr(args, dest) not in (None, [])]
+    if args.path is not None:
+        given.insert(0, str(args.path))
+    if args.kind == "tusimple":
+        given += [flag for flag, value, default in (
+            ("--lane-width-px", args.lane_width_px, metrics.CULANE_LANE_WIDTH_PX),
+            ("--iou", args.iou, metrics.CULANE_IOU)) if value != default]
+    if given:
+        takes = ("--gt, --pred, --json" if args.kind == "tusimple"
+                 else "--gt, --list, --pred, --json, --lane-width-px, --iou")
+        raise InputError(f"{', '.join(given)}: not for `evaluate {args.kind}`, which scores a "
+                         f"prediction set; it takes {takes}")
+    need = [("gt", "--gt"), ("pred", "--pred")] + ([("list_file", "--list")] if args.kind == "culane" else [])
+    missing = [flag for dest, flag in need if getattr(args, dest) is None]
+    if missing:
+        what = ("--gt LABELS.json --pred PRED.json" if args.kind == "tusimple"
+                else "--gt ROOT --list LIST --pred PRED_DIR")
+        raise InputError(f"evaluate {args.kind}: {' and '.join(missing)} missing; give {what}")
+    inputs = [f for f in (args.gt, args.pred, args.list_file) if f is not None and not f.is_dir()]
+    if args.json:
+        check_not_input(args.json, inputs)  # before the run, not after it
+    if args.kind == "tusimple":
+        result = tusimple.evaluate(args.gt, args.pred)
+    else:
+        result = culane.evaluate(args.gt, args.list_file, args.pred, width_px=args.lane_width_px,
+                                 iou_threshold=args.iou)
+    print(result.table())
+    if args.json:
+        write_json(args.json, result.to_dict(), inputs=inputs)
+        print(f"figures written to {args.json}")
+    return 0
 
 
 def _add_synth(sub) -> None:

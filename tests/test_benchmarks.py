@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import evaluate
+from lanelib import cli, evaluate
 from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.benchmarks.metrics import (CULaneCounts, culane_image, interpolate_lane, iou_matrix,
                                         lane_mask, matched_pairs, tusimple_image, tusimple_score)
@@ -389,3 +389,58 @@ def test_culane_bad_inputs_name_the_file_and_the_fix(tmp_path):
         culane.read_labels(tmp_path / "nowhere", lst)
     with pytest.raises(InputError, match=r"no such CULane list file"):
         culane.read_list(tmp_path / "none.txt")
+
+
+# --------------------------------------------------------------------------- the CLI
+
+def test_cli_evaluate_tusimple_prints_and_writes_the_official_figures(tmp_path, capsys):
+    labels, pred = write_tusimple_set(tmp_path)
+    out = tmp_path / "figures.json"
+    assert cli.main(["evaluate", "tusimple", "--gt", str(labels), "--pred", str(pred),
+                     "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "TuSimple, 2 images" in text and "Accuracy  75.00 %" in text
+    assert "FP        0.0000" in text and "FN        0.2500" in text
+    assert json.loads(out.read_text()) == {"benchmark": "tusimple", "images": 2, "Accuracy": 0.75,
+                                           "FP": 0.0, "FN": 0.25}
+
+
+def test_cli_evaluate_culane_prints_and_writes_the_official_figures(tmp_path, capsys):
+    lst = write_culane_set(tmp_path / "CULane")
+    culane.write_predictions(tmp_path / "pred", {ENTRIES[0]: [strip(600), strip(1010)],
+                                                 ENTRIES[1]: [strip(1400)]})
+    out = tmp_path / "f.json"
+    assert cli.main(["evaluate", "culane", "--gt", str(tmp_path / "CULane"), "--list", str(lst),
+                     "--pred", str(tmp_path / "pred"), "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "TP 2  FP 1  FN 1" in text and "F1         66.67 %" in text
+    figures = json.loads(out.read_text())
+    assert (figures["TP"], figures["FP"], figures["FN"], figures["missing_predictions"]) == (2, 1, 1, 0)
+    assert figures["precision"] == pytest.approx(2 / 3) and figures["F1"] == pytest.approx(2 / 3)
+    # the 10 px pair fails a higher IoU bar
+    assert cli.main(["evaluate", "culane", "--gt", str(tmp_path / "CULane"), "--list", str(lst),
+                     "--pred", str(tmp_path / "pred"), "--iou", "0.6"]) == 0
+    assert "TP 1  FP 2  FN 2" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["evaluate", "tusimple", "--gt", "{labels}"], "evaluate tusimple: --pred missing; give --gt "
+                                                   "LABELS.json --pred PRED.json"),
+    (["evaluate", "culane", "--gt", "{dir}", "--pred", "{dir}"], "evaluate culane: --list missing"),
+    (["evaluate", "tusimple", "--gt", "{labels}", "--pred", "{pred}", "--max-frames", "3"],
+     "--max-frames: not for `evaluate tusimple`"),
+    (["evaluate", "images", "{dir}", "--pred", "{pred}"], "--pred: for `evaluate tusimple|culane` only"),
+    (["evaluate", "video"], "evaluate video: give the PATH to score"),
+    (["evaluate", "tusimple", "--gt", "{labels}", "--pred", "{pred}", "--json", "{labels}"],
+     "label_data_0531.json: output would overwrite an input"),
+    (["evaluate", "tusimple", "--gt", "{labels}", "--pred", "{dir}/nope.json"],
+     "nope.json: no such TuSimple prediction file"),
+])
+def test_cli_evaluate_benchmark_errors_exit_2_with_one_line(tmp_path, capsys, argv, message):
+    labels, pred = write_tusimple_set(tmp_path)
+    before = labels.read_text()
+    argv = [a.format(labels=labels, pred=pred, dir=tmp_path) for a in argv]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ") and message in err[0]
+    assert labels.read_text() == before
