@@ -71,7 +71,8 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
                         "taken as undistorted)")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig JSON (e.g. saved by a notebook tuner) or the name of a "
-                        "bundled preset (p1: the 960x540 Udacity P1 camera); default: built-in")
+                        "bundled preset (p1: the 960x540 Udacity P1 camera; highway: the default "
+                        "checks; country: lanes 2.5-5.0 m wide on bends to 30 m); default: built-in")
     _set_arg(p)
 
 
