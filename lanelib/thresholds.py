@@ -380,17 +380,29 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
         out = in_range(cv2.morphologyEx(values, cv2.MORPH_TOPHAT, kernel), spec.low, spec.high)
     else:
         background = cv2.morphologyEx(values, cv2.MORPH_OPEN, kernel)
-        out = in_range(cv2.subtract(values, background), spec.low, spec.high)
-        if spec.ratio > 0:  # value - background >= ratio * background, in float32
-            scaled = cv2.multiply(background, 1.0 + spec.ratio, dtype=cv2.CV_32F)
-            out = cv2.bitwise_and(out, cv2.compare(values.astype(np.float32), scaled, cv2.CMP_GE))
-        if spec.max_background < 255:
-            out = cv2.bitwise_and(out, cv2.inRange(background, 0, spec.max_background))
+        tophat = cv2.subtract(values, background)
+        out = cv2.compare(tophat, cv2.LUT(background, _least_tophat(spec)), cv2.CMP_GE)
+        if spec.high < 255:
+            out = cv2.bitwise_and(out, in_range(tophat, 0, spec.high))
     k = spec.min_width_px
     if k > 1:  # an opening 1 x k; the anchors mirrored so an even k does not shift the mask
         line = np.ones((1, k), np.uint8)
         out = cv2.dilate(cv2.erode(out, line, anchor=(k // 2, 0)), line, anchor=(k - 1 - k // 2, 0))
     return out
+
+
+def _least_tophat(spec: TopHatMask) -> np.ndarray:
+    """Return the least top-hat a pixel needs for each background level 0-255 (uint8, 256).
+
+    max(low, ratio * background) rounded up (an integer top-hat passes exactly when it is at
+    least the real bound); 255 where the background is above ``max_background``. 255 is
+    reached by no top-hat there (a top-hat of 255 needs a background of 0) nor where
+    ratio * background exceeds 255 - background, so the capped table is exact.
+    """
+    levels = np.arange(256, dtype=np.float64)
+    least = np.maximum(spec.low, np.ceil(spec.ratio * levels - 1e-9))
+    least[levels > spec.max_background] = 255
+    return np.minimum(least, 255).astype(np.uint8)
 
 
 MASK_FUNCTIONS: dict[type, Callable] = {
