@@ -187,6 +187,7 @@ def test_bad_switch_parameters():
 
 def test_the_switches_are_not_mask_names():
     assert th.mask_names(th.ThresholdConfig()) == ("yellow", "white", "lab_b", "s_channel", "line_tophat",
+                                                   "shade_tophat",
                                                    "sobel_x", "sobel_y", "sobel_mag", "sobel_dir")
 
 
@@ -212,3 +213,68 @@ def test_the_top_hat_least_width_is_checked_and_widens_the_context():
         th.TopHatMask(min_width_px=0)
     assert th.mask_context_px(th.TopHatMask(width_px=61, min_width_px=12)) == (60 + 11, 0)
     assert th.mask_context_px(th.TopHatMask(width_px=61, min_width_px=1)) == (60, 0)
+
+
+# --------------------------------------------------------------------------- paint in shade
+
+SHADE = 20  # the road's level under an overpass (V of HSV), as in the bundled shadows clip
+
+
+def shaded_road(seed=0):
+    """A road 120 x 600 px: x < 300 in deep shade (level ~20, noise sd 1.5), x >= 300 sunlit
+    asphalt with texture (level ~110, blurred noise sd ~8), the edge between them soft (9 px);
+    paint only where a test puts it."""
+    rng = np.random.default_rng(seed)
+    level = np.where(np.arange(600) < 300, SHADE, 110).astype(np.float32)
+    level = np.convolve(np.pad(level, 4, mode="edge"), np.ones(9) / 9, mode="valid")
+    texture = rng.normal(0, 1.0, (120, 600)).astype(np.float32)
+    texture = (texture + np.roll(texture, 1, 1) + np.roll(texture, 1, 0)) / np.sqrt(3)
+    grey = level[None, :] * (1 + np.where(level[None, :] > 60, 0.07, 0.075) * texture)
+    img = np.clip(np.round(grey), 0, 255).astype(np.uint8)
+    return np.dstack([img, img, img])
+
+
+def test_the_shade_top_hat_finds_white_and_yellow_paint_under_a_deep_shadow():
+    """Paint 26 px wide in shade, at 1.7x the road's level (white: 34 on 20; yellow: R=G 34,
+    B 20 as in the shadows clip's frames 127-135): the shade top-hat finds both at their place,
+    the absolute top-hat (30 levels) and the colour masks find neither."""
+    img = shaded_road()
+    img[:, 80:106] = 34  # white paint in shade
+    img[:, 180:206] = (34, 34, SHADE)  # yellow paint in shade
+    cfg = th.ThresholdConfig()
+    shade = th.tophat_mask(img, cfg.shade_tophat)
+    assert cols(shade) == set(range(80, 106)) | set(range(180, 206))
+    assert not th.tophat_mask(img, cfg.line_tophat).any()
+    assert not th.color_range_mask(img, cfg.yellow).any() and not th.color_range_mask(img, cfg.white).any()
+
+
+def test_the_shade_top_hat_marks_neither_sunlit_texture_nor_a_shadow_edge():
+    """The same road without paint: the noise in the shade, the sunlit asphalt's texture and the
+    soft edge between shade and sun are not paint, and the shade top-hat marks none of them."""
+    assert not th.tophat_mask(shaded_road(), th.ThresholdConfig().shade_tophat).any()
+    for seed in (1, 2, 3):
+        assert not th.combine(shaded_road(seed), th.ThresholdConfig()).any()
+
+
+def test_the_shade_top_hat_is_relative_with_a_floor_in_levels():
+    """A 30 px stripe on a flat road of level b passes when stripe >= (1 + ratio) * b and its
+    top-hat >= low; ``max_background`` keeps only roads at most that bright; ratio 0 is the
+    absolute top-hat."""
+    def stripe(background, value, spec):
+        img = np.full((10, 200, 3), background, np.uint8)
+        img[:, 90:120] = value
+        return bool(th.tophat_mask(img, spec).any())
+
+    spec = th.TopHatMask("hsv", "v", 61, 8, 255, min_width_px=12, ratio=0.5)
+    assert stripe(40, 60, spec) and not stripe(40, 59, spec)  # 60 = 1.5 x 40
+    assert stripe(100, 150, spec) and not stripe(100, 149, spec)
+    assert stripe(10, 18, spec) and not stripe(10, 17, spec)  # the floor: 8 levels, not 1.5 x 10
+    dark_only = th.TopHatMask("hsv", "v", 61, 8, 255, min_width_px=12, ratio=0.5, max_background=60)
+    assert stripe(60, 90, dark_only) and not stripe(61, 92, dark_only)
+    assert stripe(100, 140, th.TopHatMask("hsv", "v", 61, 8, 255)) == stripe(100, 140, th.TopHatMask(
+        "hsv", "v", 61, 8, 255, ratio=0.0))
+    with pytest.raises(ConfigError, match="ratio -1"):
+        th.TopHatMask(ratio=-1)
+    with pytest.raises(ConfigError, match="max_background 300"):
+        th.TopHatMask(max_background=300)
+    assert th.mask_context_px(spec) == (60 + 11, 0)  # the ratio and the background level are per pixel

@@ -33,7 +33,9 @@ class ThresholdTuner(Tuner):
     For each mask: an on/off box (``<mask>.enabled``), the colour space (``<mask>.space``) and
     channel (``<mask>.channel``), the low/high range (``<mask>.range``; a colour range has one
     per channel, ``<mask>.range0..2``), the Sobel kernel (``<mask>.kernel_px``), the top-hat's
-    width (``<mask>.width_px``) and least width (``<mask>.min_width_px``), the opening of a colour or channel mask alone
+    width (``<mask>.width_px``), least width (``<mask>.min_width_px``), least ratio to the road
+    beside (``<mask>.ratio``) and brightest road beside it applies on (``<mask>.max_background``), the
+    opening of a colour or channel mask alone
     (``<mask>.open_px``); then the rule (``rule``), the clean-up (``open_px``, ``close_px``) and
     CLAHE on the lightness before every mask (``clahe`` on/off, ``clahe_clip_limit``,
     ``clahe_tile_px``). The preview shows the bird's-eye view (equalised when CLAHE is on), every
@@ -94,6 +96,12 @@ class ThresholdTuner(Tuner):
                             value=spec.min_width_px, min=1, max=41, step=1, description="min width",
                             layout=widgets.Layout(width="260px"),
                             style={"description_width": "70px"})))
+                        parts.append(self._control(f"{name}.ratio", widgets.FloatSlider(
+                            value=spec.ratio, min=0.0, max=3.0, step=0.05, description="ratio",
+                            readout_format=".2f", **sized(230, 45))))
+                        parts.append(self._control(f"{name}.max_background", widgets.IntSlider(
+                            value=spec.max_background, min=0, max=255, description="max bg",
+                            **sized(230, 50))))
                     else:
                         parts.append(self._open_control(name, spec))
             rows.append(row(*parts))
@@ -176,7 +184,9 @@ class ThresholdTuner(Tuner):
         if isinstance(old, thresholds.TopHatMask):
             width = int(c[f"{name}.width_px"].value)
             return thresholds.TopHatMask(space, channel, width, low, high, enabled,
-                                         min(int(c[f"{name}.min_width_px"].value), width - 1))
+                                         min(int(c[f"{name}.min_width_px"].value), width - 1),
+                                         float(c[f"{name}.ratio"].value),
+                                         int(c[f"{name}.max_background"].value))
         return thresholds.ChannelMask(space, channel, low, high, enabled, int(c[f"{name}.open_px"].value))
 
     def _apply(self, key: str) -> PipelineConfig:
@@ -231,6 +241,8 @@ class ThresholdTuner(Tuner):
             if isinstance(spec, thresholds.TopHatMask):
                 c[f"{name}.width_px"].value = spec.width_px
                 c[f"{name}.min_width_px"].value = spec.min_width_px
+                c[f"{name}.ratio"].value = spec.ratio
+                c[f"{name}.max_background"].value = spec.max_background
         c[f"{name}.range"].value = (spec.low, spec.high)
 
     # ---- views ----------------------------------------------------------------------------
