@@ -71,9 +71,21 @@ class LanePipeline:
         """Return the undistorted frame."""
         return self.undistorter.undistort(raw)
 
-    def binary(self, birdseye: np.ndarray) -> np.ndarray:
-        """Return the combined 0/255 lane-pixel mask of a bird's-eye image."""
-        return thresholds.combine(birdseye, self.config.thresholds, clahe=self._clahe)
+    def binary(self, birdseye: np.ndarray, fallback: bool = False) -> np.ndarray:
+        """Return the combined 0/255 lane-pixel mask of a bird's-eye image.
+
+        ``fallback``: under ``ThresholdConfig.fallback_rule`` (the fallback searches' masks), or
+        the rule itself when there is none.
+        """
+        tc = self.config.thresholds
+        rule = tc.fallback_rule if fallback and tc.fallback_rule else None
+        return thresholds.combine(birdseye, tc, clahe=self._clahe, rule=rule)
+
+    @property
+    def has_fallback_masks(self) -> bool:
+        """Return True when the fallback searches threshold with another rule than the cheap one."""
+        tc = self.config.thresholds
+        return bool(tc.fallback_rule) and tc.fallback_rule.replace(" ", "") != tc.rule.replace(" ", "")
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                bases: tuple[float, float] | None = None, top_px: int = 0) -> LaneSearch:
@@ -210,16 +222,26 @@ class LanePipeline:
 
         The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
         checks is not found, and is kept apart in ``rejected``. Without a ``prior``, a lane of
-        the whole view that fails is looked for again in shorter views (``short_view_search``),
-        then from other histogram peaks (``robust_search``, when ``candidates`` > 1).
+        the whole view that fails is looked for again: on the fallback masks
+        (``ThresholdConfig.fallback_rule``) in the whole view, then in shorter views
+        (``short_view_search``), then from other histogram peaks (``robust_search``, when
+        ``candidates`` > 1).
         """
         search, images = self.search_frame(raw, prior, keep_images)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        retry = self.short_view_search(images["binary"])
+        mask = images["binary"]
+        retry = None
+        if self.has_fallback_masks:
+            mask = self.binary(images["birdseye"], fallback=True)
+            whole = self.search(mask)
+            if whole.left.found and whole.right.found and self.check(whole).ok:
+                retry = whole
+        if retry is None:
+            retry = self.short_view_search(mask)
         if retry is None and self.config.search.candidates > 1:
-            retry = self.robust_search(images["binary"], search)
+            retry = self.robust_search(mask, search)
         return self.result(retry, images if keep_images else {}) if retry is not None else result
 
     def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:

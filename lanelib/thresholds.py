@@ -162,7 +162,7 @@ class TopHatMask:
 class ThresholdConfig:
     """The named masks and the rule that combines them (see the module docstring).
 
-    The default rule, ``yellow | (white & line_tophat) | shade_tophat``: yellow paint by its
+    The default rule, ``yellow | (white & line_tophat)``: yellow paint by its
     hue, white paint as light pixels (HLS L >= 160) that are also brighter than the road beside
     them (the top-hat), which drops light concrete, sunlit patches and glare, and keeps dashes
     whose brightness auto-exposure lowers; the top-hat also drops what is under 12 px (7 cm in
@@ -170,22 +170,26 @@ class ThresholdConfig:
     on the bundled ``seams`` clip it takes the tracker from 97.3 % point accuracy and 8.4 % false
     lines to 100 % and 0 %, and no bundled set or shared Udacity clip gets worse).
 
-    ``shade_tophat`` finds paint, white or yellow, in deep shade, where the colour masks' floors
+    ``fallback_rule`` ("": none) is the rule of the fallback searches only, which run when the
+    lane of ``rule`` fails its checks (``LanePipeline.detect``, ``LaneTracker``): by default it
+    adds ``shade_tophat``, whose cost (a second top-hat, about 2 ms a view) a clean road never
+    pays. ``shade_tophat`` finds paint, white or yellow, in deep shade, where the colour masks' floors
     (HSV V >= 120, HLS L >= 160) and the top-hat's 30 levels miss it: a top-hat of HSV V (the
     brightest of R, G, B, so yellow counts as much as white) that keeps a pixel at least 1.65x
     the road beside it (``ratio`` 0.65) and at least 8 levels above it (the floor: a step of a
     few levels on a road at level 20 is sensor noise and video compression), 12 px wide or more.
     Paint reflects a fixed multiple of the light on the road, so the test holds in sun and shade
     alike; under the ``shadows`` clip's overpass (road ~20, dashes ~33, yellow 28-45) paint is
-    1.5-2x the road. On the bundled clips (tracker) it takes ``harder`` from 87.2 % found, 76.1 %
-    point accuracy to 99.2 % and 88.4 %, ``shadows`` from 96.0 / 94.7 % with 3.8 % false lines
-    to 96.8 / 96.4 % with 1.2 %, the hard stills from 50 % to 83 % found; ``country`` gets worse
-    (94.0 / 69.8 % found / accuracy to 61.2 / 36.0 %, false lines 44.8 to 37.4 %): the right
-    edge line in shade is now found whole, the double yellow in the deepest shade (~1.4x the
-    road, at the noise floor) still is not, and the two fits fail the parallel check. Ratios
-    0.5 and 0.8 score the same within a point elsewhere; 0.5 adds a false line on a still
-    (a sunlit gap between two tree shadows is as many times brighter than the shade beside it),
-    0.8 keeps ``country`` found but with 57.6 % false lines.
+    1.5-2x the road. As a fallback (tracker, bundled clips) it takes ``harder`` from 87.2 %
+    found, 76.1 % point accuracy to 99.2 % and 88.0 %, ``shadows`` from 96.0 / 94.7 % with 3.8 %
+    false lines to 96.8 / 96.0 % with 2.2 %, ``country`` from 94.0 / 69.8 % to 95.6 / 71.1 %
+    (false lines 44.8 to 47.4 %); the other clips and the test images do not change. In the
+    cheap rule it cost about 2 ms a frame on the clean road and took ``country`` to 61.2 / 36.0 %
+    (the right edge line in shade found whole, the double yellow in the deepest shade, ~1.4x
+    the road, still not, so the pair failed the parallel check). Ratios 0.5 and 0.8 score the
+    same within a point elsewhere; 0.5 adds a false line on a still (a sunlit gap between two
+    tree shadows is as many times brighter than the shade beside it), 0.8 keeps ``country``
+    found but with 57.6 % false lines.
 
     The other masks are there to tune and combine (notebook 03); the rule leaves them out
     because on the Udacity and synthetic sets they added noise, not lines (``python -m lanelib
@@ -211,7 +215,8 @@ class ThresholdConfig:
     sobel_y: SobelMask = SobelMask("y", "hls", "l", 3, 20.0, 255.0, enabled=False)
     sobel_mag: SobelMask = SobelMask("mag", "hls", "l", 3, 30.0, 255.0, enabled=False)
     sobel_dir: SobelMask = SobelMask("dir", "hls", "l", 7, 0.0, 0.7, enabled=False)
-    rule: str = "yellow | (white & line_tophat) | shade_tophat"
+    rule: str = "yellow | (white & line_tophat)"
+    fallback_rule: str = "yellow | (white & line_tophat) | shade_tophat"
     close_px: int = 0
     open_px: int = 0
     clahe: bool = False
@@ -220,6 +225,8 @@ class ThresholdConfig:
 
     def __post_init__(self):
         compile_rule(self.rule, mask_names(self))
+        if self.fallback_rule:
+            compile_rule(self.fallback_rule, mask_names(self))
         if self.clahe_clip_limit <= 0:
             raise ConfigError(f"thresholds: clahe_clip_limit {self.clahe_clip_limit} must be positive")
         if self.clahe_tile_px < 8:
@@ -511,8 +518,10 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
-            computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None) -> np.ndarray:
-    """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule``.
+            computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None,
+            rule: str | None = None) -> np.ndarray:
+    """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``,
+    e.g. ``config.fallback_rule``).
 
     Only masks that the rule names and that are enabled are computed; ``computed`` may pass
     masks already made (e.g. by ``masks``) so the tuner does not compute them twice. With
@@ -532,7 +541,7 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             cache[name] = mask(channels[0], spec)
         return cache[name]
 
-    out = _evaluate(compile_rule(config.rule, mask_names(config)), get)
+    out = _evaluate(compile_rule(rule or config.rule, mask_names(config)), get)
     if out is None:
         out = np.zeros(rgb.shape[:2], np.uint8)
     if config.open_px > 1:

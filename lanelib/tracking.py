@@ -139,7 +139,8 @@ class LaneTracker:
     Call ``update`` once per frame, in order; ``reset`` before a new video. After each
     ``update``, ``retries`` names the fallback searches that frame needed, in the order they
     ran (none when the cheap search passed): "windows from the track", "remembered bases",
-    "shorter views", "other peaks". ``python -m lanelib bench`` counts them and times them.
+    "fallback masks", "shorter views", "other peaks". Every fallback search reads the whole
+    view under ``ThresholdConfig.fallback_rule`` (the cheap search, its rule). ``python -m lanelib bench`` counts them and times them.
     """
 
     def __init__(self, pipeline: "LanePipeline", config: TrackerConfig | None = None,
@@ -212,9 +213,15 @@ class LaneTracker:
         best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
 
         def mask() -> np.ndarray:
-            if "binary" not in det_images:  # a band-only search: threshold the whole view once
-                det_images["binary"] = pipe.binary(pipe.birdseye(raw))
-            return det_images["binary"]
+            """The whole view under the fallback masks' rule, thresholded once."""
+            if "fallback binary" not in det_images:
+                if pipe.has_fallback_masks or "binary" not in det_images:
+                    bird = det_images.get("birdseye")
+                    det_images["fallback binary"] = pipe.binary(
+                        bird if bird is not None else pipe.birdseye(raw), fallback=True)
+                else:
+                    det_images["fallback binary"] = det_images["binary"]
+            return det_images["fallback binary"]
 
         def better(retry: LaneSearch | None, name: str, note: str = "") -> None:
             """Keep ``retry`` when more of its lines pass the checks than of the best so far."""
@@ -236,6 +243,9 @@ class LaneTracker:
             # no track and a weak histogram peak: start that side from the remembered base
             better(pipe.search(mask(), bases=bases), "remembered bases",
                    "windows started from the remembered bases (weak histogram peak)")
+        if track is None and best[1] is None and pipe.has_fallback_masks:
+            # no track and the cheap masks gave no lane: the whole view on the fallback masks
+            better(pipe.search(mask()), "fallback masks")
         if track is None and best[1] is None and pipe.config.search.short_views:
             # no track and the whole view gave no lane: shorter views (a tight bend)
             better(pipe.short_view_search(mask()), "shorter views")

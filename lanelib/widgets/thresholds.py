@@ -16,7 +16,7 @@ from ..pipeline import LanePipeline
 from .base import Tuner, row, sized
 
 _COLOR_SPACES = tuple(s for s in thresholds.SPACES if s != "gray")
-_COMBINE_KEYS = ("rule", "open_px", "close_px")
+_COMBINE_KEYS = ("rule", "fallback_rule", "open_px", "close_px")
 _CLAHE_KEYS = ("clahe", "clahe_clip_limit", "clahe_tile_px")
 _STACK_KEYS = ("stack.r", "stack.g", "stack.b")  # the stacked view's channels: a view, not config
 _NONE = "(none)"
@@ -36,7 +36,8 @@ class ThresholdTuner(Tuner):
     width (``<mask>.width_px``), least width (``<mask>.min_width_px``), least ratio to the road
     beside (``<mask>.ratio``) and brightest road beside it applies on (``<mask>.max_background``), the
     opening of a colour or channel mask alone
-    (``<mask>.open_px``); then the rule (``rule``), the clean-up (``open_px``, ``close_px``) and
+    (``<mask>.open_px``); then the rule (``rule``), the fallback searches' rule
+    (``fallback_rule``, not previewed), the clean-up (``open_px``, ``close_px``) and
     CLAHE on the lightness before every mask (``clahe`` on/off, ``clahe_clip_limit``,
     ``clahe_tile_px``). The preview shows the bird's-eye view (equalised when CLAHE is on), every
     mask, the combination and the stacked view (``stack.r``/``stack.g``/``stack.b`` pick the
@@ -110,6 +111,9 @@ class ThresholdTuner(Tuner):
                                                continuous_update=False,
                                                layout=widgets.Layout(width="640px"),
                                                style={"description_width": "40px"})),
+            self._control("fallback_rule", widgets.Text(
+                value=cfg.fallback_rule, description="fallback", continuous_update=False,
+                layout=widgets.Layout(width="640px"), style={"description_width": "60px"})),
             self._control("open_px", widgets.IntSlider(value=cfg.open_px, min=0, max=15,
                                                        description="open px", **sized(240, 60))),
             self._control("close_px", widgets.IntSlider(value=cfg.close_px, min=0, max=15,
