@@ -24,6 +24,7 @@ from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
 from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
 from .pipeline import LanePipeline
+from .synth import datasets as synth_datasets
 
 _EXIT_OK = "exit codes: 0 every input ran;"
 _EXIT_REST = ("2 nothing was run: a usage error, a missing or empty input, an unreadable video, a bad "
@@ -61,6 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench(sub)
     _add_hough(sub)
     _add_evaluate(sub)
+    _add_predict(sub)
     _add_synth(sub)
     return parser
 
@@ -523,6 +525,57 @@ def _run_evaluate_benchmark(args) -> int:
     return 0
 
 
+def _add_predict(sub) -> None:
+    p = sub.add_parser(
+        "predict", help="predict the lanes of a TuSimple or CULane dataset in its format",
+        description="Detect the lane in every labelled frame of DATASET_ROOT, each frame on its own "
+                    "(no tracking: the labelled frames are seconds apart), and write the lines found, "
+                    "left to right, in the benchmark's format under PRED_DIR: tusimple: "
+                    f"PRED_DIR/{runs.TUSIMPLE_PREDICTIONS} (JSON lines: lanes at the label's h_samples, "
+                    "run_time in ms), assembled from one part per frame in "
+                    f"PRED_DIR/{runs.TUSIMPLE_PARTS}/; culane: one NAME.lines.txt per image mirroring "
+                    "the list. A frame with no line found gets an empty prediction. A run resumes: "
+                    "frames whose prediction exists are skipped; every file is written whole "
+                    "(temporary file, then rename), so a stopped run leaves no half-written file. "
+                    f"PRED_DIR/{runs.PREDICT_SETTINGS} records the settings; other settings are refused "
+                    "there. Score with `evaluate tusimple|culane`.",
+        epilog=_exit_codes("1 some frames failed (an unreadable image): one `error:` line each, no "
+                           "prediction for them (a later run retries them);"))
+    p.add_argument("benchmark", choices=runs.PREDICT_BENCHMARKS, help="the dataset's format")
+    p.add_argument("root", type=Path, metavar="DATASET_ROOT",
+                   help="the folder the labels' image paths are relative to")
+    p.add_argument("--list", dest="list_file", type=Path, metavar="FILE",
+                   help="tusimple: the label file whose frames to predict (default: every "
+                        "label_data*.json of DATASET_ROOT); culane: the list of images (default: "
+                        "DATASET_ROOT/list/test.txt)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="PRED_DIR",
+                   help="folder for the predictions (not DATASET_ROOT)")
+    _common_pipeline_args(p)
+    p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    _geometry_args(p, auto=True)
+    p.set_defaults(func=_run_predict)
+
+
+def _run_predict(args) -> int:
+    config, calibration = _load_pipeline_inputs(args)
+    options = _geometry_options(args) if args.auto_geometry else None
+
+    def show(sequence, geo) -> None:
+        print(f"{sequence}: road geometry from its frames")
+        _print_geometry(geo)
+
+    run = runs.predict_benchmark(args.benchmark, args.root, args.output, args.list_file, config,
+                                 calibration, args.calibration, options, progress=not args.no_progress,
+                                 on_geometry=show)
+    for o in run.failed:
+        print(f"error: {o.error}", file=sys.stderr)
+    done = len(run.outcomes) - len(run.failed)
+    print(f"{run.frames} frames: {done} predicted ({run.without_lines} with no line found), "
+          f"{run.skipped} skipped (predicted before)"
+          + (f", {len(run.failed)} failed" if run.failed else "") + f"; predictions in {run.output}")
+    return 1 if run.failed else 0
+
+
 def _add_synth(sub) -> None:
     p = sub.add_parser(
         "synth", help="render synthetic chessboards, road images and videos with ground truth",
@@ -554,16 +607,35 @@ def _add_synth(sub) -> None:
                    help="length in seconds, up to 20 (default: 10); a shorter clip is the start of "
                         "a longer one")
     k.add_argument("--seed", type=int, help="random seed of the scene (default: the set's)")
+    k = kinds.add_parser(
+        "dataset", help="a sample in the TuSimple or CULane layout with exact labels",
+        description="Render --frames labelled images in a benchmark's layout, in sequences of up to "
+                    f"{synth_datasets.FRAMES_PER_SEQUENCE} frames {synth_datasets.FRAME_SPACING_S:g} s "
+                    "apart, each sequence one camera on one multi-lane road. tusimple: "
+                    "clips/<seq>/<clip>/20.jpg (1280x720) and label_data_<seq>.json (every line in "
+                    "view, left to right, at h_samples 160..710, -2 where absent); culane: "
+                    "driver_9<k>_30frame/synth_<k>.MP4/<frame>.jpg (1640x590) with <frame>.lines.txt "
+                    "(up to 4 lines) and list/test.txt. The labels are the generator's truth.")
+    k.add_argument("benchmark", choices=synth_datasets.BENCHMARKS, help="the layout to write")
+    k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="dataset root to write")
+    k.add_argument("--frames", type=int, required=True, metavar="N", help="labelled images to render")
+    k.add_argument("--seed", type=int, default=0, help="random seed of the sample (default: 0)")
 
     def run(args) -> int:
         if args.all == bool(args.synth_kind):
-            p.error("give either --all or one of the kinds: images, boards, video")
+            p.error("give either --all or one of the kinds: images, boards, video, dataset")
         if args.all:
             root = args.out or data.PACKAGE_REPO
             files = synth.generate_all(root, progress=print)
             print(f"{len(files)} files (and their truth) written under {root}")
         elif args.synth_kind == "images":
             print(f"{len(synth.write_test_images(args.output))} images written to {args.output}")
+        elif args.synth_kind == "dataset":
+            out = synth_datasets.write_dataset(args.benchmark, args.output, args.frames, args.seed)
+            print(f"{args.output}: {len(out.images)} {args.benchmark} images in {len(out.sequences)} "
+                  f"sequences, {out.lines} labelled lines; labels in "
+                  + ("label_data_*.json" if args.benchmark == "tusimple" else
+                     "*.lines.txt beside the images, list in list/test.txt"))
         elif args.synth_kind == "boards":
             kw = {} if args.seed is None else {"seed": args.seed}
             print(f"{len(synth.write_boards(args.output, **kw))} chessboards written to {args.output}")
@@ -610,7 +682,8 @@ def main(argv: list[str] | None = None) -> int:
     0 : every input ran.
     1 : the run finished but some inputs failed: a file of a folder (``images``, ``hough``,
         ``evaluate images``) that could not be read or processed has its own row with an
-        ``error`` and one ``error:`` line on stderr; or a video (``video``, ``hough``) broke off
+        ``error`` and one ``error:`` line on stderr; a frame of ``predict`` that could not be
+        read has one ``error:`` line and no prediction (a later run retries it); or a video (``video``, ``hough``) broke off
         half-way, and its outputs keep the frames before the break (``PartialOutputError``).
     2 : nothing was run: a usage error (argparse), or a ``LaneLibError`` before any work (missing
         or empty input folder, unreadable or empty video, bad config or calibration, an output

@@ -813,26 +813,34 @@ def _ego_frames(angle_lists: dict[int, np.ndarray], roll_deg: float) -> dict[int
     seam inside the lane, or a dashed line not seen, makes the nearest pair the wrong one. The
     lane's width r is the median over the frames whose pair is centred within a fifth of its
     width (all frames when none is), and frames whose r is more than 20 % off it are left out.
+
+    On a road of three lanes or more, a car in a middle lane sees the neighbour lanes' outer
+    lines as a centred pair too (three lanes wide), and picks them in the frames where it drives
+    off its lane's centre: when the median keeps fewer than half the frames (two kinds of pair),
+    r is instead the narrowest width that the most frames agree with within 20 %, and each frame
+    takes its most centred pair of that width.
     """
-    chosen = {}
+    pairs: dict[int, list[tuple[float, int, int, float]]] = {}
     for i, ang in angle_lists.items():
         k = _k(ang, roll_deg)
         # an ego line lies EGO_ANGLES_DEG from straight down: atan(half a lane / camera height)
         lo, hi = (math.tan(math.radians(a)) for a in EGO_ANGLES_DEG)
         left = [j for j in np.argsort(-k) if -hi <= k[j] <= -lo][:2]
         right = [j for j in np.argsort(k) if lo <= k[j] <= hi][:2]
-        best = None
-        for a in left:
-            for b in right:
-                asym = abs(k[a] + k[b]) / (k[b] - k[a])
-                if best is None or asym < best[0]:
-                    best = (asym, int(a), int(b), float(k[b] - k[a]))
-        if best is not None:
-            chosen[i] = best
-    if not chosen:
+        found = sorted((abs(k[a] + k[b]) / (k[b] - k[a]), int(a), int(b), float(k[b] - k[a]))
+                       for a in left for b in right)
+        if found:
+            pairs[i] = found
+    if not pairs:
         return {}
+    chosen = {i: found[0] for i, found in pairs.items()}
     centred = [c[3] for c in chosen.values() if c[0] < 0.2] or [c[3] for c in chosen.values()]
     r = float(np.median(centred))
+    if 2 * sum(abs(c[3] / r - 1) <= 0.2 for c in chosen.values()) < len(chosen):
+        support = [(sum(abs(v / w - 1) <= 0.2 for v in centred), -w) for w in centred]
+        r = -max(support)[1]
+        chosen = {i: next((p for p in found if abs(p[3] / r - 1) <= 0.2), found[0])
+                  for i, found in pairs.items()}
     return {i: (a, b, w) for i, (_, a, b, w) in chosen.items() if abs(w / r - 1) <= 0.2}
 
 

@@ -8,6 +8,7 @@ output name, and no output may be written over one of the run's inputs.
 from __future__ import annotations
 
 import contextlib
+import glob
 import json
 import math
 import os
@@ -271,6 +272,31 @@ def check_not_input(target: str | os.PathLike, inputs: Iterable[str | os.PathLik
             raise InputError(f"{target}: output would overwrite an input; choose another output path")
 
 
+def _temp_affixes(target: Path) -> tuple[str, str]:
+    """Return the (prefix, suffix) of ``atomic_path``'s temporary files for ``target``."""
+    return f".{target.stem}.", f".part{target.suffix}"
+
+
+def remove_stale_temp_files(target: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files of ``atomic_path`` left beside ``target`` by a killed process;
+    return them.
+
+    An exception or Ctrl-C removes its temporary file; a process killed outright (SIGKILL, power
+    loss) leaves its ``.<stem>.<random>.part<suffix>`` behind. A resumed run calls this before it
+    writes ``target`` again (only ``target``'s own writer makes files of those names).
+    """
+    t = Path(target)
+    if not t.parent.is_dir():
+        return []
+    prefix, suffix = _temp_affixes(t)
+    # mkstemp puts 8 random characters (letters, digits, _) between the prefix and the suffix
+    stale = sorted(t.parent.glob(f"{glob.escape(prefix)}{'?' * 8}{glob.escape(suffix)}"))
+    for f in stale:
+        with contextlib.suppress(FileNotFoundError):
+            f.unlink()
+    return stale
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] = ()) -> Iterator[Path]:
     """Yield a temporary path beside ``target``; rename it onto ``target`` when the block succeeds.
@@ -283,7 +309,8 @@ def atomic_path(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] =
     check_not_input(t, inputs)
     try:
         t.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{t.stem}.", suffix=f".part{t.suffix}", dir=t.parent)
+        prefix, suffix = _temp_affixes(t)
+        fd, tmp_name = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=t.parent)
     except OSError as e:
         raise InputError(f"{t}: cannot be written ({e.strerror or e}); choose a writable output "
                          "path") from None

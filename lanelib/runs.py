@@ -24,17 +24,19 @@ import os
 import time
 from collections import deque
 from dataclasses import dataclass, replace
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 from tqdm import tqdm
 
 from . import geometry, hough, io
+from .benchmarks import culane, tusimple
 from .camera import Calibration
-from .config import PipelineConfig
+from .config import PipelineConfig, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
+from .evaluate import fit_x_in_raw
 from .geometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
@@ -378,6 +380,20 @@ def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration |
         confidence result is never used silently.
     """
     frames = sample_frames(source, options.seconds, options.max_frames, start_s)
+    return checked_geometry(frames, source, calibration, options)
+
+
+def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
+                     calibration: Calibration | None, options: GeometryOptions) -> RoadGeometry:
+    """Return the road geometry of ``frames`` (taken from ``source``, a video or a folder).
+
+    Raises
+    ------
+    GeometryError
+        As ``estimate_road_geometry``: no consistent vanishing point, or a confidence below
+        ``geometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``; the message names
+        ``source`` and the fix.
+    """
     try:
         geo = options.estimate(frames, calibration)
     except GeometryError as e:
@@ -634,3 +650,315 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
 
     return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
                      desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+
+
+# --------------------------------------------------------------------------- benchmark predictions
+
+PREDICT_BENCHMARKS = ("tusimple", "culane")
+TUSIMPLE_PREDICTIONS = "predictions.json"  # PRED_DIR/predictions.json: the TuSimple prediction file
+TUSIMPLE_PARTS = "parts"                   # PRED_DIR/parts/<raw_file>.json: one JSON line per frame
+PREDICT_SETTINGS = "predict.json"          # PRED_DIR/predict.json: what the predictions were made with
+PREDICT_FORMAT = "lanelib-predict/1"
+
+
+@dataclass(frozen=True)
+class FrameWork:
+    """One labelled frame to predict: all a worker needs besides the sequence's config.
+
+    Parameters
+    ----------
+    benchmark : "tusimple" or "culane".
+    name : the frame as the labels name it (TuSimple ``raw_file``, CULane list entry).
+    image : the image file.
+    sequence : the camera's folder (``frame_sequence``); its frames share one geometry.
+    rows_px : the rows the lanes are given at (TuSimple: the label's ``h_samples``; CULane:
+        ``culane.SAMPLE_ROWS_PX``, bottom up).
+    target : the frame's own prediction file (TuSimple: a part; CULane: its ``.lines.txt``).
+    """
+
+    benchmark: str
+    name: str
+    image: Path
+    sequence: str
+    rows_px: tuple[float, ...]
+    target: Path
+
+
+@dataclass(frozen=True)
+class FrameOutcome:
+    """What ``predict_frame`` did with one frame: lines written, time (ms), or the error."""
+
+    name: str
+    lines: int = 0
+    run_time_ms: float = 0.0
+    error: str = ""
+
+
+@dataclass(frozen=True)
+class PredictRun:
+    """What ``predict_benchmark`` did: frames listed, skipped (predicted before), predicted, failed.
+
+    ``outcomes`` holds the frames run now, in list order; ``output`` is the prediction file
+    (TuSimple) or folder (CULane) to pass to ``evaluate``; ``geometries`` the road geometry of each
+    sequence estimated (``--auto-geometry``).
+    """
+
+    frames: int
+    skipped: int
+    outcomes: tuple[FrameOutcome, ...]
+    output: Path
+    seconds: float
+    geometries: tuple[tuple[str, RoadGeometry], ...] = ()
+
+    @property
+    def failed(self) -> tuple[FrameOutcome, ...]:
+        return tuple(o for o in self.outcomes if o.error)
+
+    @property
+    def without_lines(self) -> int:
+        """Return how many frames run now found no line (an empty prediction was written)."""
+        return sum(1 for o in self.outcomes if not o.error and o.lines == 0)
+
+
+def frame_sequence(benchmark: str, name: str) -> str:
+    """Return the sequence (one camera's folder) of a frame: TuSimple ``clips/0313-1`` of
+    ``clips/0313-1/6040/20.jpg`` (the clip's parent), CULane ``driver_23_30frame/05151640_0419.MP4``
+    of ``/driver_23_30frame/05151640_0419.MP4/00000.jpg`` (the image's folder)."""
+    parts = PurePosixPath(name.lstrip("/")).parts[:-1]
+    if benchmark == "tusimple" and len(parts) > 1:
+        parts = parts[:-1]
+    return "/".join(parts) or "."
+
+
+def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.PathLike,
+                   list_file: str | os.PathLike | None = None) -> list[FrameWork]:
+    """Return the frames of a benchmark's dataset to predict, in list order.
+
+    Parameters
+    ----------
+    benchmark : "tusimple" (labels: ``list_file``, a label file, or every ``label_data*.json`` of
+        ``root``) or "culane" (``list_file``, default ``root/list/test.txt``).
+    root : the dataset root the labels' image paths are relative to.
+    out_dir : the prediction folder (``PRED_DIR``); each frame's target lies under it.
+
+    Raises
+    ------
+    InputError
+        If the root is missing, the labels or the list are bad, an image is missing (naming the
+        entry and the file looked for), or ``out_dir`` is the dataset root.
+    """
+    if benchmark not in PREDICT_BENCHMARKS:
+        raise InputError(f"{benchmark!r}: not a benchmark; choose one of {', '.join(PREDICT_BENCHMARKS)}")
+    r, out = Path(root), Path(out_dir)
+    if not r.is_dir():
+        raise InputError(f"{r}: no such folder; pass the {benchmark} dataset root (the folder the "
+                         "labels' image paths are relative to)")
+    if out.resolve() == r.resolve():
+        raise InputError(f"{out}: the prediction folder is the dataset root (predictions would lie "
+                         "among the labels); choose another -o folder")
+    if benchmark == "tusimple":
+        labels = Path(list_file) if list_file is not None else r
+        source = str(labels)
+        named = [(rec.raw_file, tuple(rec.h_samples)) for rec in tusimple.read_labels(labels)]
+    else:
+        source = str(Path(list_file) if list_file is not None else r / "list" / "test.txt")
+        named = [(entry, culane.SAMPLE_ROWS_PX) for entry in culane.read_list(source)]
+    work = []
+    for n, (name, rows) in enumerate(named, 1):
+        image = r.joinpath(*PurePosixPath(name.lstrip("/")).parts)
+        if not image.is_file():
+            raise InputError(f"{source}: entry {n} ({name}) has no image: {image} is missing; pass the "
+                             "dataset root the labels are relative to, or a list of the images you have")
+        if benchmark == "tusimple":
+            target = out.joinpath(TUSIMPLE_PARTS, *PurePosixPath(name.lstrip("/")).with_suffix(".json").parts)
+        else:
+            target = culane.lines_path(out, name)
+        work.append(FrameWork(benchmark, name, image, frame_sequence(benchmark, name),
+                              tuple(float(y) for y in rows), target))
+    return work
+
+
+def lane_points(result: FrameResult, pipeline: LanePipeline, rows_px: Sequence[float]) -> list[np.ndarray]:
+    """Return the x (px) of each line found at ``rows_px`` of the RAW image, left to right.
+
+    Only lines that were found (and passed their checks) are given; x is NaN on rows outside the
+    line's bird's-eye span or outside the image; a line with fewer than 2 points is left out.
+    """
+    w = pipeline.size[0]
+    rows = np.asarray(rows_px, np.float64)
+    out = []
+    for fit in (result.left, result.right):
+        if not fit.found:
+            continue
+        xs = fit_x_in_raw(fit.coeffs_px, pipeline, rows)
+        xs[~((xs >= 0) & (xs <= w - 1))] = np.nan
+        if np.count_nonzero(np.isfinite(xs)) >= 2:
+            out.append(xs)
+    return out
+
+
+def _prediction_text(work: FrameWork, lines: list[np.ndarray], run_time_ms: float) -> str:
+    """Return the text of a frame's prediction file in its benchmark's format."""
+    rows = np.asarray(work.rows_px, np.float64)
+    if work.benchmark == "tusimple":
+        lanes = tuple(tuple(tusimple.NO_POINT if not math.isfinite(x) else round(float(x), 2) for x in xs)
+                      for xs in lines)
+        record = tusimple.TuSimpleRecord(work.name, lanes, work.rows_px, round(run_time_ms, 1))
+        return tusimple.record_line(record, work.target, prediction=True)
+    pts = [np.column_stack([np.round(xs[np.isfinite(xs)], 2), rows[np.isfinite(xs)]]) for xs in lines]
+    return culane.format_lines(pts)
+
+
+def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibration | None,
+                  cache: dict) -> FrameOutcome:
+    """Return the outcome of detecting the lane in one frame on its own and writing its prediction.
+
+    The frame is read, ``LanePipeline.detect`` runs on it (no prior: each labelled frame stands
+    alone), the lines found are sampled at ``work.rows_px`` (``lane_points``) and written to
+    ``work.target`` atomically (a frame with no line found gets an empty prediction); stale
+    temporaries of that target from a killed run are removed first. ``run_time_ms`` is the
+    detection and sampling time. ``cache`` keeps one pipeline per (sequence, frame size) across
+    calls (a worker's own dict). A lanelib error (unreadable image, a size the calibration does
+    not fit) is the outcome's ``error``; a ``ConfigError`` is raised (it fails every frame).
+    """
+    try:
+        rgb = io.read_image(work.image)
+        key = (work.sequence, rgb.shape[1], rgb.shape[0])
+        if key not in cache:
+            cache[key] = LanePipeline(config, calibration, size=key[1:])
+        pipe = cache[key]
+        t0 = time.perf_counter()
+        lines = lane_points(pipe.detect(rgb), pipe, work.rows_px)
+        ms = (time.perf_counter() - t0) * 1000.0
+        io.remove_stale_temp_files(work.target)
+        io.write_text(work.target, _prediction_text(work, lines, ms), inputs=[work.image])
+    except ConfigError:
+        raise
+    except LaneLibError as e:
+        return FrameOutcome(work.name, error=naming_the_file(str(e), work.image))
+    return FrameOutcome(work.name, len(lines), ms)
+
+
+def _settings(benchmark: str, root: Path, config: PipelineConfig, calibration_file: str | None,
+              auto_geometry: GeometryOptions | None) -> dict:
+    return {"format": PREDICT_FORMAT, "benchmark": benchmark, "dataset_root": str(root.resolve()),
+            "calibration": calibration_file, "config": to_dict(config),
+            "auto_geometry": to_dict(auto_geometry) if auto_geometry is not None else None}
+
+
+def _check_settings(out: Path, settings: dict) -> bool:
+    """Return whether ``out`` records these settings already; raise if it records others."""
+    path = out / PREDICT_SETTINGS
+    if not path.is_file():
+        return False
+    old = io.read_json(path, "prediction settings file")
+    if old != settings:
+        keys = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
+        raise InputError(f"{out}: holds predictions made with other settings ({', '.join(keys)} "
+                         f"differ; see {path}); pass another -o folder, or remove it to start again")
+    return True
+
+
+def _sequence_geometry(work: Sequence[FrameWork], root: Path, calibration: Calibration | None,
+                       options: GeometryOptions) -> RoadGeometry:
+    """Return the geometry of one sequence, estimated from up to ``options.max_frames`` of its
+    frames, evenly spread (``checked_geometry``); an image that cannot be read is left out here
+    (``predict_frame`` reports it)."""
+    step = max(1, math.ceil(len(work) / options.max_frames))
+    frames = []
+    for w in work[::step]:
+        try:
+            frames.append(io.read_image(w.image))
+        except InputError:
+            continue
+    return checked_geometry(frames, root / work[0].sequence, calibration, options)
+
+
+def _assemble_tusimple(work: Sequence[FrameWork], out: Path, inputs: Sequence[Path]) -> Path:
+    """Write ``PRED_DIR/predictions.json`` from the parts of the listed frames that have one."""
+    records = []
+    for w in work:
+        if w.target.is_file():
+            text = w.target.read_text(encoding="utf-8")
+            records.append(tusimple.parse_record(text, str(w.target), prediction=True))
+    path = out / TUSIMPLE_PREDICTIONS
+    io.remove_stale_temp_files(path)
+    return tusimple.write_predictions(path, records, inputs=inputs)
+
+
+def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os.PathLike,
+                      list_file: str | os.PathLike | None = None,
+                      config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                      calibration_file: str | os.PathLike | None = None,
+                      auto_geometry: GeometryOptions | None = None, progress: bool = True,
+                      on_geometry: Callable[[str, RoadGeometry], None] | None = None) -> PredictRun:
+    """Return what the run did after predicting every labelled frame of a benchmark dataset.
+
+    Each frame is detected on its own (``predict_frame``: the labelled frames are seconds apart,
+    so no tracking) and written in the benchmark's format under ``out_dir``: TuSimple as one part
+    per frame in ``out_dir/parts/`` assembled at the end into ``out_dir/predictions.json`` (the
+    listed frames with a part, in list order); CULane as one ``.lines.txt`` per image mirroring
+    the list (``evaluate culane --pred out_dir``).
+
+    Resuming: a frame whose prediction file exists is skipped, so a run that was stopped goes on
+    where it was. Every file is written atomically (temporary file, then rename): a stop leaves
+    whole per-frame files and never a half-written one, and the TuSimple file is only written
+    once the frames are done (a killed process's temporaries are removed when their file is next
+    written). ``out_dir/predict.json`` records the settings; a run with other settings (config,
+    calibration, geometry options, dataset) refuses to add to that folder.
+
+    Parameters
+    ----------
+    benchmark, root, list_file : the dataset (``benchmark_work``).
+    config, calibration : as for ``LanePipeline``; ``calibration_file`` names the calibration in
+        the settings record.
+    auto_geometry : estimate the bird's-eye points and scale once per sequence (one camera's
+        folder, ``frame_sequence``) from up to ``max_frames`` of its frames, and use them for that
+        sequence's frames instead of ``config.perspective`` (only sequences with frames still to
+        predict are estimated). A failed or unconfident estimate stops the run before any frame
+        is written (``checked_geometry``).
+    progress : show a tqdm bar.
+    on_geometry : called with (sequence, geometry) for each estimate (the CLI prints it).
+
+    Raises
+    ------
+    InputError
+        For a bad dataset or list (``benchmark_work``) or a folder of other settings; nothing is
+        written then.
+    GeometryError
+        If a sequence's geometry cannot be estimated with confidence.
+    """
+    out = Path(out_dir)
+    work = benchmark_work(benchmark, root, out, list_file)
+    settings = _settings(benchmark, Path(root), config,
+                         None if calibration_file is None else str(calibration_file), auto_geometry)
+    recorded = _check_settings(out, settings)
+    t0 = time.perf_counter()
+    todo = [w for w in work if not w.target.is_file()]
+    configs: dict[str, PipelineConfig] = {}
+    geometries = []
+    for sequence in dict.fromkeys(w.sequence for w in todo):
+        if auto_geometry is None:
+            configs[sequence] = config
+            continue
+        geo = _sequence_geometry([w for w in work if w.sequence == sequence], Path(root), calibration,
+                                 auto_geometry)
+        geometries.append((sequence, geo))
+        if on_geometry is not None:
+            on_geometry(sequence, geo)
+        configs[sequence] = with_geometry(config, geo)
+    if not recorded:
+        path = out / PREDICT_SETTINGS
+        io.remove_stale_temp_files(path)
+        io.write_json(path, settings)
+    outcomes, cache = [], {}
+    with tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
+              dynamic_ncols=True) as bar:
+        for w in todo:
+            outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
+            bar.update(1)
+    output = out
+    if benchmark == "tusimple":
+        output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
+    return PredictRun(len(work), len(work) - len(todo), tuple(outcomes), output,
+                      time.perf_counter() - t0, tuple(geometries))

@@ -23,6 +23,9 @@ from .metrics import (CULANE_IMAGE_SIZE, CULANE_IOU, CULANE_LANE_WIDTH_PX, CULan
                       culane_image)
 
 LINES_SUFFIX = ".lines.txt"
+# rows (px) at which lanelib gives a lane's points, bottom up, every 10 px as CULane's labels do
+# (theirs start at y = 590, one below the image; these at the last row that is a multiple of 10)
+SAMPLE_ROWS_PX = tuple(range(CULANE_IMAGE_SIZE[1] - 10, 0, -10))
 
 
 def read_list(path: str | os.PathLike) -> list[str]:
@@ -98,6 +101,14 @@ def format_lines(lanes: Iterable[np.ndarray]) -> str:
     return "".join(out)
 
 
+def _write_lanes(root: str | os.PathLike, lanes: Mapping[str, Sequence[np.ndarray]],
+                 inputs: Iterable[str | os.PathLike]) -> list[Path]:
+    """Write each entry's lanes to ``lines_path(root, entry)`` atomically; return the files."""
+    inputs = list(inputs)
+    return [write_text(lines_path(root, entry), format_lines(entry_lanes), inputs=inputs)
+            for entry, entry_lanes in lanes.items()]
+
+
 def write_predictions(out_dir: str | os.PathLike, predictions: Mapping[str, Sequence[np.ndarray]],
                       inputs: Iterable[str | os.PathLike] = ()) -> list[Path]:
     """Write each entry's predicted lanes to ``out_dir`` mirroring the list layout, atomically.
@@ -108,9 +119,18 @@ def write_predictions(out_dir: str | os.PathLike, predictions: Mapping[str, Sequ
     predictions : list entry (``/driver_xx/xx.MP4/00000.jpg``) -> its lanes, each (n, 2) x, y px.
     inputs : files never to write over (the labels).
     """
-    inputs = list(inputs)
-    return [write_text(lines_path(out_dir, entry), format_lines(lanes), inputs=inputs)
-            for entry, lanes in predictions.items()]
+    return _write_lanes(out_dir, predictions, inputs)
+
+
+def write_labels(root: str | os.PathLike, labels: Mapping[str, Sequence[np.ndarray]],
+                 inputs: Iterable[str | os.PathLike] = ()) -> list[Path]:
+    """Write each entry's labelled lanes beside its image under the dataset ``root``, atomically."""
+    return _write_lanes(root, labels, inputs)
+
+
+def write_list(path: str | os.PathLike, entries: Iterable[str]) -> Path:
+    """Write a list file (``list/test.txt``): one image entry per line, atomically."""
+    return write_text(path, "".join(f"{e}\n" for e in entries))
 
 
 @dataclass(frozen=True)

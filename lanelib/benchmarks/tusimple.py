@@ -24,6 +24,7 @@ from ..io import write_text
 from .metrics import TuSimpleScore, tusimple_image, tusimple_score
 
 NO_POINT = -2  # the x TuSimple writes where a lane has no point
+H_SAMPLES_PX = tuple(range(160, 720, 10))  # the rows of most TuSimple labels (1280x720; some from 240)
 
 
 @dataclass(frozen=True)
@@ -161,24 +162,40 @@ def read_predictions(path: str | os.PathLike) -> list[TuSimpleRecord]:
     return _read(Path(path), prediction=True)
 
 
+def record_line(record: TuSimpleRecord, where: str | os.PathLike, prediction: bool) -> str:
+    """Return one record as its JSON line (newline included), as a label or a prediction file holds it.
+
+    A lane of another length than ``h_samples``, or a prediction without ``run_time_ms``, raises
+    ``InputError`` naming ``where`` (the file it is meant for) and the image.
+    """
+    r = record
+    if prediction and r.run_time_ms is None:
+        raise InputError(f"{where}: the prediction of {r.raw_file} has no run_time; give each "
+                         "image's time in ms")
+    for i, lane in enumerate(r.lanes):
+        if len(lane) != len(r.h_samples):
+            raise InputError(f"{where}: lane {i + 1} of {r.raw_file} has {len(lane)} x values for "
+                             f"{len(r.h_samples)} h_samples; give one x per row")
+    obj = r.to_json()
+    if not prediction:
+        obj.pop("run_time", None)
+    return json.dumps(obj, separators=(",", ":")) + "\n"
+
+
 def write_predictions(path: str | os.PathLike, records: Iterable[TuSimpleRecord],
                       inputs: Iterable[str | os.PathLike] = ()) -> Path:
     """Write predictions as TuSimple JSON lines, atomically (never over one of ``inputs``).
 
     Every record needs its ``run_time_ms``; a lane of another length than ``h_samples`` raises
-    ``InputError``.
+    ``InputError`` (``record_line``).
     """
-    lines = []
-    for r in records:
-        if r.run_time_ms is None:
-            raise InputError(f"{path}: the prediction of {r.raw_file} has no run_time; give each "
-                             "image's time in ms")
-        for i, lane in enumerate(r.lanes):
-            if len(lane) != len(r.h_samples):
-                raise InputError(f"{path}: lane {i + 1} of {r.raw_file} has {len(lane)} x values for "
-                                 f"{len(r.h_samples)} h_samples; give one x per row")
-        lines.append(json.dumps(r.to_json(), separators=(",", ":")))
-    return write_text(path, "".join(line + "\n" for line in lines), inputs=inputs)
+    return write_text(path, "".join(record_line(r, path, prediction=True) for r in records), inputs=inputs)
+
+
+def write_labels(path: str | os.PathLike, records: Iterable[TuSimpleRecord],
+                 inputs: Iterable[str | os.PathLike] = ()) -> Path:
+    """Write labels as TuSimple JSON lines (``label_data_*.json``: no ``run_time``), atomically."""
+    return write_text(path, "".join(record_line(r, path, prediction=False) for r in records), inputs=inputs)
 
 
 def score(labels: Sequence[TuSimpleRecord], predictions: Sequence[TuSimpleRecord],

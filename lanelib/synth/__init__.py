@@ -7,6 +7,8 @@ The truth beside every file is read back with ``load_image_truth``, ``load_video
 ``Camera.pinhole`` makes other cameras (any size, focal length, mounting and roll) for
 ``GroundGrid.build``; ``Renderer.for_grid`` renders a scene through another camera without
 drawing its maps again; ``CameraTruth`` and ``birdseye_scale`` give their true road geometry.
+``datasets.write_dataset`` renders a sample in the TuSimple or CULane layout with exact labels
+(``python -m lanelib synth dataset``).
 """
 from .camera import Camera
 from .render import GroundGrid, Renderer

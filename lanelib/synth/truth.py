@@ -9,6 +9,9 @@ fixed rows (TuSimple's h_samples), -2 where the line is not visible: outside the
 hood, farther than ``TRUTH_RANGE_M`` ahead, or beyond where the road turns out of the renderer's
 reach. Dashed lines are reported through their gaps, as TuSimple marks lane boundaries.
 
+``lines_truth`` gives every painted line of the layout the same way (at any rows and range:
+the benchmark samples of ``datasets``); ``lane_truth`` the ego lane's two.
+
 The ego lane's lines are at offsets -w/2 and +w/2 (w = ``Layout.lane_width_m``): under a double
 yellow centre line the left one is the inner (right-hand) stripe, and where the right edge is not
 painted (``Layout.right_line=False``) the right one is the asphalt edge. On a road with a vertical
@@ -251,15 +254,25 @@ def camera_truth(camera: Camera) -> CameraTruth:
                        perspective_truth(camera), camera.roll_deg)
 
 
-def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
-    """Return the raw-image x of the road line at offset ``t_m`` on every h_sample row (-2: not visible)."""
+def line_x_px(renderer: Renderer, pose: CarPose, t_m: float, rows_px: tuple[int, ...] | None = None,
+              range_m: float = TRUTH_RANGE_M) -> tuple[float, ...]:
+    """Return the raw-image x (px) of the road line at offset ``t_m`` on each row (-2: not visible).
+
+    Parameters
+    ----------
+    renderer, pose : the scene, its camera, and where the car stands.
+    t_m : the line's offset from the ego lane's centre (m, positive right; ``Line.t_m``).
+    rows_px : the image rows (default ``h_samples_px`` of the camera).
+    range_m : how far ahead the line is reported (default ``TRUTH_RANGE_M``; at most about
+        ``render.LOOK_AHEAD_M`` - 20 m, the road the renderer holds ahead of the car).
+    """
     road, camera, grid = renderer.road, renderer.grid.camera, renderer.grid
     origin, heading = car_frame(road, pose)
-    pts = world_to_car(road.offset_points(t_m, pose.s_m, pose.s_m + TRUTH_RANGE_M + 20.0), origin, heading)
+    pts = world_to_car(road.offset_points(t_m, pose.s_m, pose.s_m + range_m + 20.0), origin, heading)
     i0 = int(np.floor(road.index(pose.s_m)))
     angle = road.heading_rad[i0:i0 + len(pts)] - heading
     ok = ((np.abs(angle) < MAX_ROAD_ANGLE_RAD) & (np.diff(pts[:, 1], prepend=-np.inf) > 0)
-          & (pts[:, 1] <= TRUTH_RANGE_M))
+          & (pts[:, 1] <= range_m))
     pts = pts[:len(ok) if ok.all() else int(np.argmin(ok))]
     pts = pts[pts[:, 1] > 0.5]
     if road.height_m is None:
@@ -270,7 +283,7 @@ def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
     uv = camera.project(np.column_stack([pts[:, 0], height, pts[:, 1]]))
     w = camera.size_px[0]
     out = []
-    for row in h_samples_px(camera.size_px):
+    for row in (h_samples_px(camera.size_px) if rows_px is None else rows_px):
         v = uv[:, 1] - row
         cross = np.flatnonzero((v[:-1] >= 0) & (v[1:] < 0))
         if cross.size == 0:
@@ -284,6 +297,18 @@ def _line_x(renderer: Renderer, pose: CarPose, t_m: float) -> tuple[float, ...]:
     return tuple(out)
 
 
+def lines_truth(renderer: Renderer, pose: CarPose, rows_px: tuple[int, ...] | None = None,
+                range_m: float = TRUTH_RANGE_M) -> tuple[tuple[float, tuple[float, ...]], ...]:
+    """Return every painted line of the scene as (offset t_m, x px per row), left to right.
+
+    Each line of ``Layout.lines()`` (the stripes of a double centre line are two lines, the
+    ``extra_lines`` included), sorted by its offset, with its x on each of ``rows_px`` as
+    ``line_x_px`` gives it (-2 where not visible); a line with no visible row is kept, all -2.
+    """
+    lines = sorted(renderer.scene.layout.lines(), key=lambda line: line.t_m)
+    return tuple((line.t_m, line_x_px(renderer, pose, line.t_m, rows_px, range_m)) for line in lines)
+
+
 def lane_truth(renderer: Renderer, pose: CarPose) -> LaneTruth:
     """Return the true ego lane seen from ``pose`` in ``renderer``'s scene."""
     _, _, curvature = renderer.road.at(pose.s_m)
@@ -293,7 +318,7 @@ def lane_truth(renderer: Renderer, pose: CarPose) -> LaneTruth:
         offset_m=pose.offset_m, heading_rad=pose.heading_rad,
         lane_width_m=renderer.scene.layout.lane_width_m,
         h_samples_px=h_samples_px(renderer.grid.camera.size_px),
-        left_x_px=_line_x(renderer, pose, -half), right_x_px=_line_x(renderer, pose, half))
+        left_x_px=line_x_px(renderer, pose, -half), right_x_px=line_x_px(renderer, pose, half))
 
 
 # --------------------------------------------------------------------------- writing

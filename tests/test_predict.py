@@ -1,0 +1,243 @@
+"""Tests of the synthetic benchmark samples (``synth.datasets``) and ``predict`` (``runs.predict_benchmark``):
+the layouts and their labels, predictions in each format, resuming, bad input, and the round trip
+through ``evaluate``. The samples are a few frames each, rendered once per module."""
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lanelib import io, runs
+from lanelib.benchmarks import culane, tusimple
+from lanelib.cli import main
+from lanelib.config import PipelineConfig
+from lanelib.errors import InputError
+from lanelib.synth.datasets import CULANE_MAX_LINES, sequence_sizes, write_dataset
+
+
+@pytest.fixture(scope="module")
+def ts_root(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("tusimple")
+    write_dataset("tusimple", root, 4, per_sequence=2)
+    return root
+
+
+@pytest.fixture(scope="module")
+def cu_root(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("culane")
+    write_dataset("culane", root, 3, per_sequence=3)
+    return root
+
+
+def copy(root: Path, tmp_path: Path) -> Path:
+    return Path(shutil.copytree(root, tmp_path / "data"))
+
+
+# --------------------------------------------------------------------------- the samples
+
+def test_frames_are_shared_evenly_by_the_sequences():
+    assert sequence_sizes(40) == [10, 10, 10, 10]
+    assert sequence_sizes(23) == [8, 8, 7]
+    assert sequence_sizes(4, per_sequence=2) == [2, 2]
+    assert sequence_sizes(1) == [1]
+
+
+def test_tusimple_sample_layout_and_labels(ts_root):
+    assert sorted(p.name for p in ts_root.glob("label_data_*.json")) == ["label_data_synth01.json",
+                                                                         "label_data_synth02.json"]
+    records = tusimple.read_labels(ts_root)
+    assert [r.raw_file for r in records] == ["clips/synth01/0001/20.jpg", "clips/synth01/0002/20.jpg",
+                                             "clips/synth02/0001/20.jpg", "clips/synth02/0002/20.jpg"]
+    for r in records:
+        image = io.read_image(ts_root / r.raw_file)
+        assert image.shape == (720, 1280, 3)
+        assert r.h_samples == tuple(float(y) for y in range(160, 720, 10))
+        # several lanes: the ego pair and at least one neighbour line, at most TuSimple's 5
+        assert 3 <= len(r.lanes) <= 5
+        xs = np.array(r.lanes)
+        for lane in xs:
+            assert np.count_nonzero(lane >= 0) >= 2 and set(lane[lane < 0]) <= {-2.0}
+        # left to right on every row two lanes share
+        for a, b in zip(xs[:-1], xs[1:]):
+            both = (a >= 0) & (b >= 0)
+            assert both.any() and (a[both] < b[both]).all()
+        # nothing above the horizon (row ~300 for these cameras) nor under the hood's middle
+        assert (xs[:, :12] == -2).all()
+        middle = (xs[:, -1] > 400) & (xs[:, -1] < 880)
+        assert not middle.any()
+
+
+def test_the_labels_lie_on_the_paint(ts_root):
+    """Where a labelled point has paint under it (not a dash gap), the middle of the paint on
+    that row is within 1.5 px of the label in 9 of 10 points (a dash end or a neighbour in the
+    window moves the rest), 0.5 px in the median."""
+    errors = []
+    for r in tusimple.read_labels(ts_root):
+        grey = io.read_image(ts_root / r.raw_file).astype(np.float64).sum(axis=2)
+        for lane in r.lanes:
+            for x, y in zip(lane, r.h_samples):
+                if x < 40 or x > 1239 or y < 450:  # near rows, where a line is several pixels wide
+                    continue
+                lo = int(round(x)) - 40
+                row = grey[int(y), lo:lo + 81]
+                base = np.percentile(row, 20)
+                if row.max() - base < 90:  # a dash gap
+                    continue
+                paint = np.flatnonzero(row > base + 0.5 * (row.max() - base))
+                errors.append(abs(lo + paint.mean() - x))
+    assert len(errors) >= 40 and np.median(errors) <= 0.5 and np.percentile(errors, 90) <= 1.5
+
+
+def test_culane_sample_layout_and_labels(cu_root):
+    entries = culane.read_list(cu_root / "list" / "test.txt")
+    assert entries == ["/driver_90_30frame/synth_0001.MP4/00000.jpg",
+                       "/driver_90_30frame/synth_0001.MP4/00045.jpg",
+                       "/driver_90_30frame/synth_0001.MP4/00090.jpg"]
+    labels = culane.read_labels(cu_root, cu_root / "list" / "test.txt")
+    for entry, lanes in zip(labels.entries, labels.lanes):
+        assert io.read_image(cu_root / entry.lstrip("/")).shape == (590, 1640, 3)
+        assert 2 <= len(lanes) <= CULANE_MAX_LINES
+        for lane in lanes:
+            assert len(lane) >= 2
+            ys = lane[:, 1]
+            assert (np.diff(ys) == -10).all() and ys[0] <= 580  # bottom up, every 10 px
+        # left to right: the x of each line on the lowest row the next one shares
+        for a, b in zip(lanes[:-1], lanes[1:]):
+            row = max(a[:, 1].min(), b[:, 1].min())
+            assert np.interp(row, a[::-1, 1], a[::-1, 0]) < np.interp(row, b[::-1, 1], b[::-1, 0])
+
+
+def test_the_sample_is_the_same_every_time(tmp_path, cu_root):
+    write_dataset("culane", tmp_path, 3, per_sequence=3)
+    for f in sorted(cu_root.rglob("*.lines.txt")):
+        assert (tmp_path / f.relative_to(cu_root)).read_text() == f.read_text()
+
+
+def test_dataset_cli_bad_input(tmp_path, capsys):
+    assert main(["synth", "dataset", "tusimple", "-o", str(tmp_path), "--frames", "0"]) == 2
+    assert "--frames 0: give 1 frame or more" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- predict
+
+def predict(benchmark: str, root: Path, out: Path, *extra: str) -> int:
+    return main(["predict", benchmark, str(root), "-o", str(out), "--no-progress", "--auto-geometry",
+                 "--accept-low-confidence", *extra])
+
+
+def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
+    out = tmp_path / "pred"
+    assert predict("tusimple", ts_root, out) == 0
+    text = capsys.readouterr().out
+    assert "clips/synth01: road geometry from its frames" in text and "clips/synth02" in text
+    assert "4 frames: 4 predicted" in text
+    preds = tusimple.read_predictions(out / runs.TUSIMPLE_PREDICTIONS)
+    labels = tusimple.read_labels(ts_root)
+    assert [p.raw_file for p in preds] == [r.raw_file for r in labels]
+    for p, r in zip(preds, labels):
+        assert p.h_samples == r.h_samples and p.run_time_ms > 0
+        assert 1 <= len(p.lanes) <= 2  # the ego pair, found lines only
+        if len(p.lanes) == 2:
+            a, b = np.array(p.lanes)
+            both = (a >= 0) & (b >= 0)
+            assert (a[both] < b[both]).all()
+    # the round trip: evaluate reads the file and gives the figures of the records
+    assert main(["evaluate", "tusimple", "--gt", str(ts_root), "--pred",
+                 str(out / runs.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
+    figures = json.loads((tmp_path / "fig.json").read_text())
+    expected = tusimple.score(labels, preds)
+    assert figures["Accuracy"] == pytest.approx(expected.accuracy)
+    assert figures["images"] == 4 and 0.0 <= figures["FN"] <= 1.0
+    fast = all(p.run_time_ms < 200 for p in preds)  # a loaded machine may pass TuSimple's limit
+    assert not fast or figures["Accuracy"] > 0.4
+
+
+def test_predict_culane_and_evaluate(tmp_path, cu_root, capsys):
+    out = tmp_path / "pred"
+    assert predict("culane", cu_root, out) == 0
+    entries = culane.read_list(cu_root / "list" / "test.txt")
+    for entry in entries:
+        lanes = culane.read_lines(culane.lines_path(out, entry))
+        assert 1 <= len(lanes) <= 2
+        for lane in lanes:
+            assert (np.diff(lane[:, 1]) < 0).all() and (lane[:, 0] >= 0).all() and (lane[:, 0] < 1640).all()
+    capsys.readouterr()
+    assert main(["evaluate", "culane", "--gt", str(cu_root), "--list", str(cu_root / "list" / "test.txt"),
+                 "--pred", str(out)]) == 0
+    text = capsys.readouterr().out
+    score = culane.evaluate(cu_root, cu_root / "list" / "test.txt", out)
+    assert f"TP {score.counts.tp}  FP {score.counts.fp}" in text
+    assert score.counts.tp >= 3 and score.missing_predictions == 0
+
+
+def test_predict_resumes(tmp_path, ts_root, capsys):
+    out = tmp_path / "pred"
+    common = dict(config=PipelineConfig(), progress=False,
+                  auto_geometry=runs.GeometryOptions(accept_low_confidence=True))
+    first = runs.predict_benchmark("tusimple", ts_root, out, **common)
+    assert first.skipped == 0 and len(first.outcomes) == 4
+    assembled = (out / runs.TUSIMPLE_PREDICTIONS).read_text()
+    # a second run skips every frame and estimates no geometry; the file is the same
+    again = runs.predict_benchmark("tusimple", ts_root, out, **common)
+    assert again.skipped == 4 and again.outcomes == () and again.geometries == ()
+    assert (out / runs.TUSIMPLE_PREDICTIONS).read_text() == assembled
+    # a deleted prediction is made again, and the stray temporary of a killed write is removed
+    part = out / runs.TUSIMPLE_PARTS / "clips" / "synth02" / "0001" / "20.json"
+    part.unlink()
+    stray = part.parent / ".20.abcd1234.part.json"
+    stray.write_text('{"raw_file": "clips/synth02/0001/20.jpg", "lan')
+    redo = runs.predict_benchmark("tusimple", ts_root, out, **common)
+    assert [o.name for o in redo.outcomes] == ["clips/synth02/0001/20.jpg"]
+    assert [s for s, _ in redo.geometries] == ["clips/synth02"]
+    assert part.is_file() and not stray.exists()
+    lines = (out / runs.TUSIMPLE_PREDICTIONS).read_text().splitlines()
+    assert len(lines) == 4 and [json.loads(line)["raw_file"] for line in lines] == [
+        r.raw_file for r in tusimple.read_labels(ts_root)]
+    # other settings are refused in that folder
+    with pytest.raises(InputError, match=r"other settings \(config differ"):
+        runs.predict_benchmark("tusimple", ts_root, out, **{**common, "config": PipelineConfig(
+            perspective=replace(PipelineConfig().perspective, lane_width_m=3.5))})
+
+
+def test_predict_writes_an_empty_prediction_and_reports_a_bad_image(tmp_path, cu_root, capsys):
+    root = copy(cu_root, tmp_path)
+    entries = culane.read_list(root / "list" / "test.txt")
+    io.write_image(root / entries[1].lstrip("/"), np.full((590, 1640, 3), 90, np.uint8))  # no lane
+    (root / entries[2].lstrip("/")).write_bytes(b"not a jpeg")
+    out = tmp_path / "pred"
+    assert main(["predict", "culane", str(root), "-o", str(out), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert captured.err.count("error:") == 1 and entries[2].split("/")[-1] in captured.err
+    assert "3 frames: 2 predicted (" in captured.out
+    assert "0 skipped (predicted before), 1 failed" in captured.out
+    assert culane.lines_path(out, entries[1]).read_text() == ""          # no lane: no guess
+    assert not culane.lines_path(out, entries[2]).exists()               # retried next time
+    assert main(["predict", "culane", str(root), "-o", str(out), "--no-progress"]) == 1
+    assert "2 skipped (predicted before), 1 failed" in capsys.readouterr().out
+
+
+def test_predict_bad_input(tmp_path, ts_root, cu_root, capsys):
+    assert main(["predict", "culane", str(tmp_path / "nowhere"), "-o", str(tmp_path / "p")]) == 2
+    assert "nowhere: no such folder; pass the culane dataset root" in capsys.readouterr().err
+    # a list entry without its image: nothing is written
+    lst = tmp_path / "list.txt"
+    lst.write_text("/driver_90_30frame/synth_0001.MP4/00000.jpg\n/driver_90_30frame/synth_0001.MP4/00001.jpg\n")
+    assert main(["predict", "culane", str(cu_root), "--list", str(lst), "-o", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err
+    assert f"{lst}: entry 2 (/driver_90_30frame/synth_0001.MP4/00001.jpg) has no image" in err
+    assert "00001.jpg is missing" in err and not (tmp_path / "p").exists()
+    # a TuSimple label without its image
+    labels = tmp_path / "labels.json"
+    labels.write_text(json.dumps({"raw_file": "clips/x/1/20.jpg", "lanes": [], "h_samples": [700]}) + "\n")
+    assert main(["predict", "tusimple", str(ts_root), "--list", str(labels), "-o", str(tmp_path / "p")]) == 2
+    assert "entry 1 (clips/x/1/20.jpg) has no image" in capsys.readouterr().err
+    # predictions among the labels
+    assert main(["predict", "culane", str(cu_root), "-o", str(cu_root)]) == 2
+    assert "the prediction folder is the dataset root" in capsys.readouterr().err
+    # a folder without the list
+    assert main(["predict", "culane", str(tmp_path), "-o", str(tmp_path / "p")]) == 2
+    assert "no such CULane list file" in capsys.readouterr().err
