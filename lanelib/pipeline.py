@@ -242,7 +242,11 @@ class LanePipeline:
             retry = self.short_view_search(mask)
         if retry is None and self.config.search.candidates > 1:
             retry = self.robust_search(mask, search)
-        return self.result(retry, images if keep_images else {}) if retry is not None else result
+        if retry is None:
+            return result
+        if keep_images:
+            images["binary"] = mask  # the views show the mask the lane came from
+        return self.result(retry, images if keep_images else {})
 
     def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
         """Return the first search in a shorter look-ahead whose lane passes the checks, or None.

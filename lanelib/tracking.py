@@ -211,6 +211,7 @@ class LaneTracker:
                                                top_px=top)
         ran: list[str] = []  # the fallback searches this frame needed (``retries``)
         best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
+        first = search
 
         def mask() -> np.ndarray:
             """The whole view under the fallback masks' rule, thresholded once."""
@@ -255,6 +256,9 @@ class LaneTracker:
         self.retries = tuple(ran)
         search, left, right, why, failed = best
         images = det_images if keep_images else {}
+        if keep_images and search is not first and "fallback binary" in images:
+            images["binary"] = images["fallback binary"]  # the views show the mask the lane came from
+        images.pop("fallback binary", None)
         result = self._advance(search, left, right, why, track, images)
         if not failed:
             return result

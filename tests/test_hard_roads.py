@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
 from lanelib.config import PipelineConfig, override
@@ -30,3 +32,33 @@ def test_a_light_seam_beside_a_dashed_line_no_longer_pulls_the_line_in():
     assert fixed["point_accuracy"] >= 0.99 and fixed["fp_rate"] == 0.0
     before = tracked(SEAMS, 50, "thresholds.line_tophat.min_width_px=1")
     assert before["point_accuracy"] < 0.95 and before["fp_rate"] >= 0.1
+
+
+def _shaded_lane(pipe: LanePipeline) -> np.ndarray:
+    """A frame whose road lies in deep shade (level 20) with paint at level 36 (1.8x the road):
+    under every cheap mask's floor, but at least 1.65x the road, which the shade top-hat keeps."""
+    h, w = pipe.size[1], pipe.size[0]
+    bird = np.full((h, w, 3), 20, np.uint8)
+    for x in (320, 960):
+        cv2.line(bird, (x, 0), (x, h - 1), (36, 36, 36), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def test_a_lane_in_deep_shade_is_found_by_the_fallback_masks_and_shown_on_them():
+    """The cheap masks see nothing in deep shade; the fallback searches threshold the view
+    again with the shade top-hat and find the 3.7 m lane; the kept views show that mask (the
+    one the lane came from), in a single image and in the tracker alike."""
+    from lanelib.tracking import LaneTracker
+
+    pipe = LanePipeline(PipelineConfig())
+    raw = _shaded_lane(pipe)
+    bird = pipe.birdseye(raw)
+    assert cv2.countNonZero(pipe.binary(bird)) == 0  # the cheap rule: nothing
+    r = pipe.detect(raw, keep_images=True)
+    assert r.found and r.lane_width_m == pytest.approx(3.7, abs=0.1)
+    assert np.array_equal(r.images["binary"], pipe.binary(bird, fallback=True))
+    t = LaneTracker(pipe).update(raw, keep_images=True)
+    assert t.found and np.array_equal(t.images["binary"], pipe.binary(bird, fallback=True))
+    assert "fallback binary" not in t.images
+    off = LanePipeline(override(PipelineConfig(), ["thresholds.fallback_rule="]))
+    assert not off.detect(raw).found and not LaneTracker(off).update(raw).found
