@@ -30,7 +30,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from . import geometry, hough, io
+from . import cluster, geometry, hough, io
 from .benchmarks import culane, tusimple
 from .camera import Calibration
 from .config import PipelineConfig, to_dict
@@ -839,6 +839,29 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
     return FrameOutcome(work.name, len(lines), ms)
 
 
+def predict_chunk(chunk: Sequence[FrameWork], configs: dict[str, PipelineConfig],
+                  calibration: Calibration | None) -> list[FrameOutcome]:
+    """Return the outcome of ``predict_frame`` for each frame of a chunk, in order (a Dask task).
+
+    ``configs`` holds the config of each sequence of the chunk (its geometry estimated by the
+    client); the pipelines are built once per chunk and sequence.
+    """
+    cache: dict = {}
+    return [predict_frame(w, configs[w.sequence], calibration, cache) for w in chunk]
+
+
+def _check_visible(outcomes: list[FrameOutcome], work: Sequence[FrameWork]) -> list[FrameOutcome]:
+    """Return the outcomes, a frame a worker wrote where this process does not see it failed."""
+    checked = []
+    for o, w in zip(outcomes, work):
+        if not o.error and not w.target.is_file():
+            o = FrameOutcome(o.name, error=f"{w.target}: a Dask worker wrote this prediction but it is "
+                                           "not here; --scheduler needs the dataset and PRED_DIR on a "
+                                           "filesystem every worker sees at the same path")
+        checked.append(o)
+    return checked
+
+
 def _settings(benchmark: str, root: Path, config: PipelineConfig, calibration_file: str | None,
               auto_geometry: GeometryOptions | None) -> dict:
     return {"format": PREDICT_FORMAT, "benchmark": benchmark, "dataset_root": str(root.resolve()),
@@ -891,7 +914,8 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
                       config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
                       calibration_file: str | os.PathLike | None = None,
                       auto_geometry: GeometryOptions | None = None, progress: bool = True,
-                      on_geometry: Callable[[str, RoadGeometry], None] | None = None) -> PredictRun:
+                      on_geometry: Callable[[str, RoadGeometry], None] | None = None,
+                      workers: int = 1, scheduler: str | None = None) -> PredictRun:
     """Return what the run did after predicting every labelled frame of a benchmark dataset.
 
     Each frame is detected on its own (``predict_frame``: the labelled frames are seconds apart,
@@ -919,6 +943,13 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
         is written (``checked_geometry``).
     progress : show a tqdm bar.
     on_geometry : called with (sequence, geometry) for each estimate (the CLI prints it).
+    workers, scheduler : where the frames are predicted (``cluster.dask_client``): 1 worker (the
+        default) in this process; more on a Dask ``LocalCluster`` of that many processes; or the
+        workers of the Dask scheduler at ``scheduler``. With Dask the frames go in chunks
+        (``cluster.chunk_size``) to the workers, which read the images and write the predictions
+        themselves (``predict_chunk``: with ``scheduler`` the dataset and ``out_dir`` must be on a
+        filesystem the workers share, at the same path); the geometry is still estimated here,
+        once per sequence, and the outputs are the same as in one process (``run_time`` aside).
 
     Raises
     ------
@@ -952,11 +983,18 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
         io.remove_stale_temp_files(path)
         io.write_json(path, settings)
     outcomes, cache = [], {}
-    with tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
-              dynamic_ncols=True) as bar:
-        for w in todo:
-            outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
-            bar.update(1)
+    with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client, \
+            tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
+                 dynamic_ncols=True) as bar:
+        if client is None:
+            for w in todo:
+                outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
+                bar.update(1)
+        else:
+            chunks = cluster.split(todo, cluster.chunk_size(len(todo), cluster.total_threads(client)))
+            done = cluster.map_chunks(client, predict_chunk, chunks, bar, calibration=calibration,
+                                      configs=configs)
+            outcomes = _check_visible([o for chunk in done for o in chunk], todo)
     output = out
     if benchmark == "tusimple":
         output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
