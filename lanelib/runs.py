@@ -966,35 +966,36 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     recorded = _check_settings(out, settings)
     t0 = time.perf_counter()
     todo = [w for w in work if not w.target.is_file()]
-    configs: dict[str, PipelineConfig] = {}
-    geometries = []
-    for sequence in dict.fromkeys(w.sequence for w in todo):
-        if auto_geometry is None:
-            configs[sequence] = config
-            continue
-        geo = _sequence_geometry([w for w in work if w.sequence == sequence], Path(root), calibration,
-                                 auto_geometry)
-        geometries.append((sequence, geo))
-        if on_geometry is not None:
-            on_geometry(sequence, geo)
-        configs[sequence] = with_geometry(config, geo)
-    if not recorded:
-        path = out / PREDICT_SETTINGS
-        io.remove_stale_temp_files(path)
-        io.write_json(path, settings)
-    outcomes, cache = [], {}
-    with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client, \
-            tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
-                 dynamic_ncols=True) as bar:
-        if client is None:
-            for w in todo:
-                outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
-                bar.update(1)
-        else:
-            chunks = cluster.split(todo, cluster.chunk_size(len(todo), cluster.total_threads(client)))
-            done = cluster.map_chunks(client, predict_chunk, chunks, bar, calibration=calibration,
-                                      configs=configs)
-            outcomes = _check_visible([o for chunk in done for o in chunk], todo)
+    # the cluster is reached before anything is written: a bad --scheduler leaves no trace
+    with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client:
+        configs: dict[str, PipelineConfig] = {}
+        geometries = []
+        for sequence in dict.fromkeys(w.sequence for w in todo):
+            if auto_geometry is None:
+                configs[sequence] = config
+                continue
+            geo = _sequence_geometry([w for w in work if w.sequence == sequence], Path(root), calibration,
+                                     auto_geometry)
+            geometries.append((sequence, geo))
+            if on_geometry is not None:
+                on_geometry(sequence, geo)
+            configs[sequence] = with_geometry(config, geo)
+        if not recorded:
+            path = out / PREDICT_SETTINGS
+            io.remove_stale_temp_files(path)
+            io.write_json(path, settings)
+        outcomes, cache = [], {}
+        with tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
+                  dynamic_ncols=True) as bar:
+            if client is None:
+                for w in todo:
+                    outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
+                    bar.update(1)
+            else:
+                chunks = cluster.split(todo, cluster.chunk_size(len(todo), cluster.total_threads(client)))
+                done = cluster.map_chunks(client, predict_chunk, chunks, bar, calibration=calibration,
+                                          configs=configs)
+                outcomes = _check_visible([o for chunk in done for o in chunk], todo)
     output = out
     if benchmark == "tusimple":
         output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
