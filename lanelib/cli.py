@@ -566,7 +566,10 @@ def _dask_args(p) -> None:
                    help="predict on the workers of a running Dask cluster (tcp://HOST:PORT of `dask "
                         "scheduler`; start workers with `dask worker ADDRESS`); the workers read the "
                         "images and write the predictions themselves, so DATASET_ROOT and PRED_DIR "
-                        "must be on a filesystem they share, at the same path; --workers is ignored")
+                        "must be on a filesystem they share, at the same path; --workers is ignored. "
+                        "Start the workers with DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON__"
+                        "MALLOC_TRIM_THRESHOLD_=None in their environment (Dask's default trimming "
+                        "doubles a frame's time)")
 
 
 def _run_predict(args) -> int:

@@ -60,7 +60,8 @@ def scheduler(tmp_path_factory) -> str:
     if not DASK.is_file():
         pytest.skip(f"{DASK}: no dask command in this environment")
     address = f"tcp://127.0.0.1:{free_port()}"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    env = {**os.environ, **cluster.WORKER_ENVIRON,
+           "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
     logs = tmp_path_factory.mktemp("dask_logs")
     procs = []
     try:
@@ -75,6 +76,8 @@ def scheduler(tmp_path_factory) -> str:
             # the workers import this checkout's lanelib, not another one on the path
             files = client.run(lambda: __import__("lanelib").__file__)
             assert all(Path(f).resolve().parents[1] == REPO for f in files.values()), files
+            # and run with glibc's default malloc trimming (cluster.WORKER_ENVIRON)
+            assert set(client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_").values()) == {None}
         yield address
     finally:
         for p in reversed(procs):
@@ -111,6 +114,17 @@ def test_chunks_give_each_thread_several_and_hold_at_most_32():
     assert cluster.chunk_size(0, 4) == 1
     assert cluster.split(list(range(7)), 3) == [[0, 1, 2], [3, 4, 5], [6]]
     assert cluster.split([], 3) == []
+
+
+def _trim_threshold() -> str | None:
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def test_local_workers_keep_the_default_malloc_trimming():
+    """Dask's MALLOC_TRIM_THRESHOLD_=65536 doubles a frame's time; ``--workers`` leaves it unset."""
+    with cluster.dask_client(2) as client:
+        assert cluster.total_threads(client) == 2
+        assert set(client.run(_trim_threshold).values()) == {None}
 
 
 def test_bad_worker_count(tmp_path, ts_root, capsys):
