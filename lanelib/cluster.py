@@ -107,6 +107,17 @@ def map_chunks(client: distributed.Client, fn: Callable[..., list], chunks: Sequ
     return results  # type: ignore[return-value]
 
 
+def map_ordered(client: distributed.Client, fn: Callable[..., T], items: Sequence, **kwargs) -> list[T]:
+    """Return ``[fn(item, **kwargs) for item in items]``, run by the client's workers (all sent at
+    once); the first exception raised by ``fn``, in the items' order, cancels the rest."""
+    futures = client.map(fn, items, pure=False, **kwargs)
+    try:
+        return [future.result() for future in futures]
+    except BaseException:
+        client.cancel(futures)
+        raise
+
+
 def total_threads(client: distributed.Client) -> int:
     """Return the worker threads of the client's cluster (at least 1)."""
     return max(1, sum(client.nthreads().values()))

@@ -948,8 +948,9 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
         workers of the Dask scheduler at ``scheduler``. With Dask the frames go in chunks
         (``cluster.chunk_size``) to the workers, which read the images and write the predictions
         themselves (``predict_chunk``: with ``scheduler`` the dataset and ``out_dir`` must be on a
-        filesystem the workers share, at the same path); the geometry is still estimated here,
-        once per sequence, and the outputs are the same as in one process (``run_time`` aside).
+        filesystem the workers share, at the same path); the geometries too are estimated on the
+        workers, one task per sequence, all before any frame; the outputs are the same as in one
+        process (``run_time`` aside).
 
     Raises
     ------
@@ -968,18 +969,21 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     todo = [w for w in work if not w.target.is_file()]
     # the cluster is reached before anything is written: a bad --scheduler leaves no trace
     with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client:
-        configs: dict[str, PipelineConfig] = {}
+        sequences = list(dict.fromkeys(w.sequence for w in todo))
+        configs = {sequence: config for sequence in sequences}
         geometries = []
-        for sequence in dict.fromkeys(w.sequence for w in todo):
-            if auto_geometry is None:
-                configs[sequence] = config
-                continue
-            geo = _sequence_geometry([w for w in work if w.sequence == sequence], Path(root), calibration,
-                                     auto_geometry)
-            geometries.append((sequence, geo))
-            if on_geometry is not None:
-                on_geometry(sequence, geo)
-            configs[sequence] = with_geometry(config, geo)
+        if auto_geometry is not None:
+            groups = [[w for w in work if w.sequence == sequence] for sequence in sequences]
+            if client is None:
+                estimates = (_sequence_geometry(g, Path(root), calibration, auto_geometry) for g in groups)
+            else:  # one task per sequence, all sent at once; results in order
+                estimates = cluster.map_ordered(client, _sequence_geometry, groups, root=Path(root),
+                                                calibration=calibration, options=auto_geometry)
+            for sequence, geo in zip(sequences, estimates):
+                geometries.append((sequence, geo))
+                if on_geometry is not None:
+                    on_geometry(sequence, geo)
+                configs[sequence] = with_geometry(config, geo)
         if not recorded:
             path = out / PREDICT_SETTINGS
             io.remove_stale_temp_files(path)

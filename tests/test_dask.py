@@ -16,9 +16,10 @@ import time
 from pathlib import Path
 
 import distributed
+import numpy as np
 import pytest
 
-from lanelib import cluster, runs
+from lanelib import cluster, io, runs
 from lanelib.benchmarks import tusimple
 from lanelib.cli import main
 from lanelib.synth.datasets import write_dataset
@@ -185,3 +186,14 @@ def test_an_unreachable_scheduler_is_an_input_error(tmp_path, ts_root, capsys, m
     assert "no Dask scheduler answered" in capsys.readouterr().err
     assert not (tmp_path / "p").exists()  # nothing written
     assert time.perf_counter() - t0 < 30
+
+
+def test_a_failed_geometry_on_dask_stops_the_run_before_any_frame(tmp_path, ts_root, scheduler, capsys):
+    root = Path(shutil.copytree(ts_root, tmp_path / "data"))
+    for r in tusimple.read_labels(root):
+        if r.raw_file.startswith("clips/synth02/"):
+            io.write_image(root / r.raw_file, np.full((720, 1280, 3), 90, np.uint8))  # no road to see
+    out = tmp_path / "pred"
+    assert predict(root, out, "--scheduler", scheduler) == 2
+    assert "clips/synth02" in capsys.readouterr().err
+    assert not (out / runs.TUSIMPLE_PARTS).exists() and not (out / runs.TUSIMPLE_PREDICTIONS).exists()
