@@ -552,8 +552,24 @@ def _add_predict(sub) -> None:
                    help="folder for the predictions (not DATASET_ROOT)")
     _common_pipeline_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    _dask_args(p)
     _geometry_args(p, auto=True)
     p.set_defaults(func=_run_predict)
+
+
+def _dask_args(p) -> None:
+    g = p.add_argument_group("dataset scale (Dask)")
+    g.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="predict on N worker processes of a Dask LocalCluster on this machine, in "
+                        "chunks of frames (default 1: in this process, without Dask)")
+    g.add_argument("--scheduler", metavar="ADDRESS",
+                   help="predict on the workers of a running Dask cluster (tcp://HOST:PORT of `dask "
+                        "scheduler`; start workers with `dask worker ADDRESS`); the workers read the "
+                        "images and write the predictions themselves, so DATASET_ROOT and PRED_DIR "
+                        "must be on a filesystem they share, at the same path; --workers is ignored. "
+                        "Start the workers with DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON__"
+                        "MALLOC_TRIM_THRESHOLD_=None in their environment (Dask's default trimming "
+                        "doubles a frame's time)")
 
 
 def _run_predict(args) -> int:
@@ -566,7 +582,7 @@ def _run_predict(args) -> int:
 
     run = runs.predict_benchmark(args.benchmark, args.root, args.output, args.list_file, config,
                                  calibration, args.calibration, options, progress=not args.no_progress,
-                                 on_geometry=show)
+                                 on_geometry=show, workers=args.workers, scheduler=args.scheduler)
     for o in run.failed:
         print(f"error: {o.error}", file=sys.stderr)
     done = len(run.outcomes) - len(run.failed)

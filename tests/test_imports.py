@@ -156,7 +156,8 @@ LAYERS = [
     {"lanelib.hough", "lanelib.tracking"},  # the basic pipeline; the tracker (takes a pipeline object)
     {"lanelib.config"},                     # nests every stage's config
     {"lanelib.pipeline"},
-    {"lanelib.runs", "lanelib.evaluate", "lanelib.bench", "lanelib.synth", "lanelib.benchmarks"},
+    {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
+     "lanelib.benchmarks"},
     {"lanelib.widgets"},
     {"lanelib.cli", "lanelib.__main__", "lanelib"},
 ]
