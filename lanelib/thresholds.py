@@ -13,6 +13,7 @@ their letter (``h``, ``l``, ``s``, ``v``, ``b`` ...) as OpenCV's 8-bit conversio
 from __future__ import annotations
 
 import ast
+import functools
 import math
 from dataclasses import dataclass, fields
 from typing import Callable
@@ -398,9 +399,12 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
     return out
 
 
+@functools.lru_cache(maxsize=32)
 def _least_tophat(spec: TopHatMask) -> np.ndarray:
     """Return the least top-hat a pixel needs for each background level 0-255 (uint8, 256).
 
+    Made once per mask record (records are frozen, so the table is cached, read-only) rather
+    than on every frame.
     max(low, ratio * background) rounded up (an integer top-hat passes exactly when it is at
     least the real bound); 255 where the background is above ``max_background``. 255 is
     reached by no top-hat there (a top-hat of 255 needs a background of 0) nor where
@@ -409,7 +413,9 @@ def _least_tophat(spec: TopHatMask) -> np.ndarray:
     levels = np.arange(256, dtype=np.float64)
     least = np.maximum(spec.low, np.ceil(spec.ratio * levels - 1e-9))
     least[levels > spec.max_background] = 255
-    return np.minimum(least, 255).astype(np.uint8)
+    table = np.minimum(least, 255).astype(np.uint8)
+    table.flags.writeable = False
+    return table
 
 
 MASK_FUNCTIONS: dict[type, Callable] = {
