@@ -322,11 +322,31 @@ def color_range_mask(rgb: np.ndarray | Channels, spec: ColorRange) -> np.ndarray
     return _open(m, spec.open_px)
 
 
+def morph(image: np.ndarray, op: str, width_px: int, height_px: int) -> np.ndarray:
+    """Return ``image`` opened (``op="open"``) or closed (``"close"``) by a width x height rectangle.
+
+    The two passes take mirrored anchors: OpenCV puts the anchor of an even kernel half a pixel
+    off centre and ``cv2.morphologyEx`` uses it for both passes, so an opening or closing with an
+    even size moved the result by one pixel (a 20 px square opened by 4 x 4 came back one pixel
+    down and right). With the second pass's anchor mirrored, an opening or closing of a shape
+    wider than the kernel returns it in place, for every size. Works on masks and grey images
+    (the top-hat's background).
+    """
+    kernel = np.ones((height_px, width_px), np.uint8)
+    first = (width_px // 2, height_px // 2)
+    second = (width_px - 1 - first[0], height_px - 1 - first[1])
+    if op == "open":
+        return cv2.dilate(cv2.erode(image, kernel, anchor=first), kernel, anchor=second)
+    if op == "close":
+        return cv2.erode(cv2.dilate(image, kernel, anchor=first), kernel, anchor=second)
+    raise ValueError(f"morph: op {op!r} must be 'open' or 'close'")
+
+
 def _open(m: np.ndarray, size: int) -> np.ndarray:
     """Return mask ``m`` opened with a square kernel of ``size`` px (unchanged for size 0 or 1)."""
     if size <= 1:
         return m
-    return cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((size, size), np.uint8))
+    return morph(m, "open", size, size)
 
 
 def _sobel_step_scale(kernel_px: int) -> float:
@@ -382,20 +402,17 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
     """Return the 0/255 mask of pixels brighter than their surroundings by [low, high] levels
     (and, with ``spec.ratio``, by that multiple of the surroundings; see ``TopHatMask``)."""
     ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
-    kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (spec.width_px, 1))
     values = ch.channel(spec.space, spec.channel)
+    background = morph(values, "open", spec.width_px, 1)
+    tophat = cv2.subtract(values, background)
     if spec.ratio <= 0 and spec.max_background >= 255:
-        out = in_range(cv2.morphologyEx(values, cv2.MORPH_TOPHAT, kernel), spec.low, spec.high)
+        out = in_range(tophat, spec.low, spec.high)
     else:
-        background = cv2.morphologyEx(values, cv2.MORPH_OPEN, kernel)
-        tophat = cv2.subtract(values, background)
         out = cv2.compare(tophat, cv2.LUT(background, _least_tophat(spec)), cv2.CMP_GE)
         if spec.high < 255:
             out = cv2.bitwise_and(out, in_range(tophat, 0, spec.high))
-    k = spec.min_width_px
-    if k > 1:  # an opening 1 x k; the anchors mirrored so an even k does not shift the mask
-        line = np.ones((1, k), np.uint8)
-        out = cv2.dilate(cv2.erode(out, line, anchor=(k // 2, 0)), line, anchor=(k - 1 - k // 2, 0))
+    if spec.min_width_px > 1:  # an opening 1 x k across the road
+        out = morph(out, "open", spec.min_width_px, 1)
     return out
 
 
@@ -550,8 +567,7 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     out = _evaluate(compile_rule(rule or config.rule, mask_names(config)), get)
     if out is None:
         out = np.zeros(rgb.shape[:2], np.uint8)
-    if config.open_px > 1:
-        out = cv2.morphologyEx(out, cv2.MORPH_OPEN, np.ones((config.open_px, config.open_px), np.uint8))
+    out = _open(out, config.open_px)
     if config.close_px > 1:
-        out = cv2.morphologyEx(out, cv2.MORPH_CLOSE, np.ones((config.close_px, config.close_px), np.uint8))
+        out = morph(out, "close", config.close_px, config.close_px)
     return out

@@ -278,3 +278,33 @@ def test_the_shade_top_hat_is_relative_with_a_floor_in_levels():
     with pytest.raises(ConfigError, match="max_background 300"):
         th.TopHatMask(max_background=300)
     assert th.mask_context_px(spec) == (60 + 11, 0)  # the ratio and the background level are per pixel
+
+
+@pytest.mark.parametrize("size", [2, 3, 4, 5, 6, 8])
+def test_openings_and_closings_of_any_size_leave_a_wide_shape_in_place(size, road):
+    # OpenCV's morphologyEx put an even kernel's anchor half a pixel off centre for both passes,
+    # which moved a 20 px square one pixel down and right; th.morph mirrors the second anchor
+    square = np.zeros((40, 40), np.uint8)
+    square[10:30, 10:30] = 255
+    for op in ("open", "close"):
+        assert np.array_equal(th.morph(square, op, size, size), square), op
+    # every place that opens or closes a mask: per mask, the combined mask, the top-hat's least width
+    yellow = th.ColorRange("hsv", (15, 80, 120), (35, 255, 255), open_px=size)
+    assert cols(th.color_range_mask(road, yellow)) == set(range(100, 120))
+    for cfg in (th.ThresholdConfig(rule="yellow | white", open_px=size),
+                th.ThresholdConfig(rule="yellow | white", close_px=size)):
+        assert cols(th.combine(road, cfg)) == set(range(100, 120)) | set(range(300, 320))
+    stripe = np.full((10, 100), 60, np.uint8)
+    stripe[:, 40:60] = 200
+    tophat = th.TopHatMask("hls", "l", 41, 50, 255, min_width_px=size)
+    assert cols(th.tophat_mask(np.dstack([stripe] * 3), tophat)) == set(range(40, 60))
+
+
+def test_an_even_opening_still_drops_what_is_narrower_than_it():
+    m = np.zeros((20, 40), np.uint8)
+    m[:, 10:13] = 255  # 3 px wide: dropped by 4, kept by 3
+    m[:, 25:29] = 255  # 4 px wide: kept by 4
+    assert cols(th.morph(m, "open", 4, 1)) == set(range(25, 29))
+    assert cols(th.morph(m, "open", 3, 1)) == set(range(10, 13)) | set(range(25, 29))
+    with pytest.raises(ValueError, match="'open' or 'close'"):
+        th.morph(m, "erode", 3, 3)
