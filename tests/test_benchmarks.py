@@ -215,6 +215,24 @@ def test_culane_spline_keeps_two_points_and_resamples_more():
     assert out.shape == (101, 2) and np.allclose(out[[0, 50, 100]], bent[:3])
 
 
+def test_culane_natural_spline_is_the_textbook_one():
+    # knots 0, 1, 2 with values 0, 1, 0: M1 = 6 (-1 - 1) / (2 (1 + 1)) = -3, and at the middle of
+    # the first segment y = 0.5 + (1/6) (0.125 - 0.5) (-3) = 0.6875; the ends have y'' = 0
+    out = metrics.natural_cubic_spline(np.array([0.0, 1.0, 2.0]), np.array([0.0, 1.0, 0.0]),
+                                       np.array([0.0, 0.5]))
+    assert np.allclose(out.ravel(), [0.0, 0.6875, 1.0, 0.6875])
+    # and scipy's natural CubicSpline (a dependency for the Hungarian matching) on random lanes
+    from scipy.interpolate import CubicSpline
+    rng = np.random.default_rng(5)
+    k = np.arange(50) / 50
+    for n in (2, 3, 6, 18):
+        p = np.cumsum(rng.uniform(1, 40, (n, 2)), axis=0)
+        t = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
+        ts = (t[:-1, None] + np.diff(t)[:, None] * k[None, :]).ravel()
+        assert np.allclose(metrics.natural_cubic_spline(t, p, k), CubicSpline(t, p, bc_type="natural")(ts),
+                           atol=1e-9)
+
+
 def test_culane_slanted_lane_shifted_along_x():
     # a 45-degree lane shifted 10 px sideways is 7.1 px away across: a match; 30 px is not
     lane = np.array([[400.0, 590.0], [700.0, 290.0], [1000.0, -10.0]])

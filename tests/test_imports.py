@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import ast
 import functools
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -140,6 +142,17 @@ def test_lanelib_has_no_import_cycle():
     assert len(edges) > 15
     cycle = find_cycle(edges)
     assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+# imported only by the one function that needs them: each costs about 1 s at every command's start
+HEAVY_IMPORTS = ("scipy.optimize", "scipy.interpolate")
+
+
+def test_the_command_line_starts_without_the_heavy_imports():
+    code = ("import sys, lanelib.cli, lanelib.evaluate, lanelib.runs; "
+            f"print([m for m in {HEAVY_IMPORTS!r} if m in sys.modules])")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert p.stdout.strip() == "[]", p.stdout
 
 
 def test_lanelib_has_no_function_level_imports():

@@ -53,8 +53,6 @@ from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.optimize import linear_sum_assignment
 
 # --------------------------------------------------------------------------- TuSimple constants
 
@@ -279,10 +277,40 @@ def interpolate_lane(points: np.ndarray, steps: int = SPLINE_STEPS) -> np.ndarra
     if len(p) <= 2:
         return p
     t = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
-    spline = CubicSpline(t, p, bc_type="natural")
     k = np.arange(steps) / steps
-    ts = (t[:-1, None] + np.diff(t)[:, None] * k[None, :]).ravel()
-    return np.vstack([spline(ts), p[-1:]])
+    return np.vstack([natural_cubic_spline(t, p, k), p[-1:]])
+
+
+def natural_cubic_spline(t: np.ndarray, values: np.ndarray, fractions: np.ndarray) -> np.ndarray:
+    """Return the natural cubic spline through (t, values) sampled in every segment, (segments *
+    len(fractions), dims): segment i at t[i] + fraction * (t[i+1] - t[i]), segment by segment.
+
+    The spline is the C2 piecewise cubic with zero second derivative at both ends (the CULane
+    tool's ``spline.cpp``); its second derivatives M solve the tridiagonal system
+    h[i-1] M[i-1] + 2 (h[i-1] + h[i]) M[i] + h[i] M[i+1] = 6 (d[i] - d[i-1]), d the slopes
+    (values[i+1] - values[i]) / h[i], M[0] = M[n-1] = 0.
+
+    Parameters
+    ----------
+    t : (n,) strictly increasing knots, n >= 2.
+    values : (n, dims) values at the knots.
+    fractions : where each segment is sampled, in [0, 1).
+    """
+    y = np.asarray(values, np.float64).reshape(len(t), -1)
+    h = np.diff(t)
+    d = np.diff(y, axis=0) / h[:, None]
+    n = len(t)
+    m = np.zeros_like(y)
+    if n > 2:
+        a = np.diag(2.0 * (h[:-1] + h[1:])) + np.diag(h[1:-1], 1) + np.diag(h[1:-1], -1)
+        m[1:-1] = np.linalg.solve(a, 6.0 * np.diff(d, axis=0))
+    u = np.asarray(fractions, np.float64)[None, :, None]
+    hh = h[:, None, None]
+    y0, y1, m0, m1 = y[:-1, None], y[1:, None], m[:-1, None], m[1:, None]
+    # the cubic of each segment in the fraction u of its length (Hermite form of the spline)
+    out = ((1 - u) * y0 + u * y1
+           + hh ** 2 / 6.0 * (((1 - u) ** 3 - (1 - u)) * m0 + (u ** 3 - u) * m1))
+    return out.reshape(-1, y.shape[1])
 
 
 def lane_mask(points: np.ndarray, image_size: tuple[int, int] = CULANE_IMAGE_SIZE,
@@ -341,6 +369,9 @@ def matched_pairs(ious: np.ndarray, iou_threshold: float = CULANE_IOU) -> int:
     """
     if ious.size == 0:
         return 0
+    # imported here, not at the top: scipy.optimize takes about 1 s to import and only the CULane
+    # score needs it; every other command starts without it (tests/test_imports.py)
+    from scipy.optimize import linear_sum_assignment
     rows, cols = linear_sum_assignment(1.0 - ious)
     return int(np.count_nonzero(ious[rows, cols] > iou_threshold))
 
