@@ -159,3 +159,15 @@ def test_a_bad_override_names_the_setting_and_the_fix(setting, message):
         override(PipelineConfig(), [setting])
     assert message in str(e.value) and repr(setting) in str(e.value)
     assert "search: search:" not in str(e.value)
+
+
+def test_the_trend_and_blind_hold_of_the_tracker_round_trip(tmp_path):
+    import dataclasses
+
+    cfg = PipelineConfig()
+    assert (cfg.tracking.trend_frames, cfg.tracking.blind_hold_frames) == (5, 12)
+    cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, trend_frames=0, blind_hold_frames=4))
+    back = load_config(save_config(cfg, tmp_path / "c.json"))
+    assert back == cfg
+    saved = json.loads((tmp_path / "c.json").read_text())["tracking"]
+    assert (saved["trend_frames"], saved["blind_hold_frames"]) == (0, 4)

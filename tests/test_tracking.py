@@ -141,7 +141,7 @@ def test_texture_is_not_taken_for_a_line(pipe):
 
 
 def test_hold_then_reset_then_reacquire(pipe):
-    cfg = TrackerConfig(hold_frames=3)
+    cfg = TrackerConfig(hold_frames=3, blind_hold_frames=0)  # every frame without a lane counts
     tracker = LaneTracker(pipe, cfg)
     good = tracker.update(frame(pipe))
     blank = frame(pipe, left_x=None, right_x=None)
@@ -210,7 +210,7 @@ def _dash_gap_and_specks(pipe: LanePipeline, seed: int = 0) -> np.ndarray:
 
 @pytest.mark.parametrize("history", [0, 20])
 def test_remembered_bases_restart_the_windows_after_a_reset(pipe, history):
-    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=1, base_history_frames=history))
+    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=1, blind_hold_frames=0, base_history_frames=history))
     for _ in range(3):
         tracker.update(frame(pipe))
     blank = frame(pipe, left_x=None, right_x=None)
@@ -257,3 +257,106 @@ def test_a_held_lane_is_drawn_and_logged_apart_from_a_seen_one(pipe):
     assert "Held" not in " ".join(draw.measurement_lines(1000, 0.1, 3.7, True))
     assert video_log_row(1, 0.04, held)["method"] == "hold"
     assert video_log_row(0, 0.0, seen)["method"] in ("windows", "prior")
+
+
+# ---- blind frames (nothing seen) and the trend of the lane ------------------------------------
+
+def test_blind_frames_are_held_beside_hold_frames_then_no_lane_with_the_reason(pipe):
+    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=2, blind_hold_frames=3))
+    good = [tracker.update(frame(pipe)) for _ in range(3)][-1]
+    blank = frame(pipe, left_x=None, right_x=None)  # under an overpass: no line at all
+    held = [tracker.update(blank) for _ in range(5)]
+    notes = [f"holding the last good lane (nothing seen: {k} of 3 blind frames)" for k in (1, 2, 3)]
+    notes += [f"holding the last good lane ({k} of 2 frames)" for k in (1, 2)]  # beyond the blind ones
+    shares = [1 - k / 4 for k in (1, 2, 3)] + [(1 - k / 3) * (1 - 3 / 4) for k in (1, 2)]
+    for r, note, share in zip(held, notes, shares):
+        assert r.found and r.method == "hold" and note in r.reason
+        assert r.left_conf == pytest.approx(round(good.left_conf * share, 3))
+        assert bottom_x(r, "left") == pytest.approx(LEFT_X, abs=3)
+    gone = tracker.update(blank)
+    assert not gone.found and tracker.lane is None
+    assert "lane lost for more than 2 frames beside 3 frames with nothing seen; tracker reset" in gone.reason
+
+
+def test_lines_seen_and_refused_count_toward_hold_frames_at_once(pipe):
+    tracker = LaneTracker(pipe, TrackerConfig(max_jump_m=0.2, hold_frames=2, blind_hold_frames=5))
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    step = 0.3 / XM  # both lines jump 0.3 m: seen, and refused by the jump check
+    moved = frame(pipe, LEFT_X + step, RIGHT_X + step)
+    held = [tracker.update(moved) for _ in range(2)]
+    for k, r in enumerate(held, 1):
+        assert r.method == "hold" and f"holding the last good lane ({k} of 2 frames)" in r.reason
+        assert "right line jumped" in r.reason and "nothing seen" not in r.reason
+    gone = tracker.update(moved)
+    assert not gone.found and "lane lost for more than 2 frames; tracker reset" in gone.reason
+
+
+def _curving_bird(a: float, c_left: float) -> np.ndarray:
+    """A bird's-eye frame whose lines are x = a * (H - 1 - y)**2 + c (px): a bend bending away
+    from the car, both lines 640 px (3.7 m) apart."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(0, H, 8, dtype=float)
+    for c in (c_left, c_left + RIGHT_X - LEFT_X):
+        xs = a * (H - 1 - ys) ** 2 + c
+        cv2.polylines(bird, [np.round(np.column_stack([xs, ys])).astype(np.int32)], False,
+                      (235, 235, 235), 24)
+    return bird
+
+
+def _true_lane(a: float, c_left: float) -> tuple[np.ndarray, np.ndarray]:
+    """The pixel coefficients (x = a*y^2 + b*y + c) of ``_curving_bird``'s lines."""
+    h = H - 1.0
+    left = np.array([a, -2 * a * h, a * h * h + c_left])
+    return left, left + np.array([0.0, 0.0, RIGHT_X - LEFT_X])
+
+
+def test_the_predicted_lane_follows_the_trend_of_a_tightening_bend(pipe):
+    # the bend tightens and the lane drifts right at a steady rate: a linear trend per frame
+    a0, da, c0, dc = 0.0, 4e-5, LEFT_X, 4.0
+    tracker = LaneTracker(pipe)
+    rows = np.linspace(250.0, H - 1.0, 20)  # the near 2/3 of the view, where the bend shows most
+    lag, err = [], []
+    for n in range(8):
+        tracker.update(pipe.perspective.unwarp(_curving_bird(a0 + n * da, c0 + n * dc)))
+        truth = _true_lane(a0 + (n + 1) * da, c0 + (n + 1) * dc)  # the next frame's lane
+        predicted = tracker.predicted_lane(tracker.frame_number + 1)
+        smoothed = tracker.lane
+        if n < 2:  # from the third accepted frame on
+            assert all(np.array_equal(p, s) for p, s in zip(predicted, smoothed))
+            continue
+        assert tracker.lost_frames == 0  # every frame accepted
+        for side in (0, 1):
+            err.append(np.abs(np.polyval(predicted[side], rows) - np.polyval(truth[side], rows)).max())
+            lag.append(np.abs(np.polyval(smoothed[side], rows) - np.polyval(truth[side], rows)).max())
+    # the average shows the lane of about two frames before the next one (21-27 px off on these
+    # rows); the prediction is where the lane is next, to a fraction of a pixel
+    assert min(lag) > 15
+    assert max(err) < 1.0
+
+
+def test_the_trend_keeps_the_width_and_stops_at_the_frame_after_the_last_seen_one(pipe):
+    tracker = LaneTracker(pipe)
+    for n in range(5):
+        tracker.update(frame(pipe, LEFT_X + 5.0 * n, RIGHT_X + 5.0 * n))  # the car drifts left
+    nxt = tracker.predicted_lane(tracker.frame_number + 1)
+    later = tracker.predicted_lane(tracker.frame_number + 10)  # not seen since: no further than the next
+    for side, x0 in ((0, LEFT_X), (1, RIGHT_X)):
+        assert np.polyval(nxt[side], H - 1) == pytest.approx(x0 + 25.0, abs=1.5)
+        assert np.array_equal(later[side], nxt[side])
+    width = np.polyval(nxt[1], H - 1) - np.polyval(nxt[0], H - 1)
+    assert width == pytest.approx(RIGHT_X - LEFT_X, abs=1.0)
+    blank = frame(pipe, left_x=None, right_x=None)
+    held = [tracker.update(blank) for _ in range(3)]
+    for r in held:  # the held lane stays where the lane was predicted for the frame after
+        assert r.method == "hold" and bottom_x(r, "left") == pytest.approx(LEFT_X + 25.0, abs=1.5)
+    off = LaneTracker(pipe, TrackerConfig(trend_frames=0))
+    for n in range(5):
+        off.update(frame(pipe, LEFT_X + 5.0 * n, RIGHT_X + 5.0 * n))
+    assert all(np.array_equal(p, s) for p, s in zip(off.predicted_lane(), off.lane))
+
+
+@pytest.mark.parametrize("kwargs", [dict(trend_frames=-1), dict(blind_hold_frames=-2)])
+def test_trend_and_blind_hold_need_counts(kwargs):
+    with pytest.raises(ConfigError, match="trend_frames >= 0 and blind_hold_frames >= 0"):
+        TrackerConfig(**kwargs)
