@@ -825,9 +825,10 @@ def _ego_frames(angle_lists: dict[int, np.ndarray], roll_deg: float) -> dict[int
     too: lanes are equally wide, so neighbour lines lie one lane width apart. A width's support
     is the number of frames with a candidate pair within 20 % of it plus the number of frames
     with two adjacent lines on one side of the camera (up to ROLL_MAX_LINE_ANGLE_DEG from
-    straight down) that far apart; r is the candidate width of the most support (ties: the
-    narrowest), or a half or a third of it when a width there has a third of its support or
-    more (lanes whose dashed lines are missed in most frames). Each frame takes its most nearly
+    straight down) that far apart; r is the median width of the frames' pairs within 20 % of
+    the candidate width of the most support (ties: the narrowest), or of a half or a third of it
+    (within 10 %) when a width there has a third of its support or more (lanes whose dashed lines
+    are missed in most frames). Each frame takes its most nearly
     centred pair within 20 % of r (a car drives near its lane's centre); frames with none are
     left out.
     """
@@ -856,12 +857,18 @@ def _ego_frames(angle_lists: dict[int, np.ndarray], roll_deg: float) -> dict[int
         return (sum(bool(near([p[3] for p in found]).any()) for found in pairs.values())
                 + sum(bool(near(g).any()) for g in gaps.values() if len(g)))
 
+    def centre(c: float) -> float:
+        """The median of each frame's candidate width nearest ``c`` (within 20 % of it)."""
+        near = [min((p[3] for p in found), key=lambda v: abs(v / c - 1)) for found in pairs.values()]
+        return float(np.median([v for v in near if abs(v / c - 1) <= 0.2] or [c]))
+
     scored = {c: support(c) for c in widths}
-    r = max(widths, key=lambda c: (scored[c], -c))
+    best = max(widths, key=lambda c: (scored[c], -c))
+    r = centre(best)
     for n in (3, 2):       # a half or a third of it, seen often enough: the lanes' own width
-        part = [c for c in widths if abs(c * n / r - 1) <= 0.1 and 3 * scored[c] >= scored[r]]
+        part = [c for c in widths if abs(c * n / r - 1) <= 0.1 and 3 * scored[c] >= scored[best]]
         if part:
-            r = max(part, key=lambda c: (scored[c], -c))
+            r = centre(max(part, key=lambda c: (scored[c], -c)))
             break
     chosen = {i: next((p for p in found if abs(p[3] / r - 1) <= 0.2), None) for i, found in pairs.items()}
     return {i: (c[1], c[2], c[3]) for i, c in chosen.items() if c is not None}
