@@ -41,10 +41,13 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   as inconsistent (a hill, a bump, a lane change).
 - **The ego lane.** A road line at lateral offset t (m) from the camera, seen from height H,
   runs from the vanishing point at atan(t / H) from straight down (in coordinates turned by the
-  roll). The ego lane's two lines are chosen in each frame among the two nearest lines on either
-  side, each 20-80 deg from straight down, as the pair most nearly centred on the camera; the
-  lane's width r (below) is the median over frames, and frames more than 20 % off it (a dashed
-  line not seen, a bright seam in the lane) are left out of it.
+  roll). The ego lane's two lines are one on either side among the two nearest there, each
+  20-80 deg from straight down. Its width r (below) is the one the road's lines agree on (lanes
+  are equally wide): the width of the most frames' pairs plus frames with two adjacent lines on
+  one side that far apart, so that neither the neighbour lanes' outer lines (three lanes wide,
+  as centred on a car in a middle lane as its own) nor a dashed line not seen (two lanes wide)
+  nor a bright seam in the lane is taken for the ego lane; each frame takes its most centred
+  pair within 20 % of r, and frames with none are left out.
 - **Horizon and roll.** The vanishing point of the road lies on the horizon. Its slope is the
   camera's roll, which lane lines of one direction cannot show by themselves: it is measured
   from the spacing of three or more lines (the ego lane's two and any line beyond them up to
@@ -90,8 +93,10 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   vanishing point (1 up to 1 px of standard error of their mean row, falling off beyond: a car
   pitching over bumps scatters single frames by a few px, and many frames still pin it), min(1, frames showing the
   ego lane / 5), the source of the scale (dashes 1, focal length 0.9, dashes and focal length
-  disagreeing by more than 8 % 0.75, and then the focal length is used, assumed focal length 0.4) and 0.9 when the hood was not
-  found. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
+  disagreeing by more than 8 % 0.75, and then the focal length is used, assumed focal length 0.4), 0.9 when the hood was not
+  found, and 0.4 when the focal length and the lane width put the camera at an implausible
+  height (``CAMERA_HEIGHT_RANGE_M``, 0.7-4 m: the lines were paired wrongly; the assumptions
+  say so). Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
@@ -161,6 +166,10 @@ DASH_LENGTH_RANGE = 1.35
 DASH_LENGTH_UP = 1.7
 DASH_FOCAL_RANGE = 1.35        # with a known focal length, C is searched within this factor of its C
 FOCAL_RANGE_W = (0.3, 3.5)     # else focal lengths from 0.3 to 3.5 image widths (hfov 16-118 deg)
+# A camera this high above the road or more, or this low or less, is no road camera (a car's
+# dashcam sits 1.0-1.6 m up, a truck's 2-3 m): the lane width was measured between the wrong lines
+CAMERA_HEIGHT_RANGE_M = (0.7, 4.0)
+IMPLAUSIBLE_CONFIDENCE = 0.4   # the confidence is multiplied by this then (below LOW_CONFIDENCE)
 
 Point = tuple[float, float]
 
@@ -806,42 +815,63 @@ def _ego_frames(angle_lists: dict[int, np.ndarray], roll_deg: float) -> dict[int
     """Return {frame: (left line, right line, r = k_right - k_left)} of the ego lane in the frames
     where it is seen.
 
-    In each frame the pair is chosen among the two nearest lines on either side of the camera's
-    line, each EGO_ANGLES_DEG from straight down (atan of half a lane over the camera's height:
-    56 deg for 3.7 m lanes seen from 1.25 m; 37 deg from a 2.5 m truck cab), as the one most
-    nearly centred on it (a car drives near its lane's centre); a bright
-    seam inside the lane, or a dashed line not seen, makes the nearest pair the wrong one. The
-    lane's width r is the median over the frames whose pair is centred within a fifth of its
-    width (all frames when none is), and frames whose r is more than 20 % off it are left out.
-
-    On a road of three lanes or more, a car in a middle lane sees the neighbour lanes' outer
-    lines as a centred pair too (three lanes wide), and picks them in the frames where it drives
-    off its lane's centre: when the median keeps fewer than half the frames (two kinds of pair),
-    r is instead the narrowest width that the most frames agree with within 20 %, and each frame
-    takes its most centred pair of that width.
+    The candidates of each frame are the pairs of one line on either side of the camera's line
+    among the two nearest there, each EGO_ANGLES_DEG from straight down (atan of half a lane
+    over the camera's height: 56 deg for 3.7 m lanes seen from 1.25 m; 37 deg from a 2.5 m
+    truck cab). Some pairs are not the ego lane: a dashed line not seen or a bright seam in the
+    lane make the nearest pair two lanes wide or part of one, and on a road of three lanes or
+    more a car in a middle lane sees the neighbour lanes' outer lines as a pair three lanes wide,
+    centred on it as well as its own. So the lane's width r is chosen by the road's other lines
+    too: lanes are equally wide, so neighbour lines lie one lane width apart. A width's support
+    is the number of frames with a candidate pair within 20 % of it plus the number of frames
+    with two adjacent lines on one side of the camera (up to ROLL_MAX_LINE_ANGLE_DEG from
+    straight down) that far apart; r is the median width of the frames' pairs within 20 % of
+    the candidate width of the most support (ties: the narrowest), or of a half or a third of it
+    (within 10 %) when a width there has a third of its support or more (lanes whose dashed lines
+    are missed in most frames). Each frame takes its most nearly
+    centred pair within 20 % of r (a car drives near its lane's centre); frames with none are
+    left out.
     """
+    lo, hi = (math.tan(math.radians(a)) for a in EGO_ANGLES_DEG)
+    k_far = math.tan(math.radians(ROLL_MAX_LINE_ANGLE_DEG))
     pairs: dict[int, list[tuple[float, int, int, float]]] = {}
+    gaps: dict[int, np.ndarray] = {}
     for i, ang in angle_lists.items():
         k = _k(ang, roll_deg)
         # an ego line lies EGO_ANGLES_DEG from straight down: atan(half a lane / camera height)
-        lo, hi = (math.tan(math.radians(a)) for a in EGO_ANGLES_DEG)
         left = [j for j in np.argsort(-k) if -hi <= k[j] <= -lo][:2]
         right = [j for j in np.argsort(k) if lo <= k[j] <= hi][:2]
         found = sorted((abs(k[a] + k[b]) / (k[b] - k[a]), int(a), int(b), float(k[b] - k[a]))
                        for a in left for b in right)
         if found:
             pairs[i] = found
+        ks = np.sort(k[np.abs(k) <= k_far])
+        same_side = ks[:-1] * ks[1:] > 0
+        gaps[i] = np.diff(ks)[same_side]
     if not pairs:
         return {}
-    chosen = {i: found[0] for i, found in pairs.items()}
-    centred = [c[3] for c in chosen.values() if c[0] < 0.2] or [c[3] for c in chosen.values()]
-    r = float(np.median(centred))
-    if 2 * sum(abs(c[3] / r - 1) <= 0.2 for c in chosen.values()) < len(chosen):
-        support = [(sum(abs(v / w - 1) <= 0.2 for v in centred), -w) for w in centred]
-        r = -max(support)[1]
-        chosen = {i: next((p for p in found if abs(p[3] / r - 1) <= 0.2), found[0])
-                  for i, found in pairs.items()}
-    return {i: (a, b, w) for i, (_, a, b, w) in chosen.items() if abs(w / r - 1) <= 0.2}
+    widths = sorted({p[3] for found in pairs.values() for p in found})
+
+    def support(c: float) -> int:
+        near = lambda v: np.abs(np.asarray(v) / c - 1) <= 0.2  # noqa: E731
+        return (sum(bool(near([p[3] for p in found]).any()) for found in pairs.values())
+                + sum(bool(near(g).any()) for g in gaps.values() if len(g)))
+
+    def centre(c: float) -> float:
+        """The median of each frame's candidate width nearest ``c`` (within 20 % of it)."""
+        near = [min((p[3] for p in found), key=lambda v: abs(v / c - 1)) for found in pairs.values()]
+        return float(np.median([v for v in near if abs(v / c - 1) <= 0.2] or [c]))
+
+    scored = {c: support(c) for c in widths}
+    best = max(widths, key=lambda c: (scored[c], -c))
+    r = centre(best)
+    for n in (3, 2):       # a half or a third of it, seen often enough: the lanes' own width
+        part = [c for c in widths if abs(c * n / r - 1) <= 0.1 and 3 * scored[c] >= scored[best]]
+        if part:
+            r = centre(max(part, key=lambda c: (scored[c], -c)))
+            break
+    chosen = {i: next((p for p in found if abs(p[3] / r - 1) <= 0.2), None) for i, found in pairs.items()}
+    return {i: (c[1], c[2], c[3]) for i, c in chosen.items() if c is not None}
 
 
 def _roll_from_spacing(frames: list[tuple[np.ndarray, tuple[int, int]]]) -> tuple[float, int] | None:
@@ -1138,6 +1168,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     assumptions.append(f"lanes {lane_width_m:g} m wide; a flat road")
 
     pitch = yaw = height = None
+    implausible = ""
     k_c, s0 = 0.0, 0.0
     if fx is not None:
         theta, psi = angles(fx, fy)
@@ -1145,6 +1176,12 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         height = fx * lane_width_m * math.cos(theta) / (fy * r_k * math.cos(psi))
         k_c = (fx / fy) * math.tan(psi) * math.sin(theta)
         s0 = -height * math.tan(theta) / math.cos(psi)
+        if not CAMERA_HEIGHT_RANGE_M[0] < height < CAMERA_HEIGHT_RANGE_M[1]:
+            implausible = (f"implausible: the lane width and the focal length ({fx:.0f} px, {focal_source}) put "
+                           f"the camera {height:.2f} m above the road, outside {CAMERA_HEIGHT_RANGE_M[0]:g}-"
+                           f"{CAMERA_HEIGHT_RANGE_M[1]:g} m; the lane lines were probably paired wrongly (or "
+                           f"the lanes are not {lane_width_m:g} m wide): the scale is not to be trusted")
+            assumptions.append(implausible)
     else:
         assumptions.append("the camera sits on the car's centre line")
 
@@ -1185,6 +1222,8 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     conf *= min(1.0, ego_both / MIN_GOOD_FRAMES)
     if hood_source.startswith("not detected"):
         conf *= 0.9
+    if implausible:
+        conf *= IMPLAUSIBLE_CONFIDENCE
     return RoadGeometry(
         size_px=(w, h), vanishing_point_px=(float(vp[0]), float(vp[1])), horizon_row_px=horizon_row,
         horizon_slope=slope, roll_deg=roll, roll_source=roll_source, pitch_deg=pitch, yaw_deg=yaw,

@@ -82,13 +82,14 @@ def estimates(straight_renderer) -> dict:
     return out
 
 
-def birdseye_lines(camera: Camera, geom: RoadGeometry, offset_m: float, heading_rad: float = 0.0):
+def birdseye_lines(camera: Camera, geom: RoadGeometry, offset_m: float, heading_rad: float = 0.0,
+                   lane_width_m: float = 3.7):
     """Return the ego lane's two lines, seen from a car ``offset_m`` right of the lane centre and
     turned by ``heading_rad``, mapped into the estimated bird's-eye view ((N, 2) each)."""
     persp = Perspective(geom.perspective_config())
     z = np.linspace(4.0, 45.0, 60)
     out = []
-    for t in (-1.85, 1.85):
+    for t in (-lane_width_m / 2, lane_width_m / 2):
         # the line in the car frame: lateral t - offset, rotated by the car's heading
         x0 = t - offset_m
         x = x0 * math.cos(heading_rad) - z * math.sin(heading_rad)
@@ -158,8 +159,13 @@ def test_horizon_within_2_px(estimates, name):
 @pytest.mark.parametrize("name", list(CAMERAS))
 def test_lane_width_through_the_estimated_view_within_3_percent(estimates, name):
     camera, _, geom = estimates[name]
+    check_lane_width(camera, geom, 3.7)
+
+
+def check_lane_width(camera: Camera, geom: RoadGeometry, lane_width_m: float) -> None:
+    """Assert that the ego lane measures ``lane_width_m`` within 3 % through the estimated view."""
     for offset, heading in ((0.3, 0.0), (-0.4, 0.01)):
-        left, right = birdseye_lines(camera, geom, offset, heading)
+        left, right = birdseye_lines(camera, geom, offset, heading, lane_width_m)
         h = geom.size_px[1]
         for row in (0.05 * h, 0.5 * h, 0.95 * h):
             xl = np.interp(row, left[::-1, 1], left[::-1, 0])
@@ -167,7 +173,37 @@ def test_lane_width_through_the_estimated_view_within_3_percent(estimates, name)
             # across the lane, square to the lines (the car is turned by ``heading``)
             slope = np.polyfit(left[:, 1], left[:, 0], 1)[0] * geom.xm_per_px / geom.ym_per_px
             width = (xr - xl) * geom.xm_per_px * math.cos(math.atan(slope))
-            assert width == pytest.approx(3.7, rel=0.03), (offset, row)
+            assert width == pytest.approx(lane_width_m, rel=0.03), (offset, row)
+
+
+def test_a_car_in_a_middle_lane_measures_its_own_lane_not_three():
+    """Known answer: on a road of four 3.6 m lanes, a car in the two middle lanes (a little off
+    their centres, as the TuSimple/CULane samples drive) sees the neighbour lanes' outer lines
+    as a pair three lanes wide and as centred on it as its own lane's. Taking that pair (as the
+    estimate once did in most frames) put the camera 0.5 m above the road with a focal length of
+    3300 px; the road's other lines, one lane apart, tell the lane's true width."""
+    camera = pinhole(height_m=1.55, pitch_deg=2.8, roll_deg=-0.5)
+    road = Scene(CurvatureProfile(), Layout(3.6, right_lanes=3, left_shoulder_m=3.0), Look(), -20.0, 260.0,
+                 seed=23)
+    renderer = Renderer(road, GroundGrid.build(camera))
+    offsets = (3.6 + 0.3, 7.2 - 0.25, 3.6 - 0.3, 7.2 + 0.3, 3.6 + 0.2, 7.2 - 0.3, 0.2)
+    poses = [CarPose(10.0 + 2.9 * i, o, 0.004 * math.sin(0.9 * i + 1)) for i, o in enumerate(offsets)]
+    geom = estimate_geometry([renderer.render(p, noise_key=i) for i, p in enumerate(poses)], lane_width_m=3.6)
+    check_lane_width(camera, geom, 3.6)
+    assert geom.camera_height_m == pytest.approx(1.55, rel=0.03)
+    assert geom.focal_px == pytest.approx(camera.K[0, 0], rel=0.05)
+    assert geom.roll_deg == pytest.approx(-0.5, abs=0.2)
+    assert not geom.low_confidence
+
+
+def test_an_implausible_camera_height_is_said_and_distrusted(estimates):
+    """Lanes said to be 0.6 m wide put the bundled camera 0.2 m above the road: the estimate
+    says so and its confidence falls below LOW_CONFIDENCE (a wrong pairing of the lines does the same)."""
+    _, frames, _ = estimates["bundled"]
+    geom = estimate_geometry(frames, lens=lens_of(Camera()), lane_width_m=0.6)
+    assert geom.camera_height_m < geometry.CAMERA_HEIGHT_RANGE_M[0]
+    assert any(a.startswith("implausible") for a in geom.assumptions)
+    assert geom.low_confidence
 
 
 @pytest.mark.parametrize("name", list(CAMERAS))
