@@ -451,11 +451,12 @@ def _add_evaluate(sub) -> None:
                         "offset_err_cm_p95, curvature_err_median, radius_err_pct_median, "
                         "point_accuracy, fp_rate, fn_rate, files_failed (rates as fractions, null "
                         "where nothing was scored)")
+    _dask_args(p, "evaluate")
     p.set_defaults(func=_run_evaluate)
 
 
 _PIPELINE_ONLY = (("config", "--config"), ("settings", "--set"), ("calibration", "--calibration"),
-                  ("detector", "--detector"), ("max_frames", "--max-frames"))
+                  ("detector", "--detector"), ("max_frames", "--max-frames"), ("scheduler", "--scheduler"))
 _BENCHMARK_ONLY = (("gt", "--gt"), ("pred", "--pred"), ("list_file", "--list"))
 
 
@@ -485,10 +486,12 @@ def _run_evaluate(args) -> int:
     if args.json:
         check_not_input(args.json, inputs)  # before the run, not after it
     if args.kind == "images":
-        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames)
+        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames,
+                                          workers=args.workers, scheduler=args.scheduler)
     else:
         report = evaluate.evaluate_video(args.path, pipe, use_tracker=detector == "tracker",
-                                         max_frames=args.max_frames)
+                                         max_frames=args.max_frames, workers=args.workers,
+                                         scheduler=args.scheduler)
     print(report.table())
     for _, error in report.failed:
         print(f"error: {error}", file=sys.stderr)
@@ -501,6 +504,8 @@ def _run_evaluate(args) -> int:
 def _run_evaluate_benchmark(args) -> int:
     """``evaluate tusimple|culane``: print the official figures of a prediction set (and --json)."""
     given = [flag for dest, flag in _PIPELINE_ONLY if getattr(args, dest) not in (None, [])]
+    if args.workers != 1:
+        given.append("--workers")
     if args.path is not None:
         given.insert(0, str(args.path))
     if args.kind == "tusimple":
@@ -574,6 +579,9 @@ _DASK_WORK = {
     "video": ("in segments of the clip, each started 50 frames early to warm the tracker up (the "
               "output and log are those of one process), joined without re-encoding",
               "read the video and write the segments beside OUT themselves, so IN and OUT's folder"),
+    "evaluate": ("images|video only: in chunks of images, or segments of the video (with the tracker each "
+                 "started 50 frames early to warm it up); the figures are those of one process",
+                 "read the images or the video and its truth themselves, so PATH"),
     "hough": ("in chunks of images, or segments of a video (as `video`)",
               "read the input and write the outputs themselves, so IN and OUT"),
 }

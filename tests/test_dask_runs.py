@@ -19,7 +19,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from lanelib import cluster, io
+from lanelib import cluster, evaluate, io
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline
@@ -155,3 +155,35 @@ def test_a_bad_scheduler_writes_nothing(tmp_path, clip, image_folder, capsys, mo
                  "--scheduler", f"tcp://127.0.0.1:{free_port()}"]) == 2
     assert "no Dask scheduler answered" in capsys.readouterr().err
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["in"]
+
+
+# --------------------------------------------------------------------------- evaluate
+
+def same_reports(a, b) -> bool:
+    return (a.names == b.names and a.failed == b.failed and all(
+        np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True)
+        for k in ("found", "offset_pred_m", "curvature_pred_per_m", "lane_width_pred_m", "line_accuracy",
+                  "pred_lines", "fp_lines", "fn_lines")))
+
+
+def test_evaluate_video_on_dask_scores_the_frames_of_one_process(scheduler):
+    """110 frames of shadows.mp4 with the tracker: segments 0..54 and 55..109 (warmed up from 5)."""
+    path = REPO / "videos/shadows.mp4"
+    pipe = LanePipeline(calibration=evaluate.calibration_from_truth(path))
+    one = evaluate.evaluate_video(path, pipe, max_frames=110)
+    two = evaluate.evaluate_video(path, pipe, max_frames=110, scheduler=scheduler, progress=False)
+    assert two.frames == 110 and same_reports(one, two)
+
+
+def test_evaluate_images_on_dask_scores_as_one_process(tmp_path, scheduler):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("straight_1", "curve_left_250m", "concrete_light"):
+        for suffix in (".jpg", ".json"):
+            shutil.copy(REPO / "test_images" / (name + suffix), folder / (name + suffix))
+    (folder / "broken.jpg").write_bytes(b"not a jpeg")
+    pipe = LanePipeline(calibration=evaluate.calibration_from_truth(folder))
+    one = evaluate.evaluate_images(folder, pipe)
+    two = evaluate.evaluate_images(folder, pipe, scheduler=scheduler, progress=False)
+    assert two.frames == 3 and [name for name, _ in two.failed] == ["broken.jpg"]
+    assert same_reports(one, two)
