@@ -440,7 +440,10 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
                                       sizes=[stop - start for _, start, stop in spans], path=Path(path),
                                       pipeline=pipeline, use_tracker=use_tracker, max_frames=max_frames)
     col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
-    col.rows = [row for (rows,) in done for row in rows]
+    for (rows,) in done:
+        if isinstance(rows, str):  # the first segment that failed says why, as one process would
+            raise InputError(rows)
+        col.rows += rows
     if len(col.rows) < len(frames):
         raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
                          f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
@@ -449,31 +452,41 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
 
 
 def score_video_segment(chunk: Sequence[tuple[int, int, int, bool]], path: Path, pipeline,
-                        use_tracker: bool, max_frames: int | None) -> list[list[tuple]]:
+                        use_tracker: bool, max_frames: int | None) -> list[list[tuple] | str]:
     """Return the score rows of each segment ``(first, start, stop, to_end)`` of a video (a Dask
-    task of ``evaluate_video``): run from ``first`` (a fresh tracker), rows kept from ``start``."""
+    task of ``evaluate_video``): run from ``first`` (a fresh tracker), rows kept from ``start``;
+    a segment that cannot be scored (the clip breaks off, more frames than truth) gives the
+    error's message instead (the client raises the first one in the clip's order)."""
     truth = load_video_truth(path).frames
-    out = []
+    out: list[list[tuple] | str] = []
     for first, start, stop, to_end in chunk:
         tracker = LaneTracker(pipeline) if use_tracker else None
         rows = []
-        with VideoReader(path, first, None if to_end else stop) as reader:
-            try:
-                for n, raw in enumerate(reader):
-                    i = first + n
-                    if i >= len(truth):
-                        raise InputError(f"{path}: the video has more frames than its truth "
-                                         f"{Path(path).with_suffix('.csv')} ({len(truth)}); "
-                                         "regenerate the truth with `python -m lanelib synth --all`")
-                    result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
-                    if i >= start:
-                        rows.append(_score_row(pipeline, str(i), result, truth[i]))
-            except DecodeStoppedError as e:
-                want = len(truth[:max_frames])
-                raise InputError(f"{e}; only {e.frames + first} of the {want} frames to score could "
-                                 "be read: pass a complete video, or --max-frames up to that") from None
-        out.append(rows)
+        try:
+            _score_segment(path, pipeline, tracker, truth, first, start, None if to_end else stop, rows)
+        except DecodeStoppedError as e:
+            out.append(f"{e}; only {e.frames + first} of the {len(truth[:max_frames])} frames to score "
+                       "could be read: pass a complete video, or --max-frames up to that")
+        except InputError as e:
+            out.append(str(e))
+        else:
+            out.append(rows)
     return out
+
+
+def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int, stop: int | None,
+                   rows: list) -> None:
+    """Append the score rows of frames ``start ..`` to ``rows``, run from frame ``first``."""
+    with VideoReader(path, first, stop) as reader:
+        for n, raw in enumerate(reader):
+            i = first + n
+            if i >= len(truth):
+                raise InputError(f"{path}: the video has more frames than its truth "
+                                 f"{Path(path).with_suffix('.csv')} ({len(truth)}); "
+                                 "regenerate the truth with `python -m lanelib synth --all`")
+            result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+            if i >= start:
+                rows.append(_score_row(pipeline, str(i), result, truth[i]))
 
 
 def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracker: bool = True,

@@ -187,3 +187,30 @@ def test_evaluate_images_on_dask_scores_as_one_process(tmp_path, scheduler):
     two = evaluate.evaluate_images(folder, pipe, scheduler=scheduler, progress=False)
     assert two.frames == 3 and [name for name, _ in two.failed] == ["broken.jpg"]
     assert same_reports(one, two)
+
+
+def test_a_video_broken_half_way_on_dask_keeps_the_frames_before_the_break(tmp_path, faststart, scheduler,
+                                                                          capsys):
+    """As in one process (tests/test_video.py): exit 1, the outputs hold the frames before the break."""
+    data = faststart.read_bytes()
+    src = tmp_path / "cut.mp4"
+    src.write_bytes(data[:len(data) // 12])
+    errors = []
+    for name, extra in (("one", []), ("two", ["--scheduler", scheduler])):
+        out, log = tmp_path / f"{name}.mp4", tmp_path / f"{name}.csv"
+        assert main(["video", str(src), "-o", str(out), "--log", str(log), "--no-progress", *extra]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "decoding stopped at frame" in err[0] and f"rows to {log}" in err[0]
+        errors.append(err[0])
+    assert errors[1] == errors[0].replace("one.", "two.")
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+    assert len(frames(tmp_path / "two.mp4")) == len(frames(tmp_path / "one.mp4")) > 0
+    assert not list(tmp_path.glob(".*part*"))
+    # evaluate cannot score the frames that are not there: the message of one process, exit 2
+    for suffix in (".csv", ".json"):
+        shutil.copy(REPO / "videos" / ("project" + suffix), src.with_suffix(suffix))
+    messages = []
+    for extra in ([], ["--scheduler", scheduler]):
+        assert main(["evaluate", "video", str(src), *extra]) == 2
+        messages.append(capsys.readouterr().err.strip().splitlines()[-1])
+    assert messages[1] == messages[0] and "frames to score could be read" in messages[0]
