@@ -12,6 +12,13 @@ output frame and a row of numbers, and do the reading, writing, progress bar, pe
 and results file, all written atomically and never over an input; so the two pipelines behave
 the same on the command line. A video run returns one ``VideoRun`` record whichever the pipeline.
 
+On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in chunks of files
+(``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
+that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up, joined without
+re-encoding; the ``process`` callables are built on the workers by picklable factories
+(``lane_image_process``, ``lane_video_process``, ``hough_image_process``,
+``hough_video_process``), so the rows, logs and results are those of one process.
+
 Bad inputs: in a folder run, a file that cannot be read or processed (a lanelib error) gets its
 own row with an ``error`` and the run goes on; a video that breaks off half-way keeps the frames
 processed before the break and raises ``PartialOutputError`` once its outputs are in place.
