@@ -175,6 +175,8 @@ def _add_images(sub) -> None:
     _common_pipeline_args(p)
     p.add_argument("--debug", action="store_true",
                    help="write the 2x2 debug composite instead of the annotated frame")
+    p.add_argument("--no-progress", action="store_true", help="do not show the progress bar (Dask runs)")
+    _dask_args(p, "images")
     _geometry_args(p, auto=True)
     p.set_defaults(func=_run_images)
 
@@ -186,7 +188,9 @@ def _run_images(args) -> int:
         geo = runs.estimate_road_geometry(args.in_dir, calibration, _geometry_options(args))
         _print_geometry(geo)
         config = runs.with_geometry(config, geo)
-    rows = runs.process_images(files, args.output, config, calibration, debug=args.debug)
+    rows = runs.process_images(files, args.output, config, calibration, debug=args.debug,
+                               workers=args.workers, scheduler=args.scheduler,
+                               progress=not args.no_progress)
     for r in rows:
         if "error" in r:
             continue
@@ -227,6 +231,7 @@ def _add_video(sub) -> None:
                         "offset_m, lane_width_m, left_a..c, right_a..c (bird's-eye pixel fits)")
     _range_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    _dask_args(p, "video")
     _geometry_args(p, auto=True)
     p.set_defaults(func=_run_video)
 
@@ -262,7 +267,7 @@ def _run_video(args) -> int:
     run = runs.process_video(args.input, args.output, config, calibration, debug=args.debug,
                              log_path=args.log, progress=not args.no_progress,
                              start_s=args.start, end_s=args.end, auto_geometry=options,
-                             on_geometry=_print_geometry)
+                             on_geometry=_print_geometry, workers=args.workers, scheduler=args.scheduler)
     for note in run.notes:
         print(f"geometry: {note}")
     print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
@@ -342,6 +347,7 @@ def _add_hough(sub) -> None:
                         "right_held, reason")
     _range_args(p, "videos only: ")
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
+    _dask_args(p, "hough")
     p.set_defaults(func=_run_hough)
 
 
@@ -353,7 +359,8 @@ def _run_hough(args) -> int:
         if args.start is not None or args.end is not None:
             raise InputError(f"{args.input}: --start and --end are for videos; drop them for a "
                              "folder of images")
-        rows = runs.hough_images(list_images(args.input), args.output, config)
+        rows = runs.hough_images(list_images(args.input), args.output, config, workers=args.workers,
+                                 scheduler=args.scheduler, progress=not args.no_progress)
         for r in rows:
             if "error" in r:
                 continue
@@ -371,7 +378,8 @@ def _run_hough(args) -> int:
         raise InputError(f"{args.input}: neither a folder of images nor a video "
                          f"({', '.join(VIDEO_SUFFIXES)}); pass one of those")
     run = runs.hough_video(args.input, args.output, config, log_path=args.log,
-                           progress=not args.no_progress, start_s=args.start, end_s=args.end)
+                           progress=not args.no_progress, start_s=args.start, end_s=args.end,
+                           workers=args.workers, scheduler=args.scheduler)
     print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
           f"({run.fps:.1f} fps); both lines found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
@@ -443,11 +451,12 @@ def _add_evaluate(sub) -> None:
                         "offset_err_cm_p95, curvature_err_median, radius_err_pct_median, "
                         "point_accuracy, fp_rate, fn_rate, files_failed (rates as fractions, null "
                         "where nothing was scored)")
+    _dask_args(p, "evaluate")
     p.set_defaults(func=_run_evaluate)
 
 
 _PIPELINE_ONLY = (("config", "--config"), ("settings", "--set"), ("calibration", "--calibration"),
-                  ("detector", "--detector"), ("max_frames", "--max-frames"))
+                  ("detector", "--detector"), ("max_frames", "--max-frames"), ("scheduler", "--scheduler"))
 _BENCHMARK_ONLY = (("gt", "--gt"), ("pred", "--pred"), ("list_file", "--list"))
 
 
@@ -477,10 +486,12 @@ def _run_evaluate(args) -> int:
     if args.json:
         check_not_input(args.json, inputs)  # before the run, not after it
     if args.kind == "images":
-        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames)
+        report = evaluate.evaluate_images(args.path, pipe, max_frames=args.max_frames,
+                                          workers=args.workers, scheduler=args.scheduler)
     else:
         report = evaluate.evaluate_video(args.path, pipe, use_tracker=detector == "tracker",
-                                         max_frames=args.max_frames)
+                                         max_frames=args.max_frames, workers=args.workers,
+                                         scheduler=args.scheduler)
     print(report.table())
     for _, error in report.failed:
         print(f"error: {error}", file=sys.stderr)
@@ -493,6 +504,8 @@ def _run_evaluate(args) -> int:
 def _run_evaluate_benchmark(args) -> int:
     """``evaluate tusimple|culane``: print the official figures of a prediction set (and --json)."""
     given = [flag for dest, flag in _PIPELINE_ONLY if getattr(args, dest) not in (None, [])]
+    if args.workers != 1:
+        given.append("--workers")
     if args.path is not None:
         given.insert(0, str(args.path))
     if args.kind == "tusimple":
@@ -552,20 +565,37 @@ def _add_predict(sub) -> None:
                    help="folder for the predictions (not DATASET_ROOT)")
     _common_pipeline_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
-    _dask_args(p)
+    _dask_args(p, "predict")
     _geometry_args(p, auto=True)
     p.set_defaults(func=_run_predict)
 
 
-def _dask_args(p) -> None:
+# what --workers splits, and where the workers read and write (the shared filesystem --scheduler needs)
+_DASK_WORK = {
+    "predict": ("in chunks of frames", "read the images and write the predictions themselves, so "
+                "DATASET_ROOT and PRED_DIR"),
+    "images": ("in chunks of images", "read the images and write the annotated ones themselves, so "
+               "IN_DIR and OUT_DIR"),
+    "video": ("in segments of the clip, each started 50 frames early to warm the tracker up (the "
+              "output and log are those of one process), joined without re-encoding",
+              "read the video and write the segments beside OUT themselves, so IN and OUT's folder"),
+    "evaluate": ("images|video only: in chunks of images, or segments of the video (with the tracker each "
+                 "started 50 frames early to warm it up); the figures are those of one process",
+                 "read the images or the video and its truth themselves, so PATH"),
+    "hough": ("in chunks of images, or segments of a video (as `video`)",
+              "read the input and write the outputs themselves, so IN and OUT"),
+}
+
+
+def _dask_args(p, command: str) -> None:
+    split, shared = _DASK_WORK[command]
     g = p.add_argument_group("dataset scale (Dask)")
     g.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="predict on N worker processes of a Dask LocalCluster on this machine, in "
-                        "chunks of frames (default 1: in this process, without Dask)")
+                   help=f"run on N worker processes of a Dask LocalCluster on this machine, {split} "
+                        "(default 1: in this process, without Dask)")
     g.add_argument("--scheduler", metavar="ADDRESS",
-                   help="predict on the workers of a running Dask cluster (tcp://HOST:PORT of `dask "
-                        "scheduler`; start workers with `dask worker ADDRESS`); the workers read the "
-                        "images and write the predictions themselves, so DATASET_ROOT and PRED_DIR "
+                   help="run on the workers of a running Dask cluster (tcp://HOST:PORT of `dask "
+                        f"scheduler`; start workers with `dask worker ADDRESS`); the workers {shared} "
                         "must be on a filesystem they share, at the same path; --workers is ignored. "
                         "Start the workers with DASK_DISTRIBUTED__NANNY__PRE_SPAWN_ENVIRON__"
                         "MALLOC_TRIM_THRESHOLD_=None in their environment (Dask's default trimming "

@@ -6,20 +6,26 @@ as without Dask), a ``distributed.LocalCluster`` of ``workers`` single-threaded 
 or a client of an existing Dask cluster (``dask scheduler`` and ``dask worker`` on any machines)
 for ``scheduler``. ``map_chunks`` sends the chunks (lists of work items) to the workers and
 returns each chunk's results in the chunks' order, updating one tqdm bar per item as chunks come
-back. The workers read and write the files themselves: with ``--scheduler`` the dataset and the
+back; ``map_items`` does both (chunks, map) and returns the items' results in order; ``segments``
+splits a video's frames into ranges for ``runs`` to track on the workers. The workers read and write the files themselves: with ``--scheduler`` the dataset and the
 output folder must lie on a filesystem every worker sees at the same path (a shared mount).
+
+``dask`` and ``distributed`` are imported inside the functions that need them (the documented
+exception to lanelib's module-level imports, docs/architecture.md): they take a few hundred ms
+to import, and only a run with ``--workers`` or ``--scheduler`` uses them.
 """
 from __future__ import annotations
 
 import math
 from contextlib import contextmanager
-from typing import Callable, Iterator, Sequence, TypeVar
+from typing import TYPE_CHECKING, Callable, Iterator, Sequence, TypeVar
 
-import dask
-import distributed
 from tqdm import tqdm
 
 from .errors import InputError
+
+if TYPE_CHECKING:
+    import distributed
 
 T = TypeVar("T")
 
@@ -54,6 +60,7 @@ def dask_client(workers: int = 1, scheduler: str | None = None) -> Iterator[dist
         If ``workers`` is below 1, or no scheduler answers at ``scheduler``.
     """
     if scheduler:
+        import distributed  # lazy: only a Dask run pays for it (module docstring)
         try:
             client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError, ValueError) as e:
@@ -68,6 +75,8 @@ def dask_client(workers: int = 1, scheduler: str | None = None) -> Iterator[dist
     if workers == 1:
         yield None
         return
+    import dask  # lazy: only a Dask run pays for them (module docstring)
+    import distributed
     with dask.config.set(WORKER_CONFIG), \
             distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                      dashboard_address=None) as cluster, \
@@ -87,20 +96,23 @@ def split(items: Sequence[T], size: int) -> list[list[T]]:
 
 
 def map_chunks(client: distributed.Client, fn: Callable[..., list], chunks: Sequence[Sequence],
-               bar: tqdm, **kwargs) -> list[list]:
+               bar: tqdm, sizes: Sequence[int] | None = None, **kwargs) -> list[list]:
     """Return ``[fn(chunk, **kwargs) for chunk in chunks]``, run by the client's workers.
 
     ``fn`` must be importable by the workers (a module-level function of lanelib) and return one
-    result per item; ``bar`` is updated by the chunk's length as each chunk comes back. An
-    exception raised by ``fn`` cancels the chunks not yet run and is raised here.
+    result per item; ``bar`` is updated by the chunk's length (or its entry of ``sizes``: e.g.
+    the frames of a video segment) as each chunk comes back. An exception raised by ``fn``
+    cancels the chunks not yet run and is raised here.
     """
+    import distributed  # lazy (module docstring)
     futures = client.map(fn, chunks, pure=False, **kwargs)
     index = {f.key: i for i, f in enumerate(futures)}
     results: list[list | None] = [None] * len(futures)
     try:
         for future in distributed.as_completed(futures):
             results[index[future.key]] = future.result()
-            bar.update(len(chunks[index[future.key]]))
+            i = index[future.key]
+            bar.update(len(chunks[i]) if sizes is None else sizes[i])
     except BaseException:
         client.cancel(futures)
         raise
@@ -121,3 +133,47 @@ def map_ordered(client: distributed.Client, fn: Callable[..., T], items: Sequenc
 def total_threads(client: distributed.Client) -> int:
     """Return the worker threads of the client's cluster (at least 1)."""
     return max(1, sum(client.nthreads().values()))
+
+
+def map_items(client: distributed.Client, fn: Callable[..., list], items: Sequence, bar: tqdm,
+              **kwargs) -> list:
+    """Return the results of ``fn`` on every item, in the items' order, run by the client's workers.
+
+    The items go in chunks (``chunk_size`` for the cluster's threads, ``split``) as tasks
+    ``fn(chunk, **kwargs)``, each returning one result per item of its chunk (``map_chunks``: one
+    bar update per item as chunks come back). A failed item is ``fn``'s to record in its result
+    (a row with an ``error``, an outcome with its message) so the run goes on; an exception
+    raised by ``fn`` (a bug, a bad config that fails every item) stops the run.
+    """
+    chunks = split(items, chunk_size(len(items), total_threads(client)))
+    return [r for chunk in map_chunks(client, fn, chunks, bar, **kwargs) for r in chunk]
+
+
+# frames a segment of a tracked video is run before its first frame and dropped (``segments``):
+# the tracker's state (smoothing over 5 frames, the prior fits, held lines) forgets a start this
+# far back, so a segment's frames come out as those of one run through the whole clip
+WARMUP_FRAMES = 50
+# a segment is at least this many warm-up lengths long, so the warm-up costs at most ~1/8 more
+MIN_SEGMENT_WARMUPS = 8
+
+
+def segments(frames: range, parts: int, warmup: int = 0) -> list[tuple[int, int, int]]:
+    """Return ``(first, start, stop)`` of each of ``parts`` consecutive frame ranges of ``frames``.
+
+    The segments cover ``frames`` in order with sizes differing by at most one frame (fewer
+    segments when there are fewer frames than ``parts``); a segment's kept frames are
+    ``start .. stop - 1`` and it is run from ``first = max(frames.start, start - warmup)``, the
+    frames before ``start`` only warming the tracker up.
+    """
+    n = len(frames)
+    parts = max(1, min(parts, n))
+    bounds = [frames.start + (n * k) // parts for k in range(parts + 1)]
+    return [(max(frames.start, a - warmup), a, b) for a, b in zip(bounds, bounds[1:]) if b > a]
+
+
+def segment_count(frames: int, threads: int, warmup: int = WARMUP_FRAMES) -> int:
+    """Return how many segments to split a video of ``frames`` into: one or more per worker
+    thread (``CHUNKS_PER_THREAD`` at most), each at least ``MIN_SEGMENT_WARMUPS * warmup`` frames
+    long when the clip allows more than one per thread."""
+    longest = max(1, frames // max(1, MIN_SEGMENT_WARMUPS * warmup))
+    return max(1, min(frames, max(threads, min(threads * CHUNKS_PER_THREAD, longest))))

@@ -48,6 +48,9 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
+from tqdm import tqdm
+
+from . import cluster
 
 from .benchmarks.metrics import (  # noqa: F401  (the point matching is shared; see above)
     MATCH_ACCURACY, POINT_THRESHOLD_PX, LineScores, line_accuracy, line_threshold_px, score_lines)
@@ -317,11 +320,7 @@ class _Collector:
         self.rows: list[tuple] = []
 
     def add(self, name: str, result, lane) -> None:
-        s = score_frame(self.pipeline, result, lane)
-        m = result.measurement
-        self.rows.append((name, bool(result.found), lane.offset_m, m.offset_m, lane.curvature_per_m,
-                          m.curvature_per_m, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
-                          s.accuracy, s.pred_lines, s.gt_lines, s.fp_lines, s.fn_lines, lane))
+        self.rows.append(_score_row(self.pipeline, name, result, lane))
 
     def report(self, failed: Sequence[tuple[str, str]] = ()) -> EvalReport:
         cols = list(zip(*self.rows)) if self.rows else [()] * 16
@@ -333,7 +332,38 @@ class _Collector:
                           i_(11), i_(12), i_(13), i_(14), tuple(cols[15]), tuple(failed))
 
 
-def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None = None) -> EvalReport:
+def _score_row(pipeline, name: str, result, lane) -> tuple:
+    """Return one frame's row of an ``EvalReport`` (what ``_Collector`` gathers)."""
+    s = score_frame(pipeline, result, lane)
+    m = result.measurement
+    return (name, bool(result.found), lane.offset_m, m.offset_m, lane.curvature_per_m,
+            m.curvature_per_m, lane.radius_m, m.radius_m, lane.lane_width_m, m.lane_width_m,
+            s.accuracy, s.pred_lines, s.gt_lines, s.fp_lines, s.fn_lines, lane)
+
+
+def score_images(chunk: Sequence[Path], pipeline) -> list[tuple[tuple | None, tuple[str, str] | None]]:
+    """Return ``(row, None)`` for each image of ``chunk`` scored, ``(None, (name, error))`` for
+    each that could not be (a task of ``evaluate_images`` on Dask, and its loop in one process)."""
+    out = []
+    w, h = pipeline.size
+    for f in chunk:
+        try:
+            lane = load_image_truth(f).lane
+            rgb = read_image(f)
+            if rgb.shape[:2] != (h, w):
+                raise InputError(f"{f}: is {rgb.shape[1]}x{rgb.shape[0]} but the ground truth's camera "
+                                 f"is {w}x{h}; score images rendered by that camera (regenerate them "
+                                 "with `python -m lanelib synth images`)")
+            result = pipeline.detect(rgb)
+        except LaneLibError as e:
+            out.append((None, (f.name, naming_the_file(str(e), f, f.with_suffix(".json")))))
+            continue
+        out.append((_score_row(pipeline, f.name, result, lane), None))
+    return out
+
+
+def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None = None,
+                    workers: int = 1, scheduler: str | None = None, progress: bool = True) -> EvalReport:
     """Return the per-image evaluation of ``pipeline`` on a folder of images with truth beside them.
 
     Each image is detected on its own (``LanePipeline.detect``) and scored against the JSON truth
@@ -347,34 +377,31 @@ def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None 
     folder : folder of images, each ``NAME.jpg`` with ``NAME.json`` beside it.
     pipeline : the ``LanePipeline`` to score (its calibration is used to map lines to the raw image).
     max_frames : score only the first this many images (by name).
+    workers, scheduler : score the images in chunks on Dask workers (``cluster.dask_client``,
+        ``cluster.map_items``; the pipeline is sent as its config, calibration and size), with a
+        progress bar unless ``progress`` is false; the report is that of one process.
 
     Raises
     ------
     InputError
-        If the folder does not exist or holds no images.
+        If the folder does not exist or holds no images, or no Dask scheduler answers.
     """
     files = list_images(folder)[:max_frames]
+    with cluster.dask_client(workers, scheduler) as client:
+        if client is None:
+            scored = score_images(files, pipeline)
+        else:
+            with tqdm(total=len(files), desc="evaluate", unit="image", disable=not progress,
+                      dynamic_ncols=True) as bar:
+                scored = cluster.map_items(client, score_images, files, bar, pipeline=pipeline)
     col = _Collector(pipeline, str(folder), "frame")
-    failed: list[tuple[str, str]] = []
-    w, h = pipeline.size
-    for f in files:
-        try:
-            lane = load_image_truth(f).lane
-            rgb = read_image(f)
-            if rgb.shape[:2] != (h, w):
-                raise InputError(f"{f}: is {rgb.shape[1]}x{rgb.shape[0]} but the ground truth's camera "
-                                 f"is {w}x{h}; score images rendered by that camera (regenerate them "
-                                 "with `python -m lanelib synth images`)")
-            result = pipeline.detect(rgb)
-        except LaneLibError as e:
-            failed.append((f.name, naming_the_file(str(e), f, f.with_suffix(".json"))))
-            continue
-        col.add(f.name, result, lane)
-    return col.report(failed)
+    col.rows = [row for row, _ in scored if row is not None]
+    return col.report([fail for _, fail in scored if fail is not None])
 
 
 def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
-                   max_frames: int | None = None) -> EvalReport:
+                   max_frames: int | None = None, workers: int = 1, scheduler: str | None = None,
+                   progress: bool = True) -> EvalReport:
     """Return the per-frame evaluation of ``pipeline`` on a video with its per-frame truth.
 
     Parameters
@@ -384,6 +411,10 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
     use_tracker : track the lane through the frames (``LaneTracker``); False detects every frame
         on its own (``LanePipeline.detect``).
     max_frames : score only the first this many frames.
+    workers, scheduler : score the clip in segments on Dask workers (``cluster.dask_client``,
+        ``cluster.segments``; with the tracker each segment starts ``cluster.WARMUP_FRAMES`` early
+        and drops those frames, so the rows are those of one run), with a progress bar unless
+        ``progress`` is false.
 
     Raises
     ------
@@ -391,7 +422,71 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
         If the video or its truth is missing or unreadable, the video stops decoding before the
         frames to score (a truncated file), or it holds more frames than its truth.
     """
-    return evaluate_video_many(path, [pipeline], use_tracker, max_frames)[0]
+    with cluster.dask_client(workers, scheduler) as client:
+        if client is None:
+            return evaluate_video_many(path, [pipeline], use_tracker, max_frames)[0]
+        truth = load_video_truth(path)
+        frames = range(len(truth.frames[:max_frames]))
+        warmup = cluster.WARMUP_FRAMES if use_tracker else 0
+        spans = cluster.segments(frames, cluster.segment_count(len(frames), cluster.total_threads(client),
+                                                               max(1, warmup)), warmup)
+        # the last segment reads on to the clip's end (unless --max-frames): a clip longer than
+        # its truth is refused, as in one process
+        chunks = [[(first, start, stop, max_frames is None and stop == frames.stop)]
+                  for first, start, stop in spans]
+        with tqdm(total=len(frames), desc="evaluate", unit="frame", disable=not progress,
+                  dynamic_ncols=True) as bar:
+            done = cluster.map_chunks(client, score_video_segment, chunks, bar,
+                                      sizes=[stop - start for _, start, stop in spans], path=Path(path),
+                                      pipeline=pipeline, use_tracker=use_tracker, max_frames=max_frames)
+    col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
+    for (rows,) in done:
+        if isinstance(rows, str):  # the first segment that failed says why, as one process would
+            raise InputError(rows)
+        col.rows += rows
+    if len(col.rows) < len(frames):
+        raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
+                         f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
+                         "regenerate both with `python -m lanelib synth --all`")
+    return col.report()
+
+
+def score_video_segment(chunk: Sequence[tuple[int, int, int, bool]], path: Path, pipeline,
+                        use_tracker: bool, max_frames: int | None) -> list[list[tuple] | str]:
+    """Return the score rows of each segment ``(first, start, stop, to_end)`` of a video (a Dask
+    task of ``evaluate_video``): run from ``first`` (a fresh tracker), rows kept from ``start``;
+    a segment that cannot be scored (the clip breaks off, more frames than truth) gives the
+    error's message instead (the client raises the first one in the clip's order)."""
+    truth = load_video_truth(path).frames
+    out: list[list[tuple] | str] = []
+    for first, start, stop, to_end in chunk:
+        tracker = LaneTracker(pipeline) if use_tracker else None
+        rows = []
+        try:
+            _score_segment(path, pipeline, tracker, truth, first, start, None if to_end else stop, rows)
+        except DecodeStoppedError as e:
+            out.append(f"{e}; only {e.frames + first} of the {len(truth[:max_frames])} frames to score "
+                       "could be read: pass a complete video, or --max-frames up to that")
+        except InputError as e:
+            out.append(str(e))
+        else:
+            out.append(rows)
+    return out
+
+
+def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int, stop: int | None,
+                   rows: list) -> None:
+    """Append the score rows of frames ``start ..`` to ``rows``, run from frame ``first``."""
+    with VideoReader(path, first, stop) as reader:
+        for n, raw in enumerate(reader):
+            i = first + n
+            if i >= len(truth):
+                raise InputError(f"{path}: the video has more frames than its truth "
+                                 f"{Path(path).with_suffix('.csv')} ({len(truth)}); "
+                                 "regenerate the truth with `python -m lanelib synth --all`")
+            result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+            if i >= start:
+                rows.append(_score_row(pipeline, str(i), result, truth[i]))
 
 
 def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracker: bool = True,

@@ -37,7 +37,8 @@ class LanePipeline:
     size : (width, height) of the frames; defaults to the perspective's ``size_px``.
 
     Everything that depends only on the configuration (remap maps, matrices, the car's position
-    in the bird's-eye view) is computed here, once.
+    in the bird's-eye view) is computed here, once. A pipeline pickles as (config, calibration,
+    size) and is built again on unpickling (its maps too), so it can be sent to Dask workers.
     """
 
     def __init__(self, config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
@@ -59,6 +60,9 @@ class LanePipeline:
         self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
         self.car_x_px = self.perspective.car_x_px
+
+    def __reduce__(self):
+        return LanePipeline, (self.config, self.undistorter.calibration, self.size)
 
     # ---- stages ---------------------------------------------------------------------------
 

@@ -12,6 +12,13 @@ output frame and a row of numbers, and do the reading, writing, progress bar, pe
 and results file, all written atomically and never over an input; so the two pipelines behave
 the same on the command line. A video run returns one ``VideoRun`` record whichever the pipeline.
 
+On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in chunks of files
+(``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
+that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up, joined without
+re-encoding; the ``process`` callables are built on the workers by picklable factories
+(``lane_image_process``, ``lane_video_process``, ``hough_image_process``,
+``hough_video_process``), so the rows, logs and results are those of one process.
+
 Bad inputs: in a folder run, a file that cannot be read or processed (a lanelib error) gets its
 own row with an ``error`` and the run goes on; a video that breaks off half-way keeps the frames
 processed before the break and raises ``PartialOutputError`` once its outputs are in place.
@@ -19,8 +26,11 @@ processed before the break and raises ``PartialOutputError`` once its outputs ar
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import os
+import shutil
+import tempfile
 import time
 from collections import deque
 from dataclasses import dataclass, replace
@@ -78,8 +88,32 @@ def image_notes(info: io.ImageFileInfo) -> list[str]:
     return notes
 
 
-def run_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike, process: ImageFn,
-               results_name: str = "results.json") -> list[dict]:
+def _image_row(f: Path, out: Path, process: ImageFn, files: Sequence[Path]) -> dict:
+    """Return the results row of one image after processing it and writing its output image."""
+    try:
+        rgb, info = io.read_image_info(f)
+        image, row = process(rgb)
+        io.write_image(out / f.name, image, inputs=files)
+    except ConfigError:
+        raise
+    except LaneLibError as e:
+        return {"file": f.name, "error": naming_the_file(str(e), f)}
+    notes = image_notes(info)
+    return {"file": f.name, **{k: _clean(v) for k, v in row.items()},
+            **({"note": "; ".join(notes)} if notes else {})}
+
+
+def image_chunk(chunk: Sequence[Path], out_dir: Path, make: Callable[[], ImageFn],
+                files: Sequence[Path]) -> list[dict]:
+    """Return the results rows of a chunk of images (a Dask task of ``run_images``): ``make()``
+    gives the chunk's ``process`` (its pipelines built once per chunk)."""
+    process = make()
+    return [_image_row(f, out_dir, process, files) for f in chunk]
+
+
+def run_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike, process: ImageFn | None,
+               results_name: str = "results.json", make: Callable[[], ImageFn] | None = None,
+               client=None, progress: bool = True) -> list[dict]:
     """Process each image, write ``OUT_DIR/<name>`` and ``OUT_DIR/results.json``; return the rows.
 
     Each row is ``{"file": <input file name>, **row}``, with ``"note"`` when the image was grey,
@@ -88,6 +122,12 @@ def run_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike, p
     "error": <one line naming the file, the cause and the fix>}``, no output image, and the run
     goes on. Any other exception is a bug and stops the run, as does a ``ConfigError`` (a bad
     configuration fails every file alike).
+
+    With a Dask ``client`` (``cluster.dask_client``) the files go in chunks to its workers
+    (``cluster.map_items``, one progress bar unless ``progress`` is false), each chunk processed
+    by the ``process`` that ``make()`` (a picklable factory, e.g. a ``functools.partial`` of a
+    module-level function) builds there; the workers write the images, this process the results
+    file, with the rows of one process.
 
     Raises
     ------
@@ -98,20 +138,13 @@ def run_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike, p
     files = [Path(f) for f in files]
     if any(f.parent.resolve() == out.resolve() for f in files):
         raise io.InputError(f"{out}: the output folder is the input folder; choose another -o folder")
-    rows = []
-    for f in files:
-        try:
-            rgb, info = io.read_image_info(f)
-            image, row = process(rgb)
-            io.write_image(out / f.name, image, inputs=files)
-        except ConfigError:
-            raise
-        except LaneLibError as e:
-            rows.append({"file": f.name, "error": naming_the_file(str(e), f)})
-            continue
-        notes = image_notes(info)
-        rows.append({"file": f.name, **{k: _clean(v) for k, v in row.items()},
-                     **({"note": "; ".join(notes)} if notes else {})})
+    if client is None:
+        process = process if process is not None else make()
+        rows = [_image_row(f, out, process, files) for f in files]
+    else:
+        with tqdm(total=len(files), desc=out.name, unit="image", disable=not progress,
+                  dynamic_ncols=True) as bar:
+            rows = cluster.map_items(client, image_chunk, files, bar, out_dir=out, make=make, files=files)
     io.write_json(out / results_name, rows, inputs=files)
     return rows
 
@@ -289,6 +322,137 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
         wrote = f"wrote {n} frames to {writer.path}" + (f" and {n} rows to {log.path}" if log.path else "")
         raise PartialOutputError(f"{stopped}; {wrote}", n)
     return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, first)
+
+
+# a FrameFn and the list its notes go to (what happened on the way: GeometryWatch.notes)
+FrameFnMaker = Callable[[], tuple[FrameFn, list[str]]]
+
+
+@dataclass(frozen=True)
+class SegmentOutcome:
+    """What ``video_segment`` did with one segment: the log rows of its kept frames, the frames
+    with a lane found, where decoding stopped (empty when it did not) and the run's notes."""
+
+    rows: tuple[dict, ...]
+    found: int
+    stopped: str = ""
+    notes: tuple[str, ...] = ()
+
+
+def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, parts: Path,
+                  make: FrameFnMaker, threads: int | None = None) -> list[SegmentOutcome]:
+    """Return the outcome of each segment of a chunk after writing its part video (a Dask task).
+
+    A segment ``(first, start, stop, to_end)`` (``cluster.segments``) is run from frame
+    ``first`` with a fresh ``make()``; the frames before ``start`` only warm the tracker up and
+    are dropped; the frames ``start .. stop - 1`` (to the clip's end when ``to_end``) go to
+    ``parts/<start>.mp4`` (written atomically, only when it holds a frame). A clip that stops
+    decoding in the segment (or before it) ends the segment there, with ``stopped`` saying why.
+    """
+    out = []
+    for first, start, stop, to_end in chunk:
+        process, notes = make()
+        rows, found, stopped = [], 0, ""
+        writer = None
+        try:
+            try:
+                reader = io.VideoReader(in_path, first, None if to_end else stop)
+                writer = io.VideoWriter(parts / f"{start:09d}.mp4", reader.info.fps, inputs=[in_path],
+                                        threads=threads)
+                with reader:
+                    for n, frame in enumerate(reader):
+                        index = first + n
+                        image, row, lane = process(frame, index, index / reader.info.fps)
+                        if index >= start:
+                            writer.write(image)
+                            rows.append(row)
+                            found += bool(lane)
+            except DecodeStoppedError as e:
+                stopped = str(e)
+            except InputError as e:  # no frame from `first` on: the clip broke off before
+                if writer is None and first == 0:
+                    raise
+                stopped = str(e)
+            if writer is not None and writer.frames_written:
+                writer.close()
+            elif writer is not None:
+                writer.abort()
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes)))
+    return out
+
+
+def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, make: FrameFnMaker,
+                       client, log_path: str | os.PathLike | None = None, progress: bool = True,
+                       desc: str = "frames", threads: int | None = None, start_s: float | None = None,
+                       end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES) -> VideoRun:
+    """Return what a run did, as ``run_video``, with the clip split into segments run by the
+    workers of a Dask ``client``.
+
+    The frames (all, or ``start_s`` .. ``end_s``: ``clip_frames``) are split into consecutive
+    segments (``cluster.segments``, ``cluster.segment_count``); each worker runs a fresh
+    ``make()`` over its segment from ``warmup`` frames earlier (the tracker's state then is that
+    of one run through the clip: the warm-up frames are dropped) and writes the segment's video
+    to a folder of parts beside ``out_path``; this process joins the parts (``io.join_videos``,
+    no re-encoding) and writes the per-frame log, both atomically, and removes the parts. One
+    progress bar counts the frames of the segments done. A clip that stops decoding keeps the
+    frames before the break, as ``run_video`` (``PartialOutputError``).
+    """
+    in_path, out = Path(in_path), Path(out_path)
+    t0 = time.perf_counter()
+    info = io.video_info(in_path)
+    whole = start_s is None and end_s is None
+    frames = range(info.n_frames) if whole else clip_frames(info, start_s, end_s)
+    inputs = [in_path]
+    io.check_not_input(out, inputs)
+    if log_path is not None:
+        io.check_not_input(log_path, inputs + [out])
+    count = cluster.segment_count(len(frames), cluster.total_threads(client), warmup)
+    spans = cluster.segments(frames, count, warmup)
+    chunks = [[(first, start, stop, end_s is None and stop == frames.stop)] for first, start, stop in spans]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    parts = Path(tempfile.mkdtemp(prefix=f".{out.stem}.", suffix=".parts", dir=out.parent))
+    try:
+        with tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
+                  dynamic_ncols=True) as bar:
+            done = cluster.map_chunks(client, video_segment, chunks, bar,
+                                      sizes=[stop - start for _, start, stop in spans],
+                                      in_path=in_path.resolve(), parts=parts.resolve(), make=make,
+                                      threads=threads)
+        outcomes, files = [], []
+        for (_, start, _), (o,) in zip(spans, done):
+            outcomes.append(o)
+            if o.rows:
+                files.append(parts / f"{start:09d}.mp4")
+            if o.stopped:
+                break
+        if not files:
+            raise InputError(f"{in_path}: no frame could be decoded ({outcomes[0].stopped}); "
+                             "pass a readable video")
+        log = _CsvLog(Path(log_path) if log_path else None, inputs)
+        ok = False
+        try:
+            for o in outcomes:
+                for row in o.rows:
+                    log.write(row)
+            io.join_videos(files, out, inputs=inputs)
+            ok = True
+        finally:
+            log.finish(ok)
+    finally:
+        shutil.rmtree(parts, ignore_errors=True)
+    n = sum(len(o.rows) for o in outcomes)
+    found = sum(o.found for o in outcomes)
+    seconds = time.perf_counter() - t0
+    notes = tuple(note for o in outcomes for note in o.notes)
+    stopped = next((o.stopped for o in outcomes if o.stopped), "")
+    if stopped:
+        wrote = f"wrote {n} frames to {out}" + (f" and {n} rows to {log_path}" if log_path else "")
+        raise PartialOutputError(f"{stopped}; {wrote}", n)
+    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, frames.start, notes)
 
 
 # --------------------------------------------------------------------------- road geometry from frames
@@ -476,18 +640,9 @@ class GeometryWatch:
 
 # --------------------------------------------------------------------------- the advanced pipeline
 
-def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
-                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
-                   debug: bool = False) -> list[dict]:
-    """Return the rows of ``results.json`` after finding the lane in each image and writing it annotated.
-
-    Each row is the image's ``FrameResult.summary``. Frames of several sizes are allowed: one
-    pipeline is built per size (the calibration is rescaled or refused per
-    ``Calibration.for_size``). A file that cannot be read, an image too small for the bird's-eye
-    view, or one whose size the calibration does not fit gets a row with an ``error``
-    (``run_images``), and the run goes on. ``debug`` writes the 2x2 debug composite
-    (``LanePipeline.debug_composite``) instead of the annotated frame.
-    """
+def lane_image_process(config: PipelineConfig, calibration: Calibration | None, debug: bool) -> ImageFn:
+    """Return ``process_images``'s ``process``: one image -> (annotated image or debug composite,
+    ``FrameResult.summary``), with one pipeline per frame size, built on first use."""
     cache: dict[tuple[int, int], LanePipeline] = {}
 
     def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -506,7 +661,28 @@ def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLik
         image = pipe.debug_composite(result) if debug else result.images["result"]
         return image, result.summary()
 
-    return run_images([Path(f) for f in files], out_dir, process)
+    return process
+
+
+def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
+                   config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                   debug: bool = False, workers: int = 1, scheduler: str | None = None,
+                   progress: bool = True) -> list[dict]:
+    """Return the rows of ``results.json`` after finding the lane in each image and writing it annotated.
+
+    Each row is the image's ``FrameResult.summary``. Frames of several sizes are allowed: one
+    pipeline is built per size (the calibration is rescaled or refused per
+    ``Calibration.for_size``). A file that cannot be read, an image too small for the bird's-eye
+    view, or one whose size the calibration does not fit gets a row with an ``error``
+    (``run_images``), and the run goes on. ``debug`` writes the 2x2 debug composite
+    (``LanePipeline.debug_composite``) instead of the annotated frame. ``workers``,
+    ``scheduler``: the images go in chunks to Dask workers (``cluster.dask_client``,
+    ``run_images``; a progress bar unless ``progress`` is false), with the rows of one process.
+    """
+    make = functools.partial(lane_image_process, config, calibration, debug)
+    with cluster.dask_client(workers, scheduler) as client:
+        return run_images([Path(f) for f in files], out_dir, None, make=make, client=client,
+                          progress=progress)
 
 
 VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
@@ -537,7 +713,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                   debug: bool = False, log_path: str | os.PathLike | None = None,
                   progress: bool = True, threads: int | None = None, start_s: float | None = None,
                   end_s: float | None = None, auto_geometry: GeometryOptions | None = None,
-                  on_geometry: Callable[[RoadGeometry], None] | None = None) -> VideoRun:
+                  on_geometry: Callable[[RoadGeometry], None] | None = None, workers: int = 1,
+                  scheduler: str | None = None) -> VideoRun:
     """Return what the run did after tracking the lane through a video and writing it annotated.
 
     The lane is drawn on the RAW frames, mapped through the lens model (``config.draw.
@@ -561,19 +738,46 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         keep checking them (``GeometryWatch``); a new estimate restarts the tracker. The run's
         ``notes`` say when and why.
     on_geometry : called with the first estimate, before the run starts (the CLI prints it).
+    workers, scheduler : run the clip in segments on Dask workers (``cluster.dask_client``,
+        ``run_video_segments``: each segment starts ``cluster.WARMUP_FRAMES`` early to warm the
+        tracker up, so the frames and the log are those of one process). With
+        ``auto_geometry`` the geometry is estimated once here and each segment checks it from
+        that estimate on (a drift found in one segment does not carry over into the next).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
     the frames before the break, and ``PartialOutputError`` says so.
     """
-    trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
-    watch: list[GeometryWatch] = []
+    geo = None
     if auto_geometry is not None:
+        # before the cluster: a failed estimate stops the run before any worker starts
         geo = estimate_road_geometry(in_path, calibration, auto_geometry, start_s)
         if on_geometry is not None:
             on_geometry(geo)
+    fps = io.video_info(in_path).fps if geo is not None else None
+    make = functools.partial(lane_video_process, config, calibration, debug, geo, auto_geometry, fps)
+    with cluster.dask_client(workers, scheduler) as client:
+        if client is not None:
+            return run_video_segments(in_path, out_path, make, client, log_path=log_path,
+                                      progress=progress, desc=Path(in_path).name, threads=threads,
+                                      start_s=start_s, end_s=end_s)
+    process, notes = make()
+    run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
+                    desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+    return replace(run, notes=tuple(notes))
+
+
+def lane_video_process(config: PipelineConfig, calibration: Calibration | None, debug: bool,
+                       geo: RoadGeometry | None = None, auto_geometry: GeometryOptions | None = None,
+                       fps: float | None = None) -> tuple[FrameFn, list[str]]:
+    """Return ``process_video``'s ``process`` (a fresh ``LaneTracker`` on the first frame) and
+    the list its notes go to; with ``geo``, the road geometry in use, checked (``GeometryWatch``
+    at ``fps``) and estimated again when it drifts, which restarts the tracker."""
+    trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
+    watch: list[GeometryWatch] = []
+    if geo is not None:
         config = with_geometry(config, geo)
-        watch.append(GeometryWatch(geo, calibration, auto_geometry, io.video_info(in_path).fps))
+        watch.append(GeometryWatch(geo, calibration, auto_geometry, fps))
 
     current = [config]  # the config of the geometry in use
 
@@ -594,29 +798,35 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
             image = pipe.annotate(frame, result, raw=True)
         return image, video_log_row(index, time_s, result), result.found
 
-    run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                    desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
-    return replace(run, notes=tuple(watch[0].notes)) if watch else run
+    return process, (watch[0].notes if watch else [])
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline
 
 def hough_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
-                 config: hough.HoughConfig = hough.HoughConfig()) -> list[dict]:
+                 config: hough.HoughConfig = hough.HoughConfig(), workers: int = 1,
+                 scheduler: str | None = None, progress: bool = True) -> list[dict]:
     """Return the rows of ``results.json`` after finding the lines in each image and writing it annotated.
 
     Each row holds ``file``, ``left_found``, ``right_found``, each line's x (px) at the bottom
     row and at the top of the region (None when not found), and ``reason``
     (``HoughResult.row``); a file that cannot be read holds ``file`` and ``error`` instead, and
-    the run goes on (``run_images``).
+    the run goes on (``run_images``). ``workers``, ``scheduler``: on Dask, as ``process_images``.
     """
+    make = functools.partial(hough_image_process, config)
+    with cluster.dask_client(workers, scheduler) as client:
+        return run_images(files, out_dir, None, make=make, client=client, progress=progress)
+
+
+def hough_image_process(config: hough.HoughConfig) -> ImageFn:
+    """Return ``hough_images``'s ``process``: one image -> (annotated, ``HoughResult.row``)."""
     finder = hough.HoughLaneFinder(config)
 
     def process(rgb: np.ndarray) -> tuple[np.ndarray, dict]:
         result = finder.process(rgb)
         return hough.annotate(rgb, result), result.row()
 
-    return run_images(files, out_dir, process)
+    return process
 
 
 def hough_log_row(frame: int, time_s: float, result: hough.HoughResult) -> dict:
@@ -628,7 +838,7 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                 config: hough.HoughConfig = hough.HoughConfig(),
                 log_path: str | os.PathLike | None = None, progress: bool = True,
                 threads: int | None = None, start_s: float | None = None,
-                end_s: float | None = None) -> VideoRun:
+                end_s: float | None = None, workers: int = 1, scheduler: str | None = None) -> VideoRun:
     """Return what the run did after tracking both lines through a video and writing it annotated.
 
     ``out_path`` is an H.264 video with the input's size and frame rate; the optional per-frame
@@ -636,11 +846,24 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     (measured or held). ``start_s``, ``end_s`` run on part of the clip, as for
     ``process_video``. Outputs are written atomically by ``run_video``: an error or Ctrl-C
     leaves nothing behind, except a video that stops decoding half-way: its outputs keep the
-    frames before the break, and ``PartialOutputError`` says so.
+    frames before the break, and ``PartialOutputError`` says so. ``workers``, ``scheduler``: in
+    segments on Dask, as ``process_video``.
     """
     if Path(out_path).suffix.lower() not in io.VIDEO_SUFFIXES:
         raise InputError(f"{out_path}: the output video needs a video suffix "
                          f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. out.mp4")
+    make = functools.partial(hough_video_process, config)
+    with cluster.dask_client(workers, scheduler) as client:
+        if client is not None:
+            return run_video_segments(in_path, out_path, make, client, log_path=log_path,
+                                      progress=progress, desc=Path(in_path).name, threads=threads,
+                                      start_s=start_s, end_s=end_s)
+    return run_video(in_path, out_path, make()[0], log_path=log_path, progress=progress,
+                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+
+
+def hough_video_process(config: hough.HoughConfig) -> tuple[FrameFn, list[str]]:
+    """Return ``hough_video``'s ``process`` (a fresh ``HoughTracker``) and its (empty) notes."""
     tracker = hough.HoughTracker(config)
 
     def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict, bool]:
@@ -648,8 +871,7 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         return (hough.annotate(frame, result), hough_log_row(index, time_s, result),
                 result.left_found and result.right_found)
 
-    return run_video(in_path, out_path, process, log_path=log_path, progress=progress,
-                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
+    return process, []
 
 
 # --------------------------------------------------------------------------- benchmark predictions

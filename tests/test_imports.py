@@ -145,7 +145,7 @@ def test_lanelib_has_no_import_cycle():
 
 
 # imported only by the one function that needs them: each costs about 1 s at every command's start
-HEAVY_IMPORTS = ("scipy.optimize", "scipy.interpolate")
+HEAVY_IMPORTS = ("scipy.optimize", "scipy.interpolate", "dask", "distributed")
 
 
 def test_the_command_line_starts_without_the_heavy_imports():

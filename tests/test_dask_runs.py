@@ -1,0 +1,216 @@
+"""Tests of the batch runs on Dask (``images``, ``hough``, ``video`` with ``--workers`` or
+``--scheduler``; ``cluster.segments``, ``io.join_videos``): the outputs are those of one process,
+a bad item is recorded and the run goes on, a bad scheduler writes nothing.
+
+Kept small for CI: one ``LocalCluster`` of 2 one-thread workers for the module (the commands get
+its address as ``--scheduler``, as a separate cluster would be used), a 130-frame 640x360 clip cut
+from ``videos/harder.mp4``, four test images.
+"""
+from __future__ import annotations
+
+import json
+import pickle
+import shutil
+import socket
+import subprocess
+from pathlib import Path
+
+import imageio_ffmpeg
+import numpy as np
+import pytest
+
+from lanelib import cluster, evaluate, io
+from lanelib.cli import main
+from lanelib.errors import InputError
+from lanelib.pipeline import LanePipeline
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def scheduler() -> str:
+    """The address of a LocalCluster of 2 one-thread worker processes, shared by the module."""
+    with cluster.dask_client(2) as client:
+        yield client.scheduler.address
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory) -> Path:
+    """130 frames (5.2 s at 25 fps) of videos/harder.mp4 at 640x360."""
+    out = tmp_path_factory.mktemp("clip") / "small.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-i", str(REPO / "videos/harder.mp4"),
+                    "-frames:v", "130", "-vf", "scale=640:360", "-c:v", "libx264", "-preset", "ultrafast",
+                    "-pix_fmt", "yuv420p", str(out)], check=True)
+    return out
+
+
+def frames(path: Path) -> list[np.ndarray]:
+    with io.VideoReader(path) as reader:
+        return [f.copy() for f in reader]
+
+
+# --------------------------------------------------------------------------- pieces
+
+def test_segments_cover_the_frames_in_order_with_their_warm_up():
+    assert cluster.segments(range(10, 130), 2, 50) == [(10, 10, 70), (20, 70, 130)]
+    assert cluster.segments(range(0, 7), 3) == [(0, 0, 2), (2, 2, 4), (4, 4, 7)]
+    assert cluster.segments(range(0, 2), 5) == [(0, 0, 1), (1, 1, 2)]  # no empty segment
+    assert cluster.segment_count(120, 2) == 2  # short: one per worker
+    assert cluster.segment_count(1260, 2) == 3  # each at least 8 warm-ups long
+    assert cluster.segment_count(100_000, 2) == 2 * cluster.CHUNKS_PER_THREAD
+
+
+def test_join_videos_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    shown = []
+    for name, n in (("a.mp4", 5), ("b.mp4", 7)):
+        with io.VideoWriter(tmp_path / name, 25) as w:
+            for _ in range(n):
+                shown.append(np.repeat(rng.integers(0, 256, (6, 8, 3), np.uint8), 8, 0).repeat(8, 1))
+                w.write(shown[-1])
+    out = io.join_videos([tmp_path / "a.mp4", tmp_path / "b.mp4"], tmp_path / "ab.mp4")
+    got = frames(out)
+    assert len(got) == 12
+    assert io.video_info(out).fps == 25
+    # the parts' own frames, not re-encoded: each as close to what was shown as in its part
+    parts = frames(tmp_path / "a.mp4") + frames(tmp_path / "b.mp4")
+    assert all(np.array_equal(g, p) for g, p in zip(got, parts))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "ab.mp4", "b.mp4"]  # no temporaries
+    with pytest.raises(InputError, match="no video parts"):
+        io.join_videos([], tmp_path / "none.mp4")
+
+
+def test_a_pipeline_pickles_as_its_config_calibration_and_size():
+    pipe = LanePipeline()
+    wire = pickle.dumps(pipe)
+    assert len(wire) < 20_000  # no remap maps on the wire: they are built again
+    again = pickle.loads(wire)
+    assert again.size == pipe.size and again.config == pipe.config
+    raw = io.read_image(REPO / "test_images/straight_1.jpg")
+    assert again.detect(raw).summary() == pipe.detect(raw).summary()
+
+
+# --------------------------------------------------------------------------- runs
+
+def test_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler, capsys):
+    """Two segments (frames 10..69, 70..129), the second warmed up from frame 20: the same rows."""
+    args = ["video", str(clip), "--start", "0.4", "--no-progress"]
+    assert main([*args, "-o", str(tmp_path / "one.mp4"), "--log", str(tmp_path / "one.csv")]) == 0
+    assert main([*args, "-o", str(tmp_path / "two.mp4"), "--log", str(tmp_path / "two.csv"),
+                 "--scheduler", scheduler]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split(" in ")[0] == out[1].split(" in ")[0].replace("two.mp4", "one.mp4")
+    assert "120 frames (frames 10..129" in out[1]
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+    assert len(frames(tmp_path / "two.mp4")) == 120
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["one.csv", "one.mp4", "two.csv", "two.mp4"]
+
+
+def test_hough_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler):
+    args = ["hough", str(clip), "--no-progress"]
+    assert main([*args, "-o", str(tmp_path / "one.mp4"), "--log", str(tmp_path / "one.csv")]) == 0
+    assert main([*args, "-o", str(tmp_path / "two.mp4"), "--log", str(tmp_path / "two.csv"),
+                 "--scheduler", scheduler]) == 0
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+
+
+@pytest.fixture
+def image_folder(tmp_path) -> Path:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("straight_1.jpg", "curve_right_400m_shadows.jpg", "curve_left_250m.jpg"):
+        shutil.copy(REPO / "test_images" / name, folder / name)
+    (folder / "broken.jpg").write_bytes(b"not a jpeg")
+    return folder
+
+
+@pytest.mark.parametrize("command", ["images", "hough"])
+def test_images_on_dask_give_the_results_of_one_process(tmp_path, image_folder, scheduler, capsys, command):
+    """A bad file gets its error row and one `error:` line, the others run (exit 1), as in one process."""
+    results = []
+    for name, extra in (("one", []), ("two", ["--scheduler", scheduler])):
+        assert main([command, str(image_folder), "-o", str(tmp_path / name), "--no-progress", *extra]) == 1
+        err = capsys.readouterr().err
+        assert err.count("error:") == 1 and "broken.jpg" in err
+        results.append(json.loads((tmp_path / name / "results.json").read_text()))
+        assert sorted(p.name for p in (tmp_path / name).iterdir()) == sorted(
+            ["results.json", "curve_left_250m.jpg", "straight_1.jpg", "curve_right_400m_shadows.jpg"])
+    assert results[1] == results[0]
+    assert [r["file"] for r in results[1]] == ["broken.jpg", "curve_left_250m.jpg",
+                                               "curve_right_400m_shadows.jpg", "straight_1.jpg"]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("command", ["video", "images"])
+def test_a_bad_scheduler_writes_nothing(tmp_path, clip, image_folder, capsys, monkeypatch, command):
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT_S", 1)
+    source = clip if command == "video" else image_folder
+    out = tmp_path / ("out.mp4" if command == "video" else "out")
+    assert main([command, str(source), "-o", str(out), "--no-progress",
+                 "--scheduler", f"tcp://127.0.0.1:{free_port()}"]) == 2
+    assert "no Dask scheduler answered" in capsys.readouterr().err
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["in"]
+
+
+# --------------------------------------------------------------------------- evaluate
+
+def same_reports(a, b) -> bool:
+    return (a.names == b.names and a.failed == b.failed and all(
+        np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True)
+        for k in ("found", "offset_pred_m", "curvature_pred_per_m", "lane_width_pred_m", "line_accuracy",
+                  "pred_lines", "fp_lines", "fn_lines")))
+
+
+def test_evaluate_video_on_dask_scores_the_frames_of_one_process(scheduler):
+    """110 frames of shadows.mp4 with the tracker: segments 0..54 and 55..109 (warmed up from 5)."""
+    path = REPO / "videos/shadows.mp4"
+    pipe = LanePipeline(calibration=evaluate.calibration_from_truth(path))
+    one = evaluate.evaluate_video(path, pipe, max_frames=110)
+    two = evaluate.evaluate_video(path, pipe, max_frames=110, scheduler=scheduler, progress=False)
+    assert two.frames == 110 and same_reports(one, two)
+
+
+def test_evaluate_images_on_dask_scores_as_one_process(tmp_path, scheduler):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("straight_1", "curve_left_250m", "concrete_light"):
+        for suffix in (".jpg", ".json"):
+            shutil.copy(REPO / "test_images" / (name + suffix), folder / (name + suffix))
+    (folder / "broken.jpg").write_bytes(b"not a jpeg")
+    pipe = LanePipeline(calibration=evaluate.calibration_from_truth(folder))
+    one = evaluate.evaluate_images(folder, pipe)
+    two = evaluate.evaluate_images(folder, pipe, scheduler=scheduler, progress=False)
+    assert two.frames == 3 and [name for name, _ in two.failed] == ["broken.jpg"]
+    assert same_reports(one, two)
+
+
+def test_a_video_broken_half_way_on_dask_keeps_the_frames_before_the_break(tmp_path, faststart, scheduler,
+                                                                          capsys):
+    """As in one process (tests/test_video.py): exit 1, the outputs hold the frames before the break."""
+    data = faststart.read_bytes()
+    src = tmp_path / "cut.mp4"
+    src.write_bytes(data[:len(data) // 12])
+    errors = []
+    for name, extra in (("one", []), ("two", ["--scheduler", scheduler])):
+        out, log = tmp_path / f"{name}.mp4", tmp_path / f"{name}.csv"
+        assert main(["video", str(src), "-o", str(out), "--log", str(log), "--no-progress", *extra]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "decoding stopped at frame" in err[0] and f"rows to {log}" in err[0]
+        errors.append(err[0])
+    assert errors[1] == errors[0].replace("one.", "two.")
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+    assert len(frames(tmp_path / "two.mp4")) == len(frames(tmp_path / "one.mp4")) > 0
+    assert not list(tmp_path.glob(".*part*"))
+    # evaluate cannot score the frames that are not there: the message of one process, exit 2
+    for suffix in (".csv", ".json"):
+        shutil.copy(REPO / "videos" / ("project" + suffix), src.with_suffix(suffix))
+    messages = []
+    for extra in ([], ["--scheduler", scheduler]):
+        assert main(["evaluate", "video", str(src), *extra]) == 2
+        messages.append(capsys.readouterr().err.strip().splitlines()[-1])
+    assert messages[1] == messages[0] and "frames to score could be read" in messages[0]
