@@ -79,7 +79,8 @@ def dask_client(workers: int = 1, scheduler: str | None = None) -> Iterator[dist
     import distributed
     with dask.config.set(WORKER_CONFIG), \
             distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                     dashboard_address=None) as cluster, \
+                                     # its HTTP server on any free port: runs side by side never fight for 8787
+                                     dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         yield client
 

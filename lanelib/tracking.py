@@ -244,9 +244,12 @@ class LaneTracker:
         frames = np.array([acc.frame for acc in self._trend], float)
         centres = np.array([(acc.left + acc.right) / 2.0 for acc in self._trend])
         rate = np.polyfit(frames - frames[-1], centres, 1)[0]  # per frame, for a, b and c
+        # frame numbers counted from the last accepted frame: the same floats wherever the
+        # tracker started (a Dask segment warms up from a later frame than one process)
+        last = frames[-1]
         w = self._smoothing_weights()
-        times = w.T @ np.array([acc.frame for acc in self._history], float) / w.sum(axis=0)
-        target = min(float(self._frame if frame is None else frame), frames[-1] + 1.0)
+        times = w.T @ (np.array([acc.frame for acc in self._history], float) - last) / w.sum(axis=0)
+        target = min(float(self._frame if frame is None else frame) - last, 1.0)
         return lane[0] + rate * (target - times[0]), lane[1] + rate * (target - times[1])
 
     @property
