@@ -488,9 +488,10 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     residuals from a first fit are split into two groups (two-means from +-spacing/2); they are
     a double line when each group holds at least a fifth of the pixels, both lie side by side
     (each of eight bands of rows that holds pixels of one holds pixels of the other, but for a
-    quarter of them), the groups' centres lie 0.6-1.5 x ``spacing_px`` apart, and each is
-    a narrow stripe (RMS spread under a third of the spacing). A single line, a dashed one or
-    texture is returned unchanged.
+    quarter of them), the groups' centres lie 0.6-1.5 x ``spacing_px`` apart, each is a
+    narrow stripe (RMS spread under a quarter of the spacing), and the gap between them is clear
+    (under 5 % of the pixels within an eighth of the spacing of its middle). A single line, a
+    dashed one or texture is returned unchanged.
 
     Parameters
     ----------
@@ -518,8 +519,10 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     counts = (int((~upper).sum()), int(upper.sum()))
     if min(counts) < 0.2 * n or not 0.6 * spacing_px <= hi - lo <= 1.5 * spacing_px:
         return ys, xs
-    if max(float(r[~upper].std()), float(r[upper].std())) > spacing_px / 3:
+    if max(float(r[~upper].std()), float(r[upper].std())) > spacing_px / 4:
         return ys, xs
+    if np.count_nonzero(np.abs(r - (lo + hi) / 2) < spacing_px / 8) > 0.05 * n:
+        return ys, xs  # no clear gap between them: one line the first fit misses, not two
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
     bins = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
