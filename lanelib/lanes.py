@@ -383,9 +383,9 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
             elif config.grow_margin_px:
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
-        picked[side] = inner_stripe(ys[idx], xs[idx], side, config.double_line_px, h)
-    left = fit_line(*picked["left"], h, config, missing="no lane pixels left of the car")
-    right = fit_line(*picked["right"], h, config, missing="no lane pixels right of the car")
+        picked[side] = (ys[idx], xs[idx])
+    left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
+    right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -409,11 +409,11 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
             picked[side] = (ys[:0], xs[:0])
             continue
         near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
-        picked[side] = inner_stripe(ys[near], xs[near], side, config.double_line_px, h)
-    new_left = fit_line(*picked["left"], h, config, missing="no previous left fit to search around"
-                        if not left.found else "no lane pixels near the previous left fit")
-    new_right = fit_line(*picked["right"], h, config, missing="no previous right fit to search around"
-                         if not right.found else "no lane pixels near the previous right fit")
+        picked[side] = (ys[near], xs[near])
+    new_left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no previous left fit to search around"
+                                         if not left.found else "no lane pixels near the previous left fit")
+    new_right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no previous right fit to search around"
+                                           if not right.found else "no lane pixels near the previous right fit")
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
     return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
 
@@ -508,7 +508,9 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     if span <= 0:
         return ys, xs
     degree = 2 if span >= 0.3 * height_px else 1
-    a, b, c, _ = _least_squares(ys, xs, degree, float(height_px))
+    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    if rss < n * (spacing_px / 4) ** 2:
+        return ys, xs  # close to one fit (a single stripe): no second stripe to look for
     r = xs - np.polyval((a, b, c), ys.astype(np.float64))
     lo, hi = -spacing_px / 2, spacing_px / 2
     for _ in range(6):  # two-means on the residuals
@@ -531,6 +533,19 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
         return ys, xs
     keep = upper if side == "left" else ~upper
     return ys[keep], xs[keep]
+
+
+def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
+              missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+    """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
+    stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
+    quarter of ``double_line_px``), so a single line costs no second fit."""
+    fit = fit_line(*pixels, height_px, config, missing=missing)
+    if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
+        inner = inner_stripe(*pixels, side, config.double_line_px, height_px)
+        if len(inner[0]) < len(pixels[0]):
+            return fit_line(*inner, height_px, config, missing=missing), inner
+    return fit, pixels
 
 
 def offset_line(coeffs_px, offset_m: float, xm_per_px: float, ym_per_px: float, height_px: int,
