@@ -79,7 +79,8 @@ class SearchConfig:
         adaptive look-ahead it was the one switch that helped (the harder clip, +7 points of
         point accuracy for 10-20 px, less beyond), and it hurts none. With the look-ahead
         keeping the lines in the view on tight bends it changes nothing there; it still catches
-        a line lost over a gap in the paint. Every other switch is off by default.
+        a line lost over a gap in the paint. Every other switch but ``double_line_px`` is off
+        by default.
     double_line_px : 0 (off), or the distance (px) between the centres of the two stripes of a
         double line (a double yellow centre line): where a line's pixels form two such stripes,
         the line is fitted to the inner one, the stripe nearer the lane (``inner_stripe``), as
@@ -410,10 +411,12 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
             continue
         near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
         picked[side] = (ys[near], xs[near])
-    new_left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no previous left fit to search around"
-                                         if not left.found else "no lane pixels near the previous left fit")
-    new_right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no previous right fit to search around"
-                                           if not right.found else "no lane pixels near the previous right fit")
+    new_left, picked["left"] = _fit_side(
+        picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
+        else "no lane pixels near the previous left fit")
+    new_right, picked["right"] = _fit_side(
+        picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
+        else "no lane pixels near the previous right fit")
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
     return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
 

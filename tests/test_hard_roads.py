@@ -42,7 +42,8 @@ def test_a_double_yellow_centre_line_is_read_at_its_inner_stripe():
     39 % of the lines found are false; fitted between the stripes, about 75 % and 50 %."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     fixed = evaluate_video(COUNTRY, pipe, use_tracker=True, max_frames=100)
-    off = LanePipeline(override(PipelineConfig(), ["search.double_line_px=0"]), calibration_from_truth(COUNTRY))
+    off = LanePipeline(override(PipelineConfig(), ["search.double_line_px=0"]),
+                       calibration_from_truth(COUNTRY))
     before = evaluate_video(COUNTRY, off, use_tracker=True, max_frames=100)
     assert np.nanmean(fixed.line_accuracy[:, 0]) >= 0.79 > 0.77 >= np.nanmean(before.line_accuracy[:, 0])
     assert fixed.summary()["fp_rate"] <= 0.42 < 0.46 <= before.summary()["fp_rate"]

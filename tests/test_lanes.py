@@ -292,7 +292,8 @@ def test_offset_line_is_the_concentric_arc_not_a_shifted_copy():
     assert shifted_err_m > 0.15
     # a straight line is moved by exactly its offset; moving back returns it
     straight = (0.0, 0.0, 320.0)
-    assert lanes.offset_line(straight, 3.7, XM_DEFAULT, YM_DEFAULT, H) == pytest.approx((0.0, 0.0, 320.0 + 3.7 / XM_DEFAULT), abs=1e-6)
+    assert lanes.offset_line(straight, 3.7, XM_DEFAULT, YM_DEFAULT, H) == pytest.approx(
+        (0.0, 0.0, 320.0 + 3.7 / XM_DEFAULT), abs=1e-6)
     back = lanes.offset_line(moved, -3.7, XM_DEFAULT, YM_DEFAULT, H)
     assert np.abs(np.polyval(back, ys) - np.polyval(line, ys)).max() * XM_DEFAULT < 0.01
 
@@ -354,13 +355,15 @@ def test_double_line_spacing_is_validated():
 def test_a_grade_spread_that_the_track_already_has_passes_the_pair_check():
     """Lines that spread 1 m apart over the view (the flat view of a road climbing ahead) fail
     the parallel check on their own, and pass it against a tracked width that spreads alike."""
-    left, right = LineFit((0.0, 0.0, 320.0)), LineFit((0.0, -1.0 / XM_DEFAULT / (H - 1), 960.0 + 1.0 / XM_DEFAULT))
+    spread = 1.0 / XM_DEFAULT  # 1 m in px, from the bottom row to the top
+    left, right = LineFit((0.0, 0.0, 320.0)), LineFit((0.0, -spread / (H - 1), 960.0 + spread))
     checks = lanes.LaneChecks()
     alone = lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks)
     assert alone.startswith("lines not parallel")
     rows = np.linspace(0.0, H - 1.0, checks.check_rows)
     reference = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
-    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks, width_reference_px=reference) == ""
+    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                              width_reference_px=reference) == ""
     # a reference that does not spread: refused as before
     flat = np.full(len(rows), 640.0)
     assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
