@@ -551,7 +551,7 @@ def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, 
     return fit, pixels
 
 
-def offset_line(coeffs_px, offset_m: float, xm_per_px: float, ym_per_px: float, height_px: int,
+def offset_line(coeffs_px, offset_m, xm_per_px: float, ym_per_px: float, height_px: int,
                 top_px: int = 0) -> tuple[float, float, float]:
     """Return the pixel fit (a, b, c) of the curve parallel to a line at ``offset_m`` along its normal.
 
@@ -564,11 +564,13 @@ def offset_line(coeffs_px, offset_m: float, xm_per_px: float, ym_per_px: float, 
     Parameters
     ----------
     coeffs_px : (a, b, c) of the line in bird's-eye pixels.
-    offset_m : signed normal distance (m); + to the right.
+    offset_m : signed normal distance (m); + to the right. One value, or one per sampled row
+        (``offset_rows_px``): a distance that changes along the view, as a tracked lane's width
+        does where a grade widens or narrows the flat view's lane ahead.
     xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
     height_px : height of the view; top_px : first row sampled.
     """
-    y = np.linspace(float(top_px), height_px - 1.0, 24)
+    y = offset_rows_px(height_px, top_px)
     x = np.polyval(coeffs_px, y)
     slope_m = np.polyval(np.polyder(np.asarray(coeffs_px, float)), y) * xm_per_px / ym_per_px
     norm = np.sqrt(1.0 + slope_m * slope_m)
@@ -577,8 +579,14 @@ def offset_line(coeffs_px, offset_m: float, xm_per_px: float, ym_per_px: float, 
     return tuple(float(v) for v in np.polyfit(y_new, x_new, 2))
 
 
-def normal_width_m(left_px, right_px, y_px: float, xm_per_px: float, ym_per_px: float) -> float:
-    """Return the distance (m) between two lines along their normal on row ``y_px``.
+def offset_rows_px(height_px: int, top_px: int = 0) -> np.ndarray:
+    """Return the rows (px) ``offset_line`` samples: 24, evenly from ``top_px`` to the bottom."""
+    return np.linspace(float(top_px), height_px - 1.0, 24)
+
+
+def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
+    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float),
+    or on each of several rows (an array).
 
     The horizontal width on a row times the cosine of the lane's heading there (the mean slope
     of the two lines); equal to the lane width on a bend where the horizontal width is wider.
@@ -587,7 +595,8 @@ def normal_width_m(left_px, right_px, y_px: float, xm_per_px: float, ym_per_px: 
     dl = np.polyval(np.polyder(np.asarray(left_px, float)), y_px)
     dr = np.polyval(np.polyder(np.asarray(right_px, float)), y_px)
     slope_m = 0.5 * (dl + dr) * xm_per_px / ym_per_px
-    return float((xr - xl) * xm_per_px / math.sqrt(1.0 + slope_m * slope_m))
+    out = (xr - xl) * xm_per_px / np.sqrt(1.0 + slope_m * slope_m)
+    return float(out) if np.ndim(out) == 0 else out
 
 
 # --------------------------------------------------------------------------- fits

@@ -31,11 +31,12 @@ debug composite work on it unchanged. Per frame:
    confidence is kept. A detection that lost a line to the checks is kept in the result's
    ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one and the tracked lane: the
-   curve parallel to the kept line at the tracked lane's width along the normal on the bottom
-   row (``lanes.normal_width_m``, ``lanes.offset_line``): the kept line's shape (the lines of a
+   kept line moved along its normal by the tracked lane's normal width on each row
+   (``lanes.normal_width_m``, ``lanes.offset_line``; a grade's widening of the flat view's lane
+   ahead, which the track follows, is carried over): the kept line's shape (the lines of a
    lane are parallel; the tracked difference of their shapes was measured on older frames, and
-   on a bend that tightens or opens it bends the inferred line off the lane ahead), moved along
-   its normal, not by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead).
+   on a bend that tightens or opens it bends the inferred line off the lane ahead), not shifted
+   by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead).
    Its confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
    ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
@@ -361,10 +362,12 @@ class LaneTracker:
         return kept["left"], kept["right"], why, failed
 
     def _inferred(self, seen: np.ndarray, track, side: int, top_px: int) -> np.ndarray:
-        """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the curve
-        parallel to the ``seen`` line at the tracked lane's width along the normal on the bottom
-        row (``lanes.normal_width_m``, ``lanes.offset_line``), over the rows from ``top_px``."""
-        width = lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
+        """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
+        ``seen`` line moved along its normal by the tracked lane's normal width on each row from
+        ``top_px`` down (``lanes.normal_width_m``, ``lanes.offset_line``): where a grade widens or
+        narrows the flat view's lane ahead, the track's width carries that change."""
+        rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
+        width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym)
         return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
                                           self.pipeline.size[1], top_px))
 

@@ -368,3 +368,15 @@ def test_a_grade_spread_that_the_track_already_has_passes_the_pair_check():
     flat = np.full(len(rows), 640.0)
     assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
                               width_reference_px=flat).startswith("lines not parallel")
+
+
+def test_offset_line_takes_a_distance_per_row():
+    """A straight line moved by a distance that grows from 3.5 m on the bottom row to 4.5 m on
+    the top one (a lane the flat view widens ahead) is the straight line through those points."""
+    rows = lanes.offset_rows_px(H)
+    offset = 3.5 + (H - 1 - rows) / (H - 1)
+    moved = lanes.offset_line((0.0, 0.0, 320.0), offset, XM_DEFAULT, YM_DEFAULT, H)
+    assert np.polyval(moved, H - 1) == pytest.approx(320.0 + 3.5 / XM_DEFAULT, abs=0.5)
+    assert np.polyval(moved, 0.0) == pytest.approx(320.0 + 4.5 / XM_DEFAULT, abs=0.5)
+    widths = lanes.normal_width_m((0.0, 0.0, 320.0), moved, rows, XM_DEFAULT, YM_DEFAULT)
+    assert np.abs(widths - offset).max() < 0.01
