@@ -79,7 +79,13 @@ class SearchConfig:
         adaptive look-ahead it was the one switch that helped (the harder clip, +7 points of
         point accuracy for 10-20 px, less beyond), and it hurts none. With the look-ahead
         keeping the lines in the view on tight bends it changes nothing there; it still catches
-        a line lost over a gap in the paint. Every other switch is off by default.
+        a line lost over a gap in the paint. Every other switch but ``double_line_px`` is off
+        by default.
+    double_line_px : 0 (off), or the distance (px) between the centres of the two stripes of a
+        double line (a double yellow centre line): where a line's pixels form two such stripes,
+        the line is fitted to the inner one, the stripe nearer the lane (``inner_stripe``), as
+        the lane's boundary is marked. 38 px is 0.22 m in the default 1280x720 view (0.10-0.15 m
+        stripes 0.10 m apart); stripes 0.6-1.5 times as far apart are taken.
     """
 
     n_windows: int = 9
@@ -97,8 +103,11 @@ class SearchConfig:
     candidates: int = 1
     short_views: tuple[float, ...] = (0.6, 0.4)
     min_view_fraction: float = 0.4
+    double_line_px: float = 38.0
 
     def __post_init__(self):
+        if self.double_line_px < 0:
+            raise ConfigError(f"search: double_line_px {self.double_line_px} must be 0 (off) or more")
         if self.candidates < 1:
             raise ConfigError(f"search: candidates {self.candidates} must be 1 (off) or more")
         if not 0 <= self.trim_outliers_pct <= 100:
@@ -376,8 +385,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left = fit_line(*picked["left"], h, config, missing="no lane pixels left of the car")
-    right = fit_line(*picked["right"], h, config, missing="no lane pixels right of the car")
+    left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
+    right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -402,10 +411,12 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
             continue
         near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
         picked[side] = (ys[near], xs[near])
-    new_left = fit_line(*picked["left"], h, config, missing="no previous left fit to search around"
-                        if not left.found else "no lane pixels near the previous left fit")
-    new_right = fit_line(*picked["right"], h, config, missing="no previous right fit to search around"
-                         if not right.found else "no lane pixels near the previous right fit")
+    new_left, picked["left"] = _fit_side(
+        picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
+        else "no lane pixels near the previous left fit")
+    new_right, picked["right"] = _fit_side(
+        picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
+        else "no lane pixels near the previous right fit")
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
     return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
 
@@ -467,6 +478,125 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
     _, b, c, rss = _least_squares(ys, xs - a * y * y, 1, float(height_px))
     shared = replace(line, coeffs_px=(a, b, c), scatter_px=math.sqrt(rss / max(len(ys), 1)))
     return (shared, right) if line is left else (left, shared)
+
+
+def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
+                 height_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return the pixels (ys, xs) of a line's inner stripe when they form a double line, else all.
+
+    A double line (two stripes ``spacing_px`` apart, centre to centre) is one lane boundary,
+    marked at its inner stripe, the one nearer the lane: right of the fit for the ``"left"``
+    line, left of it for the ``"right"`` one. A fit through both runs between the stripes, and
+    their pixels fill and scatter over the search band like a bright patch. The pixels' x
+    residuals from a first fit are split into two groups (two-means from +-spacing/2); they are
+    a double line when each group holds at least a fifth of the pixels, both lie side by side
+    (each of eight bands of rows that holds pixels of one holds pixels of the other, but for a
+    quarter of them), the groups' centres lie 0.6-1.5 x ``spacing_px`` apart, each is a
+    narrow stripe (RMS spread under a quarter of the spacing), and the gap between them is clear
+    (under 5 % of the pixels within an eighth of the spacing of its middle). A single line, a
+    dashed one or texture is returned unchanged.
+
+    Parameters
+    ----------
+    ys, xs : the line's pixels (bird's-eye px).
+    side : "left" or "right": which way the lane lies.
+    spacing_px : centre-to-centre distance of the stripes (``SearchConfig.double_line_px``;
+        0: off).
+    height_px : height of the view (scales the first fit).
+    """
+    n = len(ys)
+    if spacing_px <= 0 or n < 20:
+        return ys, xs
+    span = float(ys.max() - ys.min())
+    if span <= 0:
+        return ys, xs
+    degree = 2 if span >= 0.3 * height_px else 1
+    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    if rss < n * (spacing_px / 4) ** 2:
+        return ys, xs  # close to one fit (a single stripe): no second stripe to look for
+    r = xs - np.polyval((a, b, c), ys.astype(np.float64))
+    lo, hi = -spacing_px / 2, spacing_px / 2
+    for _ in range(6):  # two-means on the residuals
+        upper = r > (lo + hi) / 2
+        if upper.all() or not upper.any():
+            return ys, xs
+        lo, hi = float(r[~upper].mean()), float(r[upper].mean())
+    counts = (int((~upper).sum()), int(upper.sum()))
+    if min(counts) < 0.2 * n or not 0.6 * spacing_px <= hi - lo <= 1.5 * spacing_px:
+        return ys, xs
+    if max(float(r[~upper].std()), float(r[upper].std())) > spacing_px / 4:
+        return ys, xs
+    if np.count_nonzero(np.abs(r - (lo + hi) / 2) < spacing_px / 8) > 0.05 * n:
+        return ys, xs  # no clear gap between them: one line the first fit misses, not two
+    # side by side, not one after the other: both stripes on most of the rows either is on
+    # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
+    bins = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
+    on = [np.bincount(bins[g], minlength=8) > 0 for g in (~upper, upper)]
+    if (on[0] & on[1]).sum() < 0.75 * (on[0] | on[1]).sum():
+        return ys, xs
+    keep = upper if side == "left" else ~upper
+    return ys[keep], xs[keep]
+
+
+def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
+              missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+    """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
+    stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
+    quarter of ``double_line_px``), so a single line costs no second fit."""
+    fit = fit_line(*pixels, height_px, config, missing=missing)
+    if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
+        inner = inner_stripe(*pixels, side, config.double_line_px, height_px)
+        if len(inner[0]) < len(pixels[0]):
+            return fit_line(*inner, height_px, config, missing=missing), inner
+    return fit, pixels
+
+
+def offset_line(coeffs_px, offset_m, xm_per_px: float, ym_per_px: float, height_px: int,
+                top_px: int = 0) -> tuple[float, float, float]:
+    """Return the pixel fit (a, b, c) of the curve parallel to a line at ``offset_m`` along its normal.
+
+    The lines of a lane are parallel curves: the other line lies a lane width away along the
+    normal, not at the same x shift on every row (on a 35 m bend, 23 m ahead, the two differ by
+    over half a metre). The line is sampled on the rows from ``top_px`` to the bottom, each
+    point moved ``offset_m`` along the normal in metres (positive: to the right of the line as
+    the car drives, larger x) and the second-order fit x = f(y) refitted to the moved points.
+
+    Parameters
+    ----------
+    coeffs_px : (a, b, c) of the line in bird's-eye pixels.
+    offset_m : signed normal distance (m); + to the right. One value, or one per sampled row
+        (``offset_rows_px``): a distance that changes along the view, as a tracked lane's width
+        does where a grade widens or narrows the flat view's lane ahead.
+    xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
+    height_px : height of the view; top_px : first row sampled.
+    """
+    y = offset_rows_px(height_px, top_px)
+    x = np.polyval(coeffs_px, y)
+    slope_m = np.polyval(np.polyder(np.asarray(coeffs_px, float)), y) * xm_per_px / ym_per_px
+    norm = np.sqrt(1.0 + slope_m * slope_m)
+    x_new = x + offset_m / norm / xm_per_px
+    y_new = y - offset_m * slope_m / norm / ym_per_px
+    return tuple(float(v) for v in np.polyfit(y_new, x_new, 2))
+
+
+def offset_rows_px(height_px: int, top_px: int = 0) -> np.ndarray:
+    """Return the rows (px) ``offset_line`` samples: 24, evenly from ``top_px`` to the bottom."""
+    return np.linspace(float(top_px), height_px - 1.0, 24)
+
+
+def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
+    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float),
+    or on each of several rows (an array).
+
+    The horizontal width on a row times the cosine of the lane's heading there (the mean slope
+    of the two lines); equal to the lane width on a bend where the horizontal width is wider.
+    """
+    xl, xr = np.polyval(left_px, y_px), np.polyval(right_px, y_px)
+    dl = np.polyval(np.polyder(np.asarray(left_px, float)), y_px)
+    dr = np.polyval(np.polyder(np.asarray(right_px, float)), y_px)
+    slope_m = 0.5 * (dl + dr) * xm_per_px / ym_per_px
+    out = (xr - xl) * xm_per_px / np.sqrt(1.0 + slope_m * slope_m)
+    return float(out) if np.ndim(out) == 0 else out
 
 
 # --------------------------------------------------------------------------- fits
@@ -619,7 +749,8 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
 
 
 def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float, ym_per_px: float,
-                 checks: LaneChecks = LaneChecks(), top_px: int = 0) -> str:
+                 checks: LaneChecks = LaneChecks(), top_px: int = 0,
+                 width_reference_px: np.ndarray | None = None) -> str:
     """Return why two found lines are not a plausible lane ("" when they are).
 
     The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; over
@@ -628,13 +759,19 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     cover (parallel lines: the same divergence per metre); the two curvatures on the
     bottom row may differ by at most ``max_curvature_diff_per_m``. Only a few rows are
     evaluated (cheap enough for every frame).
+
+    With ``width_reference_px`` (the tracked lane's width, px, on those rows) the spread is
+    that of the width's difference from the reference: a grade makes the flat bird's-eye view
+    widen or narrow the lane ahead, and the track already follows that change, so only a
+    change of it from one frame to the next is refused.
     """
     rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
     width = (np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)) * xm_per_px
+    spread_of = width if width_reference_px is None else width - np.asarray(width_reference_px) * xm_per_px
     if not checks.min_width_m <= width[-1] <= checks.max_width_m:
         return (f"lane width {width[-1]:.2f} m at the car outside {checks.min_width_m}-"
                 f"{checks.max_width_m} m")
-    spread = float(width.max() - width.min())
+    spread = float(spread_of.max() - spread_of.min())
     limit = checks.max_width_spread_m * (height_px - 1.0 - top_px) / (height_px - 1.0)
     if spread > limit:
         return (f"lines not parallel (width varies by {spread:.2f} m, "

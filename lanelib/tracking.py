@@ -22,13 +22,22 @@ debug composite work on it unchanged. Per frame:
    (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
    lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
    the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``).
-   When the pair fails but a track exists, the line with the higher confidence is kept. A
-   detection that lost a line to the checks is kept in the result's ``rejected``.
-3. **One line lost.** The other line is inferred from the kept one and the tracked lane: it is
-   the kept line moved sideways by the tracked lane width on the bottom row, the kept line's
-   shape (the lines of a lane are parallel; the tracked difference of their shapes was measured
-   on older frames, and on a bend that tightens or opens it bends the inferred line off the
-   lane ahead). Its confidence is half the kept line's.
+   With a track the pair's width is compared row by row with the tracked width
+   (``width_reference_px``: a grade widens or narrows the flat view's lane ahead, and the track
+   follows it). A line is not checked for bending away from a tracked line that was inferred,
+   not seen; and when both lines bend away from the track alike and pass the pair's checks on
+   their own, the road changed faster than the smoothed track and both are kept
+   (``_pair_outvotes_track``). When the pair fails but a track exists, the line with the higher
+   confidence is kept. A detection that lost a line to the checks is kept in the result's
+   ``rejected``.
+3. **One line lost.** The other line is inferred from the kept one and the tracked lane: the
+   kept line moved along its normal by the tracked lane's normal width on each row
+   (``lanes.normal_width_m``, ``lanes.offset_line``; a grade's widening of the flat view's lane
+   ahead, which the track follows, is carried over): the kept line's shape (the lines of a
+   lane are parallel; the tracked difference of their shapes was measured on older frames, and
+   on a bend that tightens or opens it bends the inferred line off the lane ahead), not shifted
+   by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead).
+   Its confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
    ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
    Why a weighted average and not a Kalman filter on the coefficients: between frames the lane
@@ -144,6 +153,7 @@ class _Accepted:
     right_conf: float
     top_px: int = 0
     frame: int = 0
+    inferred: tuple[bool, bool] = (False, False)  # (left, right) inferred, not seen
 
 
 class LaneTracker:
@@ -373,6 +383,7 @@ class LaneTracker:
         failed = False
         why: list[str] = []
         kept: dict[str, LineFit | None] = {"left": None, "right": None}
+        bent: dict[str, LineFit] = {}  # lines refused only for bending away from the track
         for i, (side, fit) in enumerate((("left", left), ("right", right))):
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
@@ -389,15 +400,21 @@ class LaneTracker:
                                f"(limit {cfg.max_jump_m} m)")
                     failed = True
                     continue
-                if dx.max() - dx.min() > cfg.max_bend_m:
+                if dx.max() - dx.min() > cfg.max_bend_m and not self._track_inferred(i):
                     why.append(f"{side} line bent {dx.max() - dx.min():.2f} m away from its track "
                                f"(limit {cfg.max_bend_m} m)")
                     failed = True
+                    bent[side] = fit
                     continue
             kept[side] = fit
+        if len(bent) == 2 and self._pair_outvotes_track(bent, track, rows, top_px):
+            kept, failed = dict(bent), False
+            why.append("both lines bent away from the track together and pass the pair checks: "
+                       "the road changed, the track lags")
         if kept["left"] is not None and kept["right"] is not None:
             problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
-                                         self._xm, self._ym, self.checks, top_px)
+                                         self._xm, self._ym, self.checks, top_px,
+                                         width_reference_px=self._width_reference(track, rows))
             if problem:
                 why.append(problem)
                 failed = True
@@ -412,6 +429,44 @@ class LaneTracker:
                 why.append("one line alone cannot start a track")
             return None, None, why, failed
         return kept["left"], kept["right"], why, failed
+
+    def _inferred(self, seen: np.ndarray, track, side: int, top_px: int) -> np.ndarray:
+        """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
+        ``seen`` line moved along its normal by the tracked lane's normal width on each row from
+        ``top_px`` down (``lanes.normal_width_m``, ``lanes.offset_line``): where a grade widens or
+        narrows the flat view's lane ahead, the track's width carries that change."""
+        rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
+        width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym)
+        return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
+                                          self.pipeline.size[1], top_px))
+
+    def _pair_outvotes_track(self, bent: dict, track, rows: np.ndarray, top_px: int) -> bool:
+        """Return whether two lines that both bent away from the track are the lane anyway.
+
+        When both lines of a frame bend away from the track the same way, the road's curve
+        changed faster than the smoothed track follows (a bend tightening over a crest); they
+        are kept when they are a lane on their own (the pair's checks, ``lanes.pair_problem``)
+        and bend alike (their bends from the track differ by at most ``max_bend_m``). The jump
+        check still holds: a line is never taken that moved at the car.
+        """
+        dl = np.polyval(bent["left"].coeffs_px, rows) - np.polyval(track[0], rows)
+        dr = np.polyval(bent["right"].coeffs_px, rows) - np.polyval(track[1], rows)
+        if float(np.abs(dl - dr).max()) * self._xm > self.config.max_bend_m:
+            return False
+        return not lanes.pair_problem(bent["left"], bent["right"], self.pipeline.size[1], self._xm,
+                                      self._ym, self.checks, top_px)
+
+    def _track_inferred(self, side: int) -> bool:
+        """Return whether the newest accepted frame inferred line ``side`` (0 left, 1 right): a
+        seen line is not checked for bending away from a line that was never seen."""
+        return bool(self._history) and self._history[-1].inferred[side]
+
+    def _width_reference(self, track, rows: np.ndarray) -> np.ndarray | None:
+        """Return the tracked lane's width (px) on ``rows``, the reference the pair's width is
+        compared with (``lanes.pair_problem``), or None without a track."""
+        if track is None:
+            return None
+        return np.polyval(track[1], rows) - np.polyval(track[0], rows)
 
     def _band_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
@@ -451,14 +506,13 @@ class LaneTracker:
                 if fit is not None:
                     coeffs[side] = np.array(fit.coeffs_px, float)
                     confs[side] = self._conf_of(fit)
-            for side, other, i, j in (("left", "right", 0, 1), ("right", "left", 1, 0)):
+            for side, other, i in (("left", "right", 0), ("right", "left", 1)):
                 if side not in coeffs:  # infer from the other line and the tracked lane width
-                    shift = np.polyval(track[i], self._bottom) - np.polyval(track[j], self._bottom)
-                    coeffs[side] = coeffs[other] + np.array([0.0, 0.0, shift])
+                    coeffs[side] = self._inferred(coeffs[other], track, i, search.top_px)
                     confs[side] = round(0.5 * confs[other], 3)
                     notes.append(f"{side} line inferred from the {other} line and the tracked width")
             accepted = _Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
-                                 search.top_px, self._frame)
+                                 search.top_px, self._frame, (left is None, right is None))
             self._history.append(accepted)
             self._trend.append(accepted)
             if self._base_history.maxlen:

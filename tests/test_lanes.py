@@ -218,8 +218,11 @@ def test_centre_first_takes_the_cluster_nearest_the_lane_centre():
     search = lanes.sliding_windows(m, SearchConfig(centre_first=True), bases=(280.0, 1000.0))
     assert set(np.unique(search.left_pixels[1])) == set(range(290, 300))
     assert set(np.unique(search.right_pixels[1])) == set(range(980, 990))
-    plain = lanes.sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
+    plain = lanes.sliding_windows(m, SearchConfig(double_line_px=0), bases=(280.0, 1000.0))
     assert set(np.unique(plain.left_pixels[1])) == set(range(240, 250)) | set(range(290, 300))
+    # two stripes 50 px apart on every row also pass for a double line: its inner stripe is kept
+    double = lanes.sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
+    assert set(np.unique(double.left_pixels[1])) == set(range(290, 300))
 
 
 def test_base_peak_confidence():
@@ -258,3 +261,122 @@ def test_candidate_bases_are_the_strongest_peaks_each_side_one_per_line():
     from lanelib.errors import ConfigError
     with pytest.raises(ConfigError, match="candidates 0 must be 1"):
         SearchConfig(candidates=0)
+
+
+# --------------------------------------------------------------------------- country roads (issue 16)
+
+XM_DEFAULT, YM_DEFAULT = 0.00578125, 0.03263888888888889  # the default 1280x720 view (m/px)
+
+
+def circle_fit_px(cx_m: float, radius_m: float) -> tuple[float, float, float]:
+    """Return the parabola (px) fitted over the view to the arc x = cx - sqrt(R**2 - (y - y0)**2)
+    (metres), tangent to the view's columns on its bottom row y0: a right bend of radius R."""
+    ys = np.arange(H, dtype=np.float64)
+    dy = (ys - (H - 1)) * YM_DEFAULT
+    xs = (cx_m - np.sqrt(radius_m ** 2 - dy ** 2)) / XM_DEFAULT
+    return tuple(np.polyfit(ys, xs, 2))
+
+
+def test_offset_line_is_the_concentric_arc_not_a_shifted_copy():
+    """A line on an 80 m right bend (its centre 80 m right of it) moved 3.7 m along its normal to
+    the right is the concentric arc of radius 76.3 m: within 3 cm over the whole 23.5 m view, where
+    the same line shifted 3.7 m in x is 0.18 m off at the view's top."""
+    cx = 1.85 + 80.0
+    line = circle_fit_px(cx, 80.0)
+    truth = circle_fit_px(cx, 80.0 - 3.7)
+    moved = lanes.offset_line(line, 3.7, XM_DEFAULT, YM_DEFAULT, H)
+    ys = np.arange(0, H, 10, dtype=np.float64)
+    err_m = np.abs(np.polyval(moved, ys) - np.polyval(truth, ys)) * XM_DEFAULT
+    assert err_m.max() < 0.03
+    shifted_err_m = abs(np.polyval(line, 0.0) + 3.7 / XM_DEFAULT - np.polyval(truth, 0.0)) * XM_DEFAULT
+    assert shifted_err_m > 0.15
+    # a straight line is moved by exactly its offset; moving back returns it
+    straight = (0.0, 0.0, 320.0)
+    assert lanes.offset_line(straight, 3.7, XM_DEFAULT, YM_DEFAULT, H) == pytest.approx(
+        (0.0, 0.0, 320.0 + 3.7 / XM_DEFAULT), abs=1e-6)
+    back = lanes.offset_line(moved, -3.7, XM_DEFAULT, YM_DEFAULT, H)
+    assert np.abs(np.polyval(back, ys) - np.polyval(line, ys)).max() * XM_DEFAULT < 0.01
+
+
+def test_normal_width_is_the_width_across_a_slanted_lane():
+    """Two straight lines heading 0.3 rad off the view's axis, 3.5 m apart across the lane, are
+    3.5 / cos(0.3) = 3.66 m apart on a row; ``normal_width_m`` gives 3.5 m."""
+    slope_px = math.tan(0.3) * YM_DEFAULT / XM_DEFAULT  # dx/dy in px per px
+    gap_px = 3.5 / math.cos(0.3) / XM_DEFAULT
+    left, right = (0.0, -slope_px, 400.0), (0.0, -slope_px, 400.0 + gap_px)
+    assert lanes.normal_width_m(left, right, H - 1, XM_DEFAULT, YM_DEFAULT) == pytest.approx(3.5, abs=1e-6)
+    assert (right[2] - left[2]) * XM_DEFAULT == pytest.approx(3.66, abs=0.01)
+
+
+def double_line_mask(inner_x: float, outer_x: float, right_x: float = 960.0) -> np.ndarray:
+    """Return a mask with a double line (stripes 21 px wide at ``inner_x`` and ``outer_x``, bottom
+    row, on a gentle curve) on the left and one line at ``right_x``."""
+    m = np.zeros((H, W), np.uint8)
+    for x in (inner_x, outer_x, right_x):
+        draw_curve(m, (1e-4, -0.05, x + 0.05 * (H - 1) - 1e-4 * (H - 1) ** 2), 21)
+    return m
+
+
+def test_a_double_line_is_fitted_to_its_inner_stripe():
+    """Stripes 38 px apart (0.22 m): the left line is fitted to the stripe nearer the lane, as the
+    truth marks a double centre line; with the switch off the fit runs between the stripes."""
+    mask = double_line_mask(338.0, 300.0)
+    on = lanes.sliding_windows(mask)
+    assert on.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
+    assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
+    off = lanes.sliding_windows(mask, SearchConfig(double_line_px=0))
+    assert off.left.x_at(H - 1) == pytest.approx(319.0, abs=3)
+    # a double line on the right: its inner stripe is its left one
+    ys, xs = lanes.lane_pixels(double_line_mask(960.0, 998.0, right_x=320.0))
+    keep = xs > 640
+    iy, ix = lanes.inner_stripe(ys[keep], xs[keep], "right", 38.0, H)
+    assert lanes.fit_line(iy, ix, H).x_at(H - 1) == pytest.approx(960.0, abs=2)
+    assert lanes.fit_line(ys[keep], xs[keep], H).x_at(H - 1) == pytest.approx(979.0, abs=3)
+
+
+@pytest.mark.parametrize("gap_px", [0.0, 90.0])
+def test_one_line_or_stripes_too_far_apart_are_left_whole(gap_px):
+    """A single line (no second stripe), and two lines 90 px (0.52 m) apart, over 1.5x the 38 px
+    spacing, are not a double line: every pixel is kept."""
+    m = np.zeros((H, W), np.uint8)
+    draw_curve(m, (0.0, 0.0, 400.0), 21)
+    if gap_px:
+        draw_curve(m, (0.0, 0.0, 400.0 - gap_px), 21)
+    ys, xs = lanes.lane_pixels(m)
+    out = lanes.inner_stripe(ys, xs, "left", 38.0, H)
+    assert len(out[0]) == len(ys)
+
+
+def test_double_line_spacing_is_validated():
+    with pytest.raises(lanes.ConfigError, match="double_line_px"):
+        SearchConfig(double_line_px=-1)
+
+
+def test_a_grade_spread_that_the_track_already_has_passes_the_pair_check():
+    """Lines that spread 1 m apart over the view (the flat view of a road climbing ahead) fail
+    the parallel check on their own, and pass it against a tracked width that spreads alike."""
+    spread = 1.0 / XM_DEFAULT  # 1 m in px, from the bottom row to the top
+    left, right = LineFit((0.0, 0.0, 320.0)), LineFit((0.0, -spread / (H - 1), 960.0 + spread))
+    checks = lanes.LaneChecks()
+    alone = lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks)
+    assert alone.startswith("lines not parallel")
+    rows = np.linspace(0.0, H - 1.0, checks.check_rows)
+    reference = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
+    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                              width_reference_px=reference) == ""
+    # a reference that does not spread: refused as before
+    flat = np.full(len(rows), 640.0)
+    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                              width_reference_px=flat).startswith("lines not parallel")
+
+
+def test_offset_line_takes_a_distance_per_row():
+    """A straight line moved by a distance that grows from 3.5 m on the bottom row to 4.5 m on
+    the top one (a lane the flat view widens ahead) is the straight line through those points."""
+    rows = lanes.offset_rows_px(H)
+    offset = 3.5 + (H - 1 - rows) / (H - 1)
+    moved = lanes.offset_line((0.0, 0.0, 320.0), offset, XM_DEFAULT, YM_DEFAULT, H)
+    assert np.polyval(moved, H - 1) == pytest.approx(320.0 + 3.5 / XM_DEFAULT, abs=0.5)
+    assert np.polyval(moved, 0.0) == pytest.approx(320.0 + 4.5 / XM_DEFAULT, abs=0.5)
+    widths = lanes.normal_width_m((0.0, 0.0, 320.0), moved, rows, XM_DEFAULT, YM_DEFAULT)
+    assert np.abs(widths - offset).max() < 0.01

@@ -360,3 +360,39 @@ def test_the_trend_keeps_the_width_and_stops_at_the_frame_after_the_last_seen_on
 def test_trend_and_blind_hold_need_counts(kwargs):
     with pytest.raises(ConfigError, match="trend_frames >= 0 and blind_hold_frames >= 0"):
         TrackerConfig(**kwargs)
+
+
+def curved_frame(pipe: LanePipeline, k: float) -> np.ndarray:
+    """Return a frame whose bird's-eye lines start at LEFT_X and RIGHT_X on the bottom row and
+    bend right together, x += k * (H - 1 - y)**2 (parallel: the same bend for both)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(H)
+    for x0 in (LEFT_X, RIGHT_X):
+        pts = np.column_stack([x0 + k * (H - 1 - ys) ** 2, ys]).round().astype(np.int32)
+        cv2.polylines(bird, [pts.reshape(-1, 1, 2)], False, (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def test_two_lines_that_bend_away_together_outvote_a_lagging_track(pipe):
+    """A straight tracked lane, then both lines bend 1 m away from it at the view's top (a bend
+    the smoothed track has not caught up with): each line alone bends more than ``max_bend_m``
+    from its track, but together they are a lane (same width, same curve), so they are kept."""
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    k = 1.0 / XM / (H - 1) ** 2
+    r = tracker.update(curved_frame(pipe, k))
+    assert r.found and r.method == "prior"
+    assert "both lines bent away from the track together" in r.reason
+    assert r.rejected is None
+    # a single line bending away alone is still refused and inferred from the other
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    bird = np.full((H, W, 3), 70, np.uint8)
+    cv2.line(bird, (round(LEFT_X), 0), (round(LEFT_X), H - 1), (235, 235, 235), 24)
+    ys = np.arange(H)
+    pts = np.column_stack([RIGHT_X + k * (H - 1 - ys) ** 2, ys]).round().astype(np.int32)
+    cv2.polylines(bird, [pts.reshape(-1, 1, 2)], False, (235, 235, 235), 24)
+    r = tracker.update(pipe.perspective.unwarp(bird))
+    assert "right line bent" in r.reason and "right line inferred" in r.reason
