@@ -40,7 +40,7 @@ from .evaluate import fit_x_in_raw
 from .geometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
-from .result import FrameResult
+from .result import FrameResult, LinesResult
 from .tracking import LaneTracker
 
 # process(rgb) -> (output rgb, row of JSON-able values)
@@ -801,6 +801,28 @@ def lane_points(result: FrameResult, pipeline: LanePipeline, rows_px: Sequence[f
     return out
 
 
+def seen_lines(found: LinesResult, rows_px: Sequence[float], w: int,
+               per_side: int | None = None) -> list[np.ndarray]:
+    """Return the x (px) at ``rows_px`` of every line ``detect_lines`` saw, left to right.
+
+    x is NaN on rows where the line is not seen or outside the image (``w`` px wide); a line
+    with fewer than 2 points is left out. ``per_side``: at most that many lines on each side
+    of the car (the nearest ones; CULane labels two a side), else all.
+    """
+    kept = list(found.lines)
+    if per_side is not None:
+        left = [line for line in kept if line.offset_m < 0][-per_side:] if per_side else []
+        right = [line for line in kept if line.offset_m >= 0][:per_side]
+        kept = left + right
+    out = []
+    for line in kept:
+        xs = line.x_at_rows(rows_px)
+        xs[~((xs >= 0) & (xs <= w - 1))] = np.nan
+        if np.count_nonzero(np.isfinite(xs)) >= 2:
+            out.append(xs)
+    return out
+
+
 def _prediction_text(work: FrameWork, lines: list[np.ndarray], run_time_ms: float) -> str:
     """Return the text of a frame's prediction file in its benchmark's format."""
     rows = np.asarray(work.rows_px, np.float64)
@@ -836,7 +858,8 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
             cache[key] = LanePipeline(config, calibration, size=key[1:])
         pipe = cache[key]
         t0 = time.perf_counter()
-        lines = lane_points(pipe.detect(rgb), pipe, work.rows_px)
+        lines = seen_lines(pipe.detect_lines(rgb), work.rows_px, w=rgb.shape[1],
+                           per_side=culane.LINES_PER_SIDE if work.benchmark == "culane" else None)
         ms = (time.perf_counter() - t0) * 1000.0
         io.remove_stale_temp_files(work.target)
         io.write_text(work.target, _prediction_text(work, lines, ms), inputs=[work.image])
