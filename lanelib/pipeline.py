@@ -2,7 +2,8 @@
 
 One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
 search -> fits -> plausibility checks (``lanes.LaneChecks``, the same as the video tracker's) ->
-measurements -> overlay on the undistorted frame. A lane that fails the checks is not found; what
+measurements -> overlay on the undistorted frame (``detect_lines``: every lane line in view as
+well, for the benchmarks, in a wider and longer view). A lane that fails the checks is not found; what
 it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
 use this object, so what a slider tunes is exactly what a video run uses. This module is the
 per-frame engine only: runs over image folders and videos are ``runs.process_images`` and

@@ -36,7 +36,6 @@ from .camera import Calibration
 from .config import PipelineConfig, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
-from .evaluate import fit_x_in_raw
 from .geometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
@@ -782,25 +781,6 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
     return work
 
 
-def lane_points(result: FrameResult, pipeline: LanePipeline, rows_px: Sequence[float]) -> list[np.ndarray]:
-    """Return the x (px) of each line found at ``rows_px`` of the RAW image, left to right.
-
-    Only lines that were found (and passed their checks) are given; x is NaN on rows outside the
-    line's bird's-eye span or outside the image; a line with fewer than 2 points is left out.
-    """
-    w = pipeline.size[0]
-    rows = np.asarray(rows_px, np.float64)
-    out = []
-    for fit in (result.left, result.right):
-        if not fit.found:
-            continue
-        xs = fit_x_in_raw(fit.coeffs_px, pipeline, rows)
-        xs[~((xs >= 0) & (xs <= w - 1))] = np.nan
-        if np.count_nonzero(np.isfinite(xs)) >= 2:
-            out.append(xs)
-    return out
-
-
 def seen_lines(found: LinesResult, rows_px: Sequence[float], w: int,
                per_side: int | None = None) -> list[np.ndarray]:
     """Return the x (px) at ``rows_px`` of every line ``detect_lines`` saw, left to right.
@@ -839,8 +819,9 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
                   cache: dict) -> FrameOutcome:
     """Return the outcome of detecting the lane in one frame on its own and writing its prediction.
 
-    The frame is read, ``LanePipeline.detect`` runs on it (no prior: each labelled frame stands
-    alone), the lines found are sampled at ``work.rows_px`` (``lane_points``) and written to
+    The frame is read, ``LanePipeline.detect_lines`` runs on it (no prior: each labelled frame
+    stands alone), every line seen is sampled at ``work.rows_px`` where it is seen (``seen_lines``;
+    CULane: ``culane.LINES_PER_SIDE`` a side) and written to
     ``work.target`` atomically (a frame with no line found gets an empty prediction); stale
     temporaries of that target from a killed run are removed first. ``run_time_ms`` is the
     detection and sampling time. ``cache`` keeps one pipeline per (sequence, frame size) across
