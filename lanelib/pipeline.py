@@ -2,7 +2,8 @@
 
 One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
 search -> fits -> plausibility checks (``lanes.LaneChecks``, the same as the video tracker's) ->
-measurements -> overlay on the undistorted frame. A lane that fails the checks is not found; what
+measurements -> overlay on the undistorted frame (``detect_lines``: every lane line in view as
+well, for the benchmarks, in a wider and longer view). A lane that fails the checks is not found; what
 it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
 use this object, so what a slider tunes is exactly what a video run uses. This module is the
 per-frame engine only: runs over image folders and videos are ``runs.process_images`` and
@@ -19,9 +20,9 @@ from . import draw, lanes, thresholds
 from .camera import Calibration, Undistorter
 from .config import PipelineConfig
 from .errors import InputError
-from .lanes import LaneCheck, LaneMeasurement, LaneSearch, LineFit
-from .perspective import Perspective, scaled
-from .result import FrameResult, Rejected, line_confidence
+from .lanes import LaneCheck, LaneMeasurement, LaneSearch, LinesConfig, LineFit
+from .perspective import LinesView, Perspective, scaled
+from .result import FrameResult, LinesResult, Rejected, image_line, line_confidence
 
 
 BAND_STRIPS = 4  # strips in which band_binary computes the bands around prior fits
@@ -60,6 +61,7 @@ class LanePipeline:
         self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
         self.car_x_px = self.perspective.car_x_px
+        self._lines_view = None  # (view, remap maps, thresholds), made by the first detect_lines
 
     def __reduce__(self):
         return LanePipeline, (self.config, self.undistorter.calibration, self.size)
@@ -251,6 +253,45 @@ class LanePipeline:
         if keep_images:
             images["binary"] = mask  # the views show the mask the lane came from
         return self.result(retry, images if keep_images else {})
+
+    def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
+        """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
+        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked."""
+        if self._lines_view is None:
+            view = LinesView(self.perspective)
+            self._lines_view = (view, (self.lens.inverse + view).remap_maps(view.size),
+                                thresholds.scaled(self.config.thresholds, view.scale_from_ego))
+        return self._lines_view
+
+    def detect_lines(self, raw: np.ndarray, config: LinesConfig = LinesConfig(),
+                     keep_images: bool = False) -> LinesResult:
+        """Return every lane line seen in one RAW frame, left to right, and the ego lane.
+
+        The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
+        looked for in the lines view (``lines_view``: about 28 m across and 150 m ahead), masked
+        by the rule of the thresholds rescaled to it, by ``lanes.find_lines``, and mapped back to
+        the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
+        keeps the view ("lines_birdseye") and its mask ("lines_binary").
+        """
+        ego = self.detect(raw)
+        view, maps, tconf = self.lines_view()
+        bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
+        mask = thresholds.combine(bird, tconf)
+        if config.tophat_low and tconf.line_tophat.enabled:  # far paint: blurred, dimmer
+            far = replace(tconf.line_tophat, low=min(config.tophat_low, tconf.line_tophat.low))
+            low = thresholds.mask(bird, far)
+            top = max(0, int(view.bottom_px - config.near_m / view.ym_per_px))
+            half = int(config.near_half_width_m / view.xm_per_px)
+            cx = int(view.car_x_px)
+            low[top:, max(0, cx - half):cx + half] = 0
+            mask = cv2.bitwise_or(mask, low)
+        wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
+        mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
+        to_raw = (self.lens.inverse + view).inverse
+        lines = tuple(image_line(line, to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
+                      for line in lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px))
+        images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
+        return LinesResult(lines, ego, images)
 
     def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
         """Return the first search in a shorter look-ahead whose lane passes the checks, or None.

@@ -46,11 +46,10 @@ from .camera import Calibration
 from .config import PipelineConfig, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
-from .evaluate import fit_x_in_raw
 from .geometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
-from .result import FrameResult
+from .result import FrameResult, LinesResult
 from .tracking import LaneTracker
 
 # process(rgb) -> (output rgb, row of JSON-able values)
@@ -1004,19 +1003,22 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
     return work
 
 
-def lane_points(result: FrameResult, pipeline: LanePipeline, rows_px: Sequence[float]) -> list[np.ndarray]:
-    """Return the x (px) of each line found at ``rows_px`` of the RAW image, left to right.
+def seen_lines(found: LinesResult, rows_px: Sequence[float], w: int,
+               per_side: int | None = None) -> list[np.ndarray]:
+    """Return the x (px) at ``rows_px`` of every line ``detect_lines`` saw, left to right.
 
-    Only lines that were found (and passed their checks) are given; x is NaN on rows outside the
-    line's bird's-eye span or outside the image; a line with fewer than 2 points is left out.
+    x is NaN on rows where the line is not seen or outside the image (``w`` px wide); a line
+    with fewer than 2 points is left out. ``per_side``: at most that many lines on each side
+    of the car (the nearest ones; CULane labels two a side), else all.
     """
-    w = pipeline.size[0]
-    rows = np.asarray(rows_px, np.float64)
+    kept = list(found.lines)
+    if per_side is not None:
+        left = [line for line in kept if line.offset_m < 0][-per_side:] if per_side else []
+        right = [line for line in kept if line.offset_m >= 0][:per_side]
+        kept = left + right
     out = []
-    for fit in (result.left, result.right):
-        if not fit.found:
-            continue
-        xs = fit_x_in_raw(fit.coeffs_px, pipeline, rows)
+    for line in kept:
+        xs = line.x_at_rows(rows_px)
         xs[~((xs >= 0) & (xs <= w - 1))] = np.nan
         if np.count_nonzero(np.isfinite(xs)) >= 2:
             out.append(xs)
@@ -1039,8 +1041,9 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
                   cache: dict) -> FrameOutcome:
     """Return the outcome of detecting the lane in one frame on its own and writing its prediction.
 
-    The frame is read, ``LanePipeline.detect`` runs on it (no prior: each labelled frame stands
-    alone), the lines found are sampled at ``work.rows_px`` (``lane_points``) and written to
+    The frame is read, ``LanePipeline.detect_lines`` runs on it (no prior: each labelled frame
+    stands alone), every line seen is sampled at ``work.rows_px`` where it is seen (``seen_lines``;
+    CULane: ``culane.LINES_PER_SIDE`` a side) and written to
     ``work.target`` atomically (a frame with no line found gets an empty prediction); stale
     temporaries of that target from a killed run are removed first. ``run_time_ms`` is the
     detection and sampling time. ``cache`` keeps one pipeline per (sequence, frame size) across
@@ -1056,9 +1059,11 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
             while len(cache) >= PIPELINES_KEPT:  # the oldest goes: lists run sequence by sequence
                 del cache[next(iter(cache))]
             cache[key] = LanePipeline(config, calibration, size=key[1:])
+            cache[key].lines_view()  # per camera, like the pipeline's own maps: not in run_time
         pipe = cache[key]
         t0 = time.perf_counter()
-        lines = lane_points(pipe.detect(rgb), pipe, work.rows_px)
+        lines = seen_lines(pipe.detect_lines(rgb), work.rows_px, w=rgb.shape[1],
+                           per_side=culane.LINES_PER_SIDE if work.benchmark == "culane" else None)
         ms = (time.perf_counter() - t0) * 1000.0
         io.remove_stale_temp_files(work.target)
         io.write_text(work.target, _prediction_text(work, lines, ms), inputs=[work.image])

@@ -13,6 +13,7 @@ import socket
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import distributed
@@ -20,7 +21,7 @@ import numpy as np
 import pytest
 
 from lanelib import cluster, io, runs
-from lanelib.benchmarks import tusimple
+from lanelib.benchmarks import metrics, tusimple
 from lanelib.cli import main
 from lanelib.synth.datasets import write_dataset
 
@@ -158,8 +159,16 @@ def test_two_local_workers_give_the_predictions_of_one_process(tmp_path, ts_root
                      str(pred / runs.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
         figures.append(json.loads((tmp_path / "fig.json").read_text()))
     assert figures[0]["images"] == 8
-    assert {k: v for k, v in figures[0].items() if k != "run_time_ms"} == pytest.approx(
-        {k: v for k, v in figures[1].items() if k != "run_time_ms"})
+    # TuSimple scores a frame predicted in over 200 ms as missed: on a loaded machine a worker's
+    # run_time may pass it where one process's did not, so the figures are the same when every
+    # frame of both runs is under it, and the same without the time rule always
+    runs_ = [tusimple.read_predictions(p / runs.TUSIMPLE_PREDICTIONS) for p in (out, reference)]
+    if all(r.run_time_ms <= metrics.MAX_RUN_TIME_MS for preds in runs_ for r in preds):
+        assert {k: v for k, v in figures[0].items() if k != "run_time_ms"} == pytest.approx(
+            {k: v for k, v in figures[1].items() if k != "run_time_ms"})
+    labels = tusimple.read_labels(ts_root)
+    untimed = [tusimple.score(labels, [replace(r, run_time_ms=0.0) for r in preds]) for preds in runs_]
+    assert untimed[0].to_dict() == pytest.approx(untimed[1].to_dict())
 
 
 def test_a_separate_dask_cluster_gives_the_predictions_of_one_process(tmp_path, ts_root, reference,

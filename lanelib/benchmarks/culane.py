@@ -26,6 +26,7 @@ LINES_SUFFIX = ".lines.txt"
 # rows (px) at which lanelib gives a lane's points, bottom up, every 10 px as CULane's labels do
 # (theirs start at y = 590, one below the image; these at the last row that is a multiple of 10)
 SAMPLE_ROWS_PX = tuple(range(CULANE_IMAGE_SIZE[1] - 10, 0, -10))
+LINES_PER_SIDE = 2  # CULane labels at most two lines on each side of the car (predict keeps as many)
 
 
 def read_list(path: str | os.PathLike) -> list[str]:

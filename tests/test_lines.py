@@ -1,0 +1,71 @@
+"""Tests of the multi-line search ``lanes.find_lines`` (issue 17, every line in view): known
+answers on synthetic lines-view masks (perspective.LinesView's default size)."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from lanelib import lanes
+from lanelib.errors import ConfigError
+
+
+# --------------------------------------------------------------------------- every line (find_lines)
+
+LINES_SIZE = (1750, 755)  # perspective.LinesView's default: 28 m x 151 m at 0.016 x 0.2 m/px
+
+
+def _lines_mask(lines, dashed, size=LINES_SIZE, width_px=9):
+    """Return a lines-view mask of lines x = f(y) (callables), each dashed (3 m on, 9 m off) or solid."""
+    w, h = size
+    mask = np.zeros((h, w), np.uint8)
+    ys = np.arange(h, dtype=np.float64)
+    for f, dash in zip(lines, dashed):
+        on = ((h - ys) % 60) < 15 if dash else np.ones(h, bool)
+        for y in ys[on].astype(int):
+            x = f(float(y))
+            cv2.line(mask, (int(round(x - width_px / 2)), y), (int(round(x + width_px / 2)), y), 255, 1)
+    return mask
+
+
+@pytest.mark.parametrize("a", [0.0, 1.5e-4, -1.5e-4])
+def test_find_lines_known_answer(a):
+    # four lines of one road 3.7 m (231 px) apart, straight or bent alike, two solid, two dashed
+    h = LINES_SIZE[1]
+    bases = (420.0, 651.0, 882.0, 1113.0)
+    fs = [lambda y, b=b: b + a * (h - y) ** 2 for b in bases]
+    mask = _lines_mask(fs, (False, True, True, False))
+    found = lanes.find_lines(mask, lanes.LinesConfig(extend_m=0.0))
+    assert len(found) == 4
+    for line, f, dashed in zip(found, fs, (False, True, True, False)):  # left to right
+        rows = np.arange(line.y_top_px, line.y_bottom_px + 1)
+        truth = np.array([f(y) for y in rows])
+        assert np.abs(line.x_at(rows) - truth).max() < 2.0
+        assert line.y_bottom_px >= h - 15 and line.y_top_px <= 60  # seen over the whole view
+        assert line.scatter_px < 5  # a 10 px band: 1.4826 x its median distance, 3.7 px
+
+
+def test_find_lines_spans_merge_and_noise():
+    h = LINES_SIZE[1]
+    # a line seen only far ahead, one only near, a repeated trace of one line (two dashes 2 px
+    # apart are one line), and specks of noise: three lines, each with the span where it is seen
+    far = lambda y: 300.0  # noqa: E731
+    near = lambda y: 900.0  # noqa: E731
+    mask = _lines_mask([far, near], (False, True))
+    mask[h - 250:, 280:320] = 0  # the far line is seen from 50 m on (bands start lines to 60 m)
+    mask[:h - 200, 880:920] = 0  # the near line on the lowest 200 rows (40 m) only
+    mask = np.maximum(mask, _lines_mask([lambda y: 1400.0, lambda y: 1402.0], (True, True)))
+    rng = np.random.default_rng(0)
+    mask[rng.integers(0, h, 300), rng.integers(0, LINES_SIZE[0], 300)] = 255
+    found = lanes.find_lines(mask, lanes.LinesConfig(extend_m=0.0))
+    assert [round(float(line.x_at(line.y_bottom_px))) for line in found] == [300, 900, 1401]
+    assert found[0].y_bottom_px < h - 249 and found[0].y_top_px < 5
+    assert found[1].y_top_px > h - 215
+    extended = lanes.find_lines(mask, lanes.LinesConfig(extend_m=9.0))
+    assert extended[0].y_bottom_px == pytest.approx(found[0].y_bottom_px + 45)
+
+
+def test_find_lines_empty_and_config():
+    assert lanes.find_lines(np.zeros(LINES_SIZE[::-1], np.uint8)) == []
+    with pytest.raises(ConfigError):
+        lanes.LinesConfig(bands=0)
