@@ -456,7 +456,7 @@ def _add_evaluate(sub) -> None:
 
 
 _PIPELINE_ONLY = (("config", "--config"), ("settings", "--set"), ("calibration", "--calibration"),
-                  ("detector", "--detector"), ("max_frames", "--max-frames"), ("scheduler", "--scheduler"))
+                  ("detector", "--detector"), ("max_frames", "--max-frames"))
 _BENCHMARK_ONLY = (("gt", "--gt"), ("pred", "--pred"), ("list_file", "--list"))
 
 
@@ -504,8 +504,6 @@ def _run_evaluate(args) -> int:
 def _run_evaluate_benchmark(args) -> int:
     """``evaluate tusimple|culane``: print the official figures of a prediction set (and --json)."""
     given = [flag for dest, flag in _PIPELINE_ONLY if getattr(args, dest) not in (None, [])]
-    if args.workers != 1:
-        given.append("--workers")
     if args.path is not None:
         given.insert(0, str(args.path))
     if args.kind == "tusimple":
@@ -526,11 +524,13 @@ def _run_evaluate_benchmark(args) -> int:
     inputs = [f for f in (args.gt, args.pred, args.list_file) if f is not None and not f.is_dir()]
     if args.json:
         check_not_input(args.json, inputs)  # before the run, not after it
+    dask = dict(workers=args.workers, scheduler=args.scheduler,
+                progress=args.workers != 1 or args.scheduler is not None)
     if args.kind == "tusimple":
-        result = tusimple.evaluate(args.gt, args.pred)
+        result = tusimple.evaluate(args.gt, args.pred, **dask)
     else:
         result = culane.evaluate(args.gt, args.list_file, args.pred, width_px=args.lane_width_px,
-                                 iou_threshold=args.iou)
+                                 iou_threshold=args.iou, **dask)
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict(), inputs=inputs)
@@ -579,9 +579,10 @@ _DASK_WORK = {
     "video": ("in segments of the clip, each started 50 frames early to warm the tracker up (the "
               "output and log are those of one process), joined without re-encoding",
               "read the video and write the segments beside OUT themselves, so IN and OUT's folder"),
-    "evaluate": ("images|video only: in chunks of images, or segments of the video (with the tracker each "
-                 "started 50 frames early to warm it up); the figures are those of one process",
-                 "read the images or the video and its truth themselves, so PATH"),
+    "evaluate": ("in chunks of images, or segments of the video (with the tracker each started 50 "
+                 "frames early to warm it up); tusimple|culane: the images' scores in chunks (the "
+                 "labels and predictions are read here and sent); the figures are those of one process",
+                 "read the images or the video and its truth themselves, so PATH (images|video)"),
     "hough": ("in chunks of images, or segments of a video (as `video`)",
               "read the input and write the outputs themselves, so IN and OUT"),
 }

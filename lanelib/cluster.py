@@ -150,6 +150,22 @@ def map_items(client: distributed.Client, fn: Callable[..., list], items: Sequen
     return [r for chunk in map_chunks(client, fn, chunks, bar, **kwargs) for r in chunk]
 
 
+def run_items(fn: Callable[..., list], items: Sequence, workers: int = 1, scheduler: str | None = None,
+              desc: str = "", unit: str = "item", progress: bool = False, **kwargs) -> list:
+    """Return the results of ``fn`` on every item, in the items' order: ``fn(chunk, **kwargs)``
+    gives one result per item of a chunk, run in this process (one item at a time) or on Dask
+    (``dask_client(workers, scheduler)``, ``map_items``), with one tqdm bar when ``progress``."""
+    with dask_client(workers, scheduler) as client, \
+            tqdm(total=len(items), desc=desc, unit=unit, disable=not progress, dynamic_ncols=True) as bar:
+        if client is not None:
+            return map_items(client, fn, items, bar, **kwargs)
+        out = []
+        for item in items:
+            out += fn([item], **kwargs)
+            bar.update(1)
+        return out
+
+
 # frames a segment of a tracked video is run before its first frame and dropped (``segments``):
 # the tracker's state (smoothing over 5 frames, the prior fits, held lines) forgets a start this
 # far back, so a segment's frames come out as those of one run through the whole clip

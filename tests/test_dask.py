@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from lanelib import cluster, io, runs
-from lanelib.benchmarks import metrics, tusimple
+from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.cli import main
 from lanelib.synth.datasets import write_dataset
 
@@ -214,3 +214,33 @@ def test_a_failed_geometry_on_dask_stops_the_run_before_any_frame(tmp_path, ts_r
     assert predict(root, out, "--scheduler", scheduler) == 2
     assert "clips/synth02" in capsys.readouterr().err
     assert not (out / runs.TUSIMPLE_PARTS).exists() and not (out / runs.TUSIMPLE_PREDICTIONS).exists()
+
+
+# --------------------------------------------------------------------------- evaluate on Dask
+
+def test_evaluate_tusimple_on_dask_gives_the_figures_of_one_process(tmp_path, ts_root, reference,
+                                                                    scheduler):
+    pred = reference / runs.TUSIMPLE_PREDICTIONS
+    figures = []
+    for extra in ([], ["--scheduler", scheduler]):
+        out = tmp_path / f"fig{len(figures)}.json"
+        assert main(["evaluate", "tusimple", "--gt", str(ts_root), "--pred", str(pred), "--json",
+                     str(out), *extra]) == 0
+        figures.append(json.loads(out.read_text()))
+    assert figures[0] == figures[1] and figures[0]["images"] == 8
+    one, two = (tusimple.evaluate(ts_root, pred, scheduler=s) for s in (None, scheduler))
+    assert one.per_image == two.per_image
+
+
+def test_evaluate_culane_on_dask_counts_as_one_process(scheduler):
+    """Hand-made CULane images: one label line each, predicted exactly (TP), 12 px off (IoU of two
+    30 px strips (30 - 12) / (30 + 12) = 0.43: FP and FN), 40 px off (FP, FN), or not at all (FN)."""
+    rows = np.arange(300.0, 590.0, 10.0)
+    line = np.column_stack([400.0 + 0.5 * (rows - 300.0), rows])
+    shifts = [0, 12, 40, None, 0, 0]
+    labels = culane.CULaneSet(tuple(f"/d/{i:05d}.jpg" for i in range(len(shifts))),
+                              tuple((line,) for _ in shifts))
+    preds = [[] if d is None else [line + [d, 0.0]] for d in shifts]
+    one = culane.score(labels, preds)
+    assert (one.tp, one.fp, one.fn, one.images) == (3, 2, 3, 6)
+    assert culane.score(labels, preds, scheduler=scheduler) == one

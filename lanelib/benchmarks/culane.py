@@ -17,6 +17,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from .. import cluster
 from ..errors import InputError
 from ..io import write_text
 from .metrics import (CULANE_IMAGE_SIZE, CULANE_IOU, CULANE_LANE_WIDTH_PX, CULaneCounts,
@@ -207,19 +208,33 @@ class CULaneScore:
         return text
 
 
+def score_chunk(pairs: Sequence[tuple[Sequence[np.ndarray], Sequence[np.ndarray]]],
+                image_size: tuple[int, int] = CULANE_IMAGE_SIZE, width_px: int = CULANE_LANE_WIDTH_PX,
+                iou_threshold: float = CULANE_IOU) -> list[CULaneCounts]:
+    """Return ``metrics.culane_image`` of each (labels, predictions) pair of a chunk of images."""
+    return [culane_image(gt, pred, image_size, width_px, iou_threshold) for gt, pred in pairs]
+
+
 def score(labels: CULaneSet, predictions: Sequence[Sequence[np.ndarray]],
           image_size: tuple[int, int] = CULANE_IMAGE_SIZE, width_px: int = CULANE_LANE_WIDTH_PX,
-          iou_threshold: float = CULANE_IOU) -> CULaneCounts:
-    """Return TP, FP and FN summed over the images of ``labels`` (``metrics.culane_image``)."""
-    total = CULaneCounts()
-    for gt, pred in zip(labels.lanes, predictions):
-        total = total + culane_image(gt, pred, image_size, width_px, iou_threshold)
-    return total
+          iou_threshold: float = CULANE_IOU, workers: int = 1, scheduler: str | None = None,
+          progress: bool = False) -> CULaneCounts:
+    """Return TP, FP and FN summed over the images of ``labels`` (``metrics.culane_image``).
+
+    ``workers``/``scheduler``: score the images in chunks on Dask (``cluster.dask_client``; the
+    labels and predictions are sent to the workers, so they need no shared filesystem); the
+    counts are those of one process. ``progress`` shows a tqdm bar.
+    """
+    counts = cluster.run_items(score_chunk, list(zip(labels.lanes, predictions)), workers, scheduler,
+                               "evaluate culane", "image", progress, image_size=image_size,
+                               width_px=width_px, iou_threshold=iou_threshold)
+    return sum(counts, CULaneCounts())
 
 
 def evaluate(root: str | os.PathLike, list_file: str | os.PathLike, pred_dir: str | os.PathLike,
              image_size: tuple[int, int] = CULANE_IMAGE_SIZE, width_px: int = CULANE_LANE_WIDTH_PX,
-             iou_threshold: float = CULANE_IOU) -> CULaneScore:
+             iou_threshold: float = CULANE_IOU, workers: int = 1, scheduler: str | None = None,
+             progress: bool = False) -> CULaneScore:
     """Return the official CULane figures of the predictions in ``pred_dir`` for a list file.
 
     Parameters
@@ -230,6 +245,8 @@ def evaluate(root: str | os.PathLike, list_file: str | os.PathLike, pred_dir: st
     image_size : (width, height) px of the drawing canvas (CULane: 1640 x 590).
     width_px : thickness of the drawn lanes (CULane: 30).
     iou_threshold : IoU above which a matched pair is a true positive (CULane: 0.5).
+    workers, scheduler, progress : as for ``score`` (the files are read here, the IoUs computed
+        on the workers).
     """
     if width_px < 1:
         raise InputError(f"lane width {width_px} px: give 1 px or more (CULane: 30)")
@@ -237,4 +254,5 @@ def evaluate(root: str | os.PathLike, list_file: str | os.PathLike, pred_dir: st
         raise InputError(f"IoU threshold {iou_threshold}: give a value from 0 to below 1 (CULane: 0.5)")
     labels = read_labels(root, list_file)
     preds, missing = read_predictions(pred_dir, labels.entries)
-    return CULaneScore(score(labels, preds, image_size, width_px, iou_threshold), missing)
+    return CULaneScore(score(labels, preds, image_size, width_px, iou_threshold, workers, scheduler,
+                             progress), missing)

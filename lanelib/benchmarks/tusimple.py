@@ -19,9 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
+from .. import cluster
 from ..errors import InputError
 from ..io import write_text
-from .metrics import TuSimpleScore, tusimple_image, tusimple_score
+from .metrics import TuSimpleImage, TuSimpleScore, tusimple_image, tusimple_score
 
 NO_POINT = -2  # the x TuSimple writes where a lane has no point
 H_SAMPLES_PX = tuple(range(160, 720, 10))  # the rows of most TuSimple labels (1280x720; some from 240)
@@ -198,13 +199,22 @@ def write_labels(path: str | os.PathLike, records: Iterable[TuSimpleRecord],
     return write_text(path, "".join(record_line(r, path, prediction=False) for r in records), inputs=inputs)
 
 
+def score_chunk(pairs: Sequence[tuple[TuSimpleRecord, TuSimpleRecord]]) -> list[TuSimpleImage]:
+    """Return ``metrics.tusimple_image`` of each (prediction, label) pair of a chunk of images."""
+    return [tusimple_image(p.lanes, gt.lanes, gt.h_samples, p.run_time_ms or 0.0) for p, gt in pairs]
+
+
 def score(labels: Sequence[TuSimpleRecord], predictions: Sequence[TuSimpleRecord],
-          pred_name: str = "predictions", label_name: str = "labels") -> TuSimpleScore:
+          pred_name: str = "predictions", label_name: str = "labels", workers: int = 1,
+          scheduler: str | None = None, progress: bool = False) -> TuSimpleScore:
     """Return the official TuSimple Accuracy, FP and FN of ``predictions`` against ``labels``.
 
     As TuSimple's ``bench_one_submit``: every labelled image needs one prediction and every
     prediction a label (else ``InputError`` naming the images); the rows are the label's (a
     prediction that gives other ``h_samples`` is an error here, where TuSimple ignores them).
+    ``workers``/``scheduler``: score the images in chunks on Dask (``cluster.dask_client``; the
+    records are sent to the workers); the figures are those of one process. ``progress`` shows
+    a tqdm bar.
     """
     gts = {r.raw_file: r for r in labels}
     preds = {r.raw_file: r for r in predictions}
@@ -216,19 +226,25 @@ def score(labels: Sequence[TuSimpleRecord], predictions: Sequence[TuSimpleRecord
     if missing:
         raise InputError(f"{pred_name}: no prediction for {len(missing)} of the {len(gts)} labelled "
                          f"images (first: {missing[0]}); predict every image of {label_name}")
-    rows = []
+    pairs = []
     for raw_file, p in preds.items():
         gt = gts[raw_file]
         if p.h_samples and tuple(p.h_samples) != tuple(gt.h_samples):
             raise InputError(f"{pred_name}: {raw_file} is predicted at other h_samples than its label; "
                              "predict x at the label's rows")
-        try:
-            rows.append((raw_file, tusimple_image(p.lanes, gt.lanes, gt.h_samples, p.run_time_ms or 0.0)))
-        except ValueError as e:
-            raise InputError(f"{pred_name}: {raw_file}: {e}; give one x per label row") from None
-    return tusimple_score(rows, len(gts))
+        bad = [i + 1 for i, lane in enumerate(p.lanes) if len(lane) != len(gt.h_samples)]
+        if bad:
+            raise InputError(f"{pred_name}: {raw_file}: predicted lane {bad[0]} has "
+                             f"{len(p.lanes[bad[0] - 1])} x values for {len(gt.h_samples)} h_samples; "
+                             "give one x per label row")
+        pairs.append((p, gt))
+    images = cluster.run_items(score_chunk, pairs, workers, scheduler, "evaluate tusimple", "image", progress)
+    return tusimple_score([(p.raw_file, image) for (p, _), image in zip(pairs, images)], len(gts))
 
 
-def evaluate(labels: str | os.PathLike, predictions: str | os.PathLike) -> TuSimpleScore:
-    """Return the official TuSimple figures of a prediction file against a label file (or folder)."""
-    return score(read_labels(labels), read_predictions(predictions), str(predictions), str(labels))
+def evaluate(labels: str | os.PathLike, predictions: str | os.PathLike, workers: int = 1,
+             scheduler: str | None = None, progress: bool = False) -> TuSimpleScore:
+    """Return the official TuSimple figures of a prediction file against a label file (or folder)
+    (``workers``, ``scheduler``, ``progress``: as for ``score``)."""
+    return score(read_labels(labels), read_predictions(predictions), str(predictions), str(labels),
+                 workers, scheduler, progress)
