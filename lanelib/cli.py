@@ -259,6 +259,12 @@ def _part(args, run) -> str:
     return f" (frames {run.first_frame}..{last} of {args.input})"
 
 
+def _print_joints(joints) -> None:
+    """Print how a Dask run's segments were joined (``cluster.Joints``; nothing in one process)."""
+    if joints is not None and joints.joints:
+        print(f"dask: {joints}")
+
+
 def _run_video(args) -> int:
     config, calibration = _load_pipeline_inputs(args)
     options = _geometry_options(args) if args.auto_geometry else None
@@ -273,6 +279,7 @@ def _run_video(args) -> int:
     print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
           f"({run.fps:.1f} fps); lane found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
+    _print_joints(run.joints)
     return 0
 
 
@@ -383,6 +390,7 @@ def _run_hough(args) -> int:
     print(f"{args.output}: {run.frames} frames{_part(args, run)} in {run.seconds:.1f} s "
           f"({run.fps:.1f} fps); both lines found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
+    _print_joints(run.joints)
     return 0
 
 
@@ -493,6 +501,7 @@ def _run_evaluate(args) -> int:
                                          max_frames=args.max_frames, workers=args.workers,
                                          scheduler=args.scheduler)
     print(report.table())
+    _print_joints(report.joints)
     for _, error in report.failed:
         print(f"error: {error}", file=sys.stderr)
     if args.json:

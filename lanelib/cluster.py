@@ -7,7 +7,10 @@ or a client of an existing Dask cluster (``dask scheduler`` and ``dask worker`` 
 for ``scheduler``. ``map_chunks`` sends the chunks (lists of work items) to the workers and
 returns each chunk's results in the chunks' order, updating one tqdm bar per item as chunks come
 back; ``map_items`` does both (chunks, map) and returns the items' results in order; ``segments``
-splits a video's frames into ranges for ``runs`` to track on the workers. The workers read and write the files themselves: with ``--scheduler`` the dataset and the
+splits a video's frames into ranges for ``runs`` and ``evaluate`` to track on the workers, each
+warmed up over the end of the one before, and ``settle_joints`` makes each joint exact: where
+the warm-up did not bring the tracker to the previous segment's final state (compared by a
+fingerprint, ``LaneTracker.state_key``), the segment runs again from that state. The workers read and write the files themselves: with ``--scheduler`` the dataset and the
 output folder must lie on a filesystem every worker sees at the same path (a shared mount).
 
 ``dask`` and ``distributed`` are imported inside the functions that need them (the documented
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import math
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Iterator, Sequence, TypeVar
 
 from tqdm import tqdm
@@ -167,8 +171,10 @@ def run_items(fn: Callable[..., list], items: Sequence, workers: int = 1, schedu
 
 
 # frames a segment of a tracked video is run before its first frame and dropped (``segments``):
-# the tracker's state (smoothing over 5 frames, the prior fits, held lines) forgets a start this
-# far back, so a segment's frames come out as those of one run through the whole clip
+# the tracker's state (smoothing over 5 frames, the prior fits, held lines) mostly forgets a start
+# this far back, and the segment's frames come out as those of one run through the whole clip;
+# where it does not (a hairpin of country.mp4: the fits agree again only after 70+ frames, or
+# never before the segment ends), ``settle_joints`` finds it and runs the segment again
 WARMUP_FRAMES = 50
 # a segment is at least this many warm-up lengths long, so the warm-up costs at most ~1/8 more
 MIN_SEGMENT_WARMUPS = 8
@@ -194,3 +200,85 @@ def segment_count(frames: int, threads: int, warmup: int = WARMUP_FRAMES) -> int
     long when the clip allows more than one per thread."""
     longest = max(1, frames // max(1, MIN_SEGMENT_WARMUPS * warmup))
     return max(1, min(frames, max(threads, min(threads * CHUNKS_PER_THREAD, longest))))
+
+
+# --------------------------------------------------------------------------- the joints of a video's segments
+
+@dataclass(frozen=True)
+class Carry:
+    """A segment's tracker state at its two ends, to check the joint with its neighbours.
+
+    ``entry_key``: the fingerprint of the state just before the segment's first kept frame (after
+    its warm-up); ``end_key`` and ``end_state``: the fingerprint and the state itself (picklable,
+    e.g. the ``LaneTracker``) after its last frame. Fingerprints are None without a state (a
+    run without a tracker): two Nones are the same state.
+    """
+
+    entry_key: bytes | None = None
+    end_key: bytes | None = None
+    end_state: object = None
+
+
+@dataclass(frozen=True)
+class Joints:
+    """How the joints between a clip's segments were made exact (``settle_joints``): ``joints``
+    checked, ``rerun`` of them run again from the previous segment's state."""
+
+    joints: int = 0
+    rerun: int = 0
+
+    def __str__(self) -> str:
+        settled = self.joints - self.rerun
+        return (f"{self.joints + 1} segments; {settled} of {self.joints} joint"
+                f"{'' if self.joints == 1 else 's'} settled in the warm-up, {self.rerun} re-run")
+
+
+def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Callable[[int, object], T],
+                  ended: Callable[[T], bool] = lambda o: False) -> tuple[list[T], Joints]:
+    """Return the segments' outcomes with every joint exact, and how many joints needed a re-run.
+
+    A segment's warm-up runs over the end of the one before it: when its tracker's state before
+    its first kept frame (``Carry.entry_key``) is that of the previous segment after its last
+    frame (``end_key``), the two runs agree from there on, and the segment's frames are those of
+    one process through the clip. When not (the tracker's memory outlasted the warm-up: a hold,
+    a trend over a hairpin), ``rerun(k, state)`` runs segment ``k`` again from the previous
+    segment's final state (``end_state``); the segments are checked in order, each against the
+    final state of the one before as it now is (a chain of re-runs). A segment for which
+    ``ended`` is true (the clip broke off in it) ends the check: the later ones are not used.
+    """
+    out = list(outcomes)
+    checked = reruns = 0
+    for k in range(1, len(out)):
+        if ended(out[k - 1]):
+            break
+        checked += 1
+        before, here = carry(out[k - 1]), carry(out[k])
+        if here.entry_key != before.end_key:
+            out[k] = rerun(k, before.end_state)
+            reruns += 1
+    return out, Joints(checked, reruns)
+
+
+def map_segments(client: distributed.Client, fn: Callable[..., list], spans: Sequence[tuple[int, int, int, bool]],
+                 bar: tqdm, carry: Callable[[T], Carry], ended: Callable[[T], bool] = lambda o: False,
+                 **kwargs) -> tuple[list[T], Joints]:
+    """Return the outcome of each segment of a video run by the client's workers, every joint
+    exact (``settle_joints``), and how many joints needed a re-run.
+
+    ``fn([(first, start, stop, to_end)], state=None, **kwargs)`` runs one segment (``segments``;
+    ``to_end``: read on to the clip's end) from frame ``first`` with a fresh tracker, or from
+    frame ``start`` on from a tracker ``state``, and returns ``[outcome]``; ``carry(outcome)`` is
+    its ``Carry``. The segments go to the workers at once; re-runs, one after another, as single
+    tasks. ``bar`` counts the kept frames done, re-runs included.
+    """
+    done = map_chunks(client, fn, [[span] for span in spans], bar,
+                      sizes=[stop - start for _, start, stop, _ in spans], **kwargs)
+
+    def rerun(k: int, state: object) -> T:
+        _, start, stop, to_end = spans[k]
+        bar.total += stop - start
+        (outcome,) = map_ordered(client, fn, [[(start, start, stop, to_end)]], state=state, **kwargs)[0]
+        bar.update(stop - start)
+        return outcome
+
+    return settle_joints([o for (o,) in done], carry, rerun, ended)

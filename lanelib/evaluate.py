@@ -41,9 +41,10 @@ These are errors of the pipeline's reading of the lane and are scored as such.
 """
 from __future__ import annotations
 
+import copy
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -165,6 +166,8 @@ class EvalReport:
     names : the image file names, or the frame numbers as text.
     failed : ``(file name, error)`` of each image that could not be scored (unreadable image,
         missing or corrupt truth, another size than the truth's camera); left out of every figure.
+    joints : a video scored with the tracker on Dask: how its segments were joined (re-runs of
+        joints that did not settle in the warm-up, ``cluster.settle_joints``); None otherwise.
     """
 
     source: str
@@ -186,6 +189,7 @@ class EvalReport:
     fn_lines: np.ndarray
     truth: tuple = field(default=(), repr=False)
     failed: tuple[tuple[str, str], ...] = ()
+    joints: cluster.Joints | None = None  # on Dask with the tracker: how the segments were joined
 
     @property
     def frames(self) -> int:
@@ -413,8 +417,9 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
     max_frames : score only the first this many frames.
     workers, scheduler : score the clip in segments on Dask workers (``cluster.dask_client``,
         ``cluster.segments``; with the tracker each segment starts ``cluster.WARMUP_FRAMES`` early
-        and drops those frames, so the rows are those of one run), with a progress bar unless
-        ``progress`` is false.
+        and drops those frames, and a segment whose tracker did not come to the previous one's
+        state in that warm-up is scored again from that state: ``cluster.settle_joints``), so the
+        rows are those of one run, with a progress bar unless ``progress`` is false.
 
     Raises
     ------
@@ -432,15 +437,16 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
                                                                max(1, warmup)), warmup)
         # the last segment reads on to the clip's end (unless --max-frames): a clip longer than
         # its truth is refused, as in one process
-        chunks = [[(first, start, stop, max_frames is None and stop == frames.stop)]
-                  for first, start, stop in spans]
+        segs = [(first, start, stop, max_frames is None and stop == frames.stop) for first, start, stop in spans]
         with tqdm(total=len(frames), desc="evaluate", unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
-            done = cluster.map_chunks(client, score_video_segment, chunks, bar,
-                                      sizes=[stop - start for _, start, stop in spans], path=Path(path),
-                                      pipeline=pipeline, use_tracker=use_tracker, max_frames=max_frames)
+            # the tracker's state checked at each joint (cluster.settle_joints): the rows of one process
+            done, joints = cluster.map_segments(client, score_video_segment, segs, bar, lambda o: o[1],
+                                                lambda o: isinstance(o[0], str), path=Path(path),
+                                                pipeline=pipeline, use_tracker=use_tracker,
+                                                max_frames=max_frames)
     col = _Collector(pipeline, str(path), "tracker" if use_tracker else "frame")
-    for (rows,) in done:
+    for rows, _ in done:
         if isinstance(rows, str):  # the first segment that failed says why, as one process would
             raise InputError(rows)
         col.rows += rows
@@ -448,35 +454,43 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
         raise InputError(f"{path}: the video has {len(col.rows)} frames but its truth "
                          f"{Path(path).with_suffix('.csv')} has {len(truth.frames)}; "
                          "regenerate both with `python -m lanelib synth --all`")
-    return col.report()
+    return replace(col.report(), joints=joints if use_tracker else None)
 
 
 def score_video_segment(chunk: Sequence[tuple[int, int, int, bool]], path: Path, pipeline,
-                        use_tracker: bool, max_frames: int | None) -> list[list[tuple] | str]:
+                        use_tracker: bool, max_frames: int | None, state: LaneTracker | None = None
+                        ) -> list[tuple[list[tuple] | str, cluster.Carry]]:
     """Return the score rows of each segment ``(first, start, stop, to_end)`` of a video (a Dask
-    task of ``evaluate_video``): run from ``first`` (a fresh tracker), rows kept from ``start``;
-    a segment that cannot be scored (the clip breaks off, more frames than truth) gives the
-    error's message instead (the client raises the first one in the clip's order)."""
+    task of ``evaluate_video``) and its tracker's state at its ends (``cluster.Carry``): run from
+    ``first`` (a fresh tracker, or a copy of the tracker ``state``: a re-run from the previous
+    segment's state), rows kept from ``start``; a segment that cannot be scored (the clip breaks off, more
+    frames than truth) gives the error's message instead of rows (the client raises the first
+    one in the clip's order)."""
     truth = load_video_truth(path).frames
-    out: list[list[tuple] | str] = []
+    out: list[tuple[list[tuple] | str, cluster.Carry]] = []
     for first, start, stop, to_end in chunk:
-        tracker = LaneTracker(pipeline) if use_tracker else None
-        rows = []
+        tracked = (copy.deepcopy(state) if state is not None else LaneTracker(pipeline)) if use_tracker else None
+        rows: list[tuple] = []
         try:
-            _score_segment(path, pipeline, tracker, truth, first, start, None if to_end else stop, rows)
+            entry = _score_segment(path, pipeline, tracked, truth, first, start,
+                                   None if to_end else stop, rows)
         except DecodeStoppedError as e:
-            out.append(f"{e}; only {e.frames + first} of the {len(truth[:max_frames])} frames to score "
-                       "could be read: pass a complete video, or --max-frames up to that")
+            out.append((f"{e}; only {e.frames + first} of the {len(truth[:max_frames])} frames to "
+                        "score could be read: pass a complete video, or --max-frames up to that",
+                        cluster.Carry()))
         except InputError as e:
-            out.append(str(e))
+            out.append((str(e), cluster.Carry()))
         else:
-            out.append(rows)
+            end = tracked.state_key() if tracked is not None else None
+            out.append((rows, cluster.Carry(entry, end, tracked)))
     return out
 
 
 def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int, stop: int | None,
-                   rows: list) -> None:
-    """Append the score rows of frames ``start ..`` to ``rows``, run from frame ``first``."""
+                   rows: list) -> bytes | None:
+    """Append the score rows of frames ``start ..`` to ``rows``, run from frame ``first``; return
+    the tracker's ``state_key`` before frame ``start`` (None without a tracker)."""
+    entry = None
     with VideoReader(path, first, stop) as reader:
         for n, raw in enumerate(reader):
             i = first + n
@@ -484,9 +498,12 @@ def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int,
                 raise InputError(f"{path}: the video has more frames than its truth "
                                  f"{Path(path).with_suffix('.csv')} ({len(truth)}); "
                                  "regenerate the truth with `python -m lanelib synth --all`")
+            if i == start and tracker is not None:
+                entry = tracker.state_key()
             result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
             if i >= start:
                 rows.append(_score_row(pipeline, str(i), result, truth[i]))
+    return entry
 
 
 def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracker: bool = True,

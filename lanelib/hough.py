@@ -17,6 +17,7 @@ Its batch runs (a folder of images, a video) are ``runs.hough_images`` and ``run
 """
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 
@@ -429,6 +430,12 @@ class HoughTracker:
         c = self.finder.config
         self._left = _SideTrack(c.smoothing_alpha, c.hold_frames)
         self._right = _SideTrack(c.smoothing_alpha, c.hold_frames)
+
+    def state_key(self) -> bytes:
+        """Return a fingerprint of the state the next frames' results depend on (each side's
+        smoothed line and missed frames, the frame shape): equal keys, the same results."""
+        state = (self._shape, [(s.line, s.missed) for s in (self._left, self._right)])
+        return hashlib.sha256(repr(state).encode()).digest()
 
     def process(self, rgb: np.ndarray, keep_stages: bool = False) -> HoughResult:
         """Return the smoothed (or held) lines for the next frame of a video."""

@@ -14,8 +14,9 @@ the same on the command line. A video run returns one ``VideoRun`` record whiche
 
 On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in chunks of files
 (``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
-that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up, joined without
-re-encoding; the ``process`` callables are built on the workers by picklable factories
+that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up (a segment whose tracker
+did not reach the previous segment's final state in that warm-up runs again from that state:
+``cluster.settle_joints``, ``FrameState``), joined without re-encoding; the ``process`` callables are built on the workers by picklable factories
 (``lane_image_process``, ``lane_video_process``, ``hough_image_process``,
 ``hough_video_process``), so the rows, logs and results are those of one process.
 
@@ -27,8 +28,10 @@ from __future__ import annotations
 
 import csv
 import functools
+import hashlib
 import math
 import os
+import pickle
 import shutil
 import tempfile
 import time
@@ -165,6 +168,7 @@ class VideoRun:
     found_frames: int
     first_frame: int = 0
     notes: tuple[str, ...] = ()  # what happened on the way (e.g. the road geometry re-estimated)
+    joints: cluster.Joints | None = None  # on Dask: how the segments' joints were made exact
 
 
 # a frame whose time is a hair (float rounding) before a bound counts as at the bound
@@ -323,8 +327,20 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
     return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, first)
 
 
-# a FrameFn and the list its notes go to (what happened on the way: GeometryWatch.notes)
-FrameFnMaker = Callable[[], tuple[FrameFn, list[str]]]
+@dataclass(frozen=True)
+class FrameState:
+    """How a video's ``process`` carries its state (the tracker) from frame to frame, for the
+    joints of Dask segments (``cluster.settle_joints``): ``key()`` the fingerprint of the state
+    now (equal keys: the same results on the same next frames), ``get()`` the state (picklable),
+    ``put(state)`` go on from a state that ``get`` gave in another process (before any frame)."""
+
+    key: Callable[[], bytes | None]
+    get: Callable[[], object]
+    put: Callable[[object], None]
+
+
+# a FrameFn, the list its notes go to (what happened on the way: GeometryWatch.notes) and its state
+FrameFnMaker = Callable[[], tuple[FrameFn, list[str], FrameState]]
 
 
 @dataclass(frozen=True)
@@ -336,10 +352,12 @@ class SegmentOutcome:
     found: int
     stopped: str = ""
     notes: tuple[str, ...] = ()
+    carry: cluster.Carry = cluster.Carry()  # the state at its ends, to check its joints
 
 
 def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, parts: Path,
-                  make: FrameFnMaker, threads: int | None = None) -> list[SegmentOutcome]:
+                  make: FrameFnMaker, threads: int | None = None, state: object = None
+                  ) -> list[SegmentOutcome]:
     """Return the outcome of each segment of a chunk after writing its part video (a Dask task).
 
     A segment ``(first, start, stop, to_end)`` (``cluster.segments``) is run from frame
@@ -347,11 +365,16 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
     are dropped; the frames ``start .. stop - 1`` (to the clip's end when ``to_end``) go to
     ``parts/<start>.mp4`` (written atomically, only when it holds a frame). A clip that stops
     decoding in the segment (or before it) ends the segment there, with ``stopped`` saying why.
+    ``state`` (``FrameState.get`` of another process): the segments go on from it, not from a
+    fresh state (a re-run of a joint that did not settle in the warm-up). Each outcome's
+    ``carry`` holds the state's fingerprint before frame ``start`` and the state after the last.
     """
     out = []
     for first, start, stop, to_end in chunk:
-        process, notes = make()
-        rows, found, stopped = [], 0, ""
+        process, notes, carried = make()
+        if state is not None:
+            carried.put(state)
+        rows, found, stopped, entry = [], 0, "", None
         writer = None
         try:
             try:
@@ -361,6 +384,8 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
                 with reader:
                     for n, frame in enumerate(reader):
                         index = first + n
+                        if index == start:
+                            entry = carried.key()
                         image, row, lane = process(frame, index, index / reader.info.fps)
                         if index >= start:
                             writer.write(image)
@@ -380,7 +405,8 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
             if writer is not None:
                 writer.abort()
             raise
-        out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes)))
+        carry = cluster.Carry(entry, carried.key(), carried.get())
+        out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes), carry))
     return out
 
 
@@ -393,12 +419,15 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
 
     The frames (all, or ``start_s`` .. ``end_s``: ``clip_frames``) are split into consecutive
     segments (``cluster.segments``, ``cluster.segment_count``); each worker runs a fresh
-    ``make()`` over its segment from ``warmup`` frames earlier (the tracker's state then is that
-    of one run through the clip: the warm-up frames are dropped) and writes the segment's video
-    to a folder of parts beside ``out_path``; this process joins the parts (``io.join_videos``,
-    no re-encoding) and writes the per-frame log, both atomically, and removes the parts. One
-    progress bar counts the frames of the segments done. A clip that stops decoding keeps the
-    frames before the break, as ``run_video`` (``PartialOutputError``).
+    ``make()`` over its segment from ``warmup`` frames earlier (the warm-up frames are dropped)
+    and writes the segment's video to a folder of parts beside ``out_path``. Each joint is then
+    checked (``cluster.settle_joints``): where the warm-up did not bring the tracker to the state
+    the previous segment ended in, the segment is run again from that state, so the frames and
+    the log are those of one process; ``VideoRun.joints`` counts the re-runs. This process joins
+    the parts (``io.join_videos``, no re-encoding) and writes the per-frame log, both
+    atomically, and removes the parts. One progress bar counts the frames of the segments done
+    (re-runs included). A clip that stops decoding keeps the frames before the break, as
+    ``run_video`` (``PartialOutputError``).
     """
     in_path, out = Path(in_path), Path(out_path)
     t0 = time.perf_counter()
@@ -411,18 +440,17 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
         io.check_not_input(log_path, inputs + [out])
     count = cluster.segment_count(len(frames), cluster.total_threads(client), warmup)
     spans = cluster.segments(frames, count, warmup)
-    chunks = [[(first, start, stop, end_s is None and stop == frames.stop)] for first, start, stop in spans]
+    segs = [(first, start, stop, end_s is None and stop == frames.stop) for first, start, stop in spans]
     out.parent.mkdir(parents=True, exist_ok=True)
     parts = Path(tempfile.mkdtemp(prefix=f".{out.stem}.", suffix=".parts", dir=out.parent))
     try:
         with tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
-            done = cluster.map_chunks(client, video_segment, chunks, bar,
-                                      sizes=[stop - start for _, start, stop in spans],
-                                      in_path=in_path.resolve(), parts=parts.resolve(), make=make,
-                                      threads=threads)
+            settled, joints = cluster.map_segments(client, video_segment, segs, bar, lambda o: o.carry,
+                                                   lambda o: bool(o.stopped), in_path=in_path.resolve(),
+                                                   parts=parts.resolve(), make=make, threads=threads)
         outcomes, files = [], []
-        for (_, start, _), (o,) in zip(spans, done):
+        for (_, start, _), o in zip(spans, settled):
             outcomes.append(o)
             if o.rows:
                 files.append(parts / f"{start:09d}.mp4")
@@ -451,7 +479,8 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     if stopped:
         wrote = f"wrote {n} frames to {out}" + (f" and {n} rows to {log_path}" if log_path else "")
         raise PartialOutputError(f"{stopped}; {wrote}", n)
-    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, frames.start, notes)
+    return VideoRun(n, seconds, n / seconds if seconds > 0 else float("nan"), found, frames.start, notes,
+                    joints)
 
 
 # --------------------------------------------------------------------------- road geometry from frames
@@ -600,6 +629,11 @@ class GeometryWatch:
         self.shifts: list[float] = []
         self.notes: list[str] = []
 
+    def state_key(self) -> bytes:
+        """Return a fingerprint of what the next checks depend on: the geometry in use and the
+        horizon shifts of the checks off it in a row (their frames are those checks')."""
+        return hashlib.sha256(pickle.dumps((self.geometry, self.shifts))).digest()
+
     def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
         if index % self.every:
             return None
@@ -739,9 +773,10 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     on_geometry : called with the first estimate, before the run starts (the CLI prints it).
     workers, scheduler : run the clip in segments on Dask workers (``cluster.dask_client``,
         ``run_video_segments``: each segment starts ``cluster.WARMUP_FRAMES`` early to warm the
-        tracker up, so the frames and the log are those of one process). With
-        ``auto_geometry`` the geometry is estimated once here and each segment checks it from
-        that estimate on (a drift found in one segment does not carry over into the next).
+        tracker up, and runs again from the previous segment's tracker where that was not
+        enough, so the frames and the log are those of one process). With ``auto_geometry`` the
+        geometry is estimated once here; the geometry watch is part of the state checked at the
+        joints (a drift found in one segment carries over into the next by a re-run).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -760,7 +795,7 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
             return run_video_segments(in_path, out_path, make, client, log_path=log_path,
                                       progress=progress, desc=Path(in_path).name, threads=threads,
                                       start_s=start_s, end_s=end_s)
-    process, notes = make()
+    process, notes, _ = make()
     run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
     return replace(run, notes=tuple(notes))
@@ -768,10 +803,11 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
 
 def lane_video_process(config: PipelineConfig, calibration: Calibration | None, debug: bool,
                        geo: RoadGeometry | None = None, auto_geometry: GeometryOptions | None = None,
-                       fps: float | None = None) -> tuple[FrameFn, list[str]]:
-    """Return ``process_video``'s ``process`` (a fresh ``LaneTracker`` on the first frame) and
-    the list its notes go to; with ``geo``, the road geometry in use, checked (``GeometryWatch``
-    at ``fps``) and estimated again when it drifts, which restarts the tracker."""
+                       fps: float | None = None) -> tuple[FrameFn, list[str], FrameState]:
+    """Return ``process_video``'s ``process`` (a fresh ``LaneTracker`` on the first frame), the
+    list its notes go to and its state (the tracker; with ``geo`` also the geometry watch); with
+    ``geo``, the road geometry in use, checked (``GeometryWatch`` at ``fps``) and estimated again
+    when it drifts, which restarts the tracker."""
     trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
     watch: list[GeometryWatch] = []
     if geo is not None:
@@ -797,7 +833,22 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
             image = pipe.annotate(frame, result, raw=True)
         return image, video_log_row(index, time_s, result), result.found
 
-    return process, (watch[0].notes if watch else [])
+    def key() -> bytes | None:
+        if not trackers:
+            return None
+        return trackers[0].state_key() + (watch[0].state_key() if watch else b"")
+
+    def get() -> object:
+        return trackers[0] if trackers else None, current[0], watch[0] if watch else None
+
+    def put(state: object) -> None:
+        tracker, current[0], new = state
+        trackers[:] = [tracker] if tracker is not None else []
+        if new is not None:  # its notes were the other process's: this one's go to the list returned
+            new.notes = watch[0].notes
+            watch[0] = new
+
+    return process, (watch[0].notes if watch else []), FrameState(key, get, put)
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline
@@ -861,16 +912,20 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
                      desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
 
 
-def hough_video_process(config: hough.HoughConfig) -> tuple[FrameFn, list[str]]:
-    """Return ``hough_video``'s ``process`` (a fresh ``HoughTracker``) and its (empty) notes."""
-    tracker = hough.HoughTracker(config)
+def hough_video_process(config: hough.HoughConfig) -> tuple[FrameFn, list[str], FrameState]:
+    """Return ``hough_video``'s ``process`` (a fresh ``HoughTracker``), its (empty) notes and its
+    state (the tracker)."""
+    tracker = [hough.HoughTracker(config)]
 
     def process(frame: np.ndarray, index: int, time_s: float) -> tuple[np.ndarray, dict, bool]:
-        result = tracker.process(frame)
+        result = tracker[0].process(frame)
         return (hough.annotate(frame, result), hough_log_row(index, time_s, result),
                 result.left_found and result.right_found)
 
-    return process, []
+    def put(state: object) -> None:
+        tracker[0] = state
+
+    return process, [], FrameState(lambda: tracker[0].state_key(), lambda: tracker[0], put)
 
 
 # --------------------------------------------------------------------------- benchmark predictions

@@ -74,6 +74,7 @@ the share of the hold that is left for a held line, 0 when no lane is reported.
 """
 from __future__ import annotations
 
+import hashlib
 from collections import deque
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
@@ -271,6 +272,24 @@ class LaneTracker:
     def lost_frames(self) -> int:
         """Return the number of frames since the last accepted detection."""
         return self._lost
+
+    def state_key(self) -> bytes:
+        """Return a fingerprint of the state the next frames' results depend on.
+
+        Two trackers of one pipeline with the same key give the same results, to the last bit,
+        on the same next frames, whichever frame each started from: the remembered fits (their
+        coefficients' bytes), confidences, look-ahead rows and seen/inferred flags of the smoothing
+        and the trend, each frame's number counted back from the last frame tracked, the
+        remembered bases, the hold's counters and the held confidences. A Dask segment's
+        warm-up compares it with the previous segment's (``cluster.settle_joints``).
+        """
+        def accepted(acc: _Accepted) -> tuple:
+            return (acc.left.tobytes(), acc.right.tobytes(), acc.left_conf, acc.right_conf,
+                    acc.top_px, self._frame - acc.frame, acc.inferred)
+
+        state = ([accepted(a) for a in self._history], [accepted(a) for a in self._trend],
+                 list(self._base_history), self._lost, self._blind, self._conf)
+        return hashlib.sha256(repr(state).encode()).digest()
 
     # ---- one frame ------------------------------------------------------------------------
 

@@ -4,12 +4,15 @@ a bad item is recorded and the run goes on, a bad scheduler writes nothing.
 
 Kept small for CI: one ``LocalCluster`` of 2 one-thread workers for the module (the commands get
 its address as ``--scheduler``, as a separate cluster would be used), a 130-frame 640x360 clip cut
-from ``videos/harder.mp4``, four test images.
+from ``videos/harder.mp4`` (its joint settles in the warm-up), a 110-frame 640x360 one from
+``videos/country.mp4`` (its joint does not: the segment is run again from the previous one's
+tracker, ``cluster.settle_joints``), four test images.
 """
 from __future__ import annotations
 
 import json
 import pickle
+from dataclasses import replace
 import shutil
 import socket
 import subprocess
@@ -22,7 +25,8 @@ import pytest
 from lanelib import cluster, evaluate, io
 from lanelib.cli import main
 from lanelib.errors import InputError
-from lanelib.pipeline import LanePipeline
+from lanelib.pipeline import LanePipeline, PipelineConfig, pipeline_for
+from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -40,6 +44,18 @@ def clip(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("clip") / "small.mp4"
     subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-i", str(REPO / "videos/harder.mp4"),
                     "-frames:v", "130", "-vf", "scale=640:360", "-c:v", "libx264", "-preset", "ultrafast",
+                    "-pix_fmt", "yuv420p", str(out)], check=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def country(tmp_path_factory) -> Path:
+    """110 frames of videos/country.mp4 at 640x360: two segments 0..54 and 55..109, the second
+    warmed up from frame 5; on the hairpin the tracker's state at frame 54 depends on frames
+    before 5 (the rows of frames 55..109 differ unless the joint is run again)."""
+    out = tmp_path_factory.mktemp("country") / "country.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-i", str(REPO / "videos/country.mp4"),
+                    "-frames:v", "110", "-vf", "scale=640:360", "-c:v", "libx264", "-preset", "ultrafast",
                     "-pix_fmt", "yuv420p", str(out)], check=True)
     return out
 
@@ -90,6 +106,55 @@ def test_a_pipeline_pickles_as_its_config_calibration_and_size():
     assert again.detect(raw).summary() == pipe.detect(raw).summary()
 
 
+def test_a_trackers_state_key_says_whether_two_runs_go_on_alike(country):
+    """Equal keys: equal results on the next frames, whichever frame each tracker started from."""
+    shown = frames(country)[:64]
+    pipe = pipeline_for(shown[0], PipelineConfig(), None)
+
+    def run(tracker, first, stop):
+        return [repr(tracker.update(f)) for f in shown[first:stop]]  # repr: NaN equals NaN
+
+    whole, late = LaneTracker(pipe), LaneTracker(pipe)
+    assert whole.state_key() == late.state_key()  # two fresh trackers
+    run(whole, 0, 55)
+    run(late, 5, 55)  # a Dask segment's warm-up of 50 frames: not enough on the hairpin
+    assert whole.state_key() != late.state_key()
+    copied = pickle.loads(pickle.dumps(whole))  # what a re-run starts from
+    assert copied.state_key() == whole.state_key() != LaneTracker(pipe).state_key()
+    assert run(copied, 55, 64) == run(whole, 55, 64) != run(late, 55, 64)
+    assert copied.state_key() == whole.state_key()
+    # frame numbers count back from the last frame tracked: a start 100 frames later, the same key
+    copied._frame += 100
+    copied._history = type(copied._history)([replace(a, frame=a.frame + 100) for a in copied._history],
+                                            copied._history.maxlen)
+    copied._trend = type(copied._trend)([replace(a, frame=a.frame + 100) for a in copied._trend],
+                                        copied._trend.maxlen)
+    assert copied.state_key() == whole.state_key()
+
+
+def test_settle_joints_reruns_in_a_chain_from_the_state_before():
+    """Joint 1 settled, joint 2 not: segment 2 runs again from segment 1's state, and joint 3 is
+    checked against the state the re-run ended in."""
+    seg = [cluster.Carry(None, b"a", "A"), cluster.Carry(b"a", b"b", "B"),
+           cluster.Carry(b"x", b"c", "C"), cluster.Carry(b"c2", b"d", "D")]
+    calls = []
+
+    def rerun(k, state):
+        calls.append((k, state))
+        return cluster.Carry(None, {2: b"c2", 3: b"d"}[k], state + "'")
+
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun)
+    assert calls == [(2, "B")] and out[2].end_state == "B'" and out[3] is seg[3]
+    assert joints == cluster.Joints(3, 1) and str(joints) == (
+        "4 segments; 2 of 3 joints settled in the warm-up, 1 re-run")
+    seg[3] = cluster.Carry(b"c", b"d", "D")  # settled against the first run's end, not the re-run's
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun)
+    assert [k for k, _ in calls[1:]] == [2, 3] and joints.rerun == 2
+    # a segment the clip broke off in ends the checks
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun, ended=lambda c: c.end_state == "B")
+    assert joints == cluster.Joints(1, 0)
+
+
 # --------------------------------------------------------------------------- runs
 
 def test_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler, capsys):
@@ -101,8 +166,23 @@ def test_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler, c
     out = capsys.readouterr().out.splitlines()
     assert out[0].split(" in ")[0] == out[1].split(" in ")[0].replace("two.mp4", "one.mp4")
     assert "120 frames (frames 10..129" in out[1]
+    assert out[2] == "dask: 2 segments; 1 of 1 joint settled in the warm-up, 0 re-run"
     assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
     assert len(frames(tmp_path / "two.mp4")) == 120
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["one.csv", "one.mp4", "two.csv", "two.mp4"]
+
+
+def test_a_joint_that_does_not_settle_in_the_warm_up_is_run_again(tmp_path, country, scheduler, capsys):
+    """country's hairpin: the second segment runs again from the first one's tracker; the log
+    and the frames are those of one process."""
+    args = ["video", str(country), "--no-progress"]
+    assert main([*args, "-o", str(tmp_path / "one.mp4"), "--log", str(tmp_path / "one.csv")]) == 0
+    assert main([*args, "-o", str(tmp_path / "two.mp4"), "--log", str(tmp_path / "two.csv"),
+                 "--scheduler", scheduler]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[2] == "dask: 2 segments; 0 of 1 joint settled in the warm-up, 1 re-run"
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+    assert len(frames(tmp_path / "two.mp4")) == 110
     assert sorted(p.name for p in tmp_path.iterdir()) == ["one.csv", "one.mp4", "two.csv", "two.mp4"]
 
 
@@ -167,12 +247,15 @@ def same_reports(a, b) -> bool:
 
 
 def test_evaluate_video_on_dask_scores_the_frames_of_one_process(scheduler):
-    """110 frames of shadows.mp4 with the tracker: segments 0..54 and 55..109 (warmed up from 5)."""
-    path = REPO / "videos/shadows.mp4"
+    """110 frames of country.mp4 with the tracker: segments 0..54 and 55..109 (warmed up from 5,
+    not enough on the hairpin: 23 frames differ unless the second segment is scored again from
+    the first one's tracker)."""
+    path = REPO / "videos/country.mp4"
     pipe = LanePipeline(calibration=evaluate.calibration_from_truth(path))
     one = evaluate.evaluate_video(path, pipe, max_frames=110)
     two = evaluate.evaluate_video(path, pipe, max_frames=110, scheduler=scheduler, progress=False)
     assert two.frames == 110 and same_reports(one, two)
+    assert one.joints is None and two.joints == cluster.Joints(1, 1)
 
 
 def test_evaluate_images_on_dask_scores_as_one_process(tmp_path, scheduler):
