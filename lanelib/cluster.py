@@ -10,8 +10,9 @@ back; ``map_items`` does both (chunks, map) and returns the items' results in or
 splits a video's frames into ranges for ``runs`` and ``evaluate`` to track on the workers, each
 warmed up over the end of the one before, and ``settle_joints`` makes each joint exact: where
 the warm-up did not bring the tracker to the previous segment's final state (compared by a
-fingerprint, ``LaneTracker.state_key``), the segment runs again from that state. The workers read and write the files themselves: with ``--scheduler`` the dataset and the
-output folder must lie on a filesystem every worker sees at the same path (a shared mount).
+fingerprint, ``LaneTracker.state_key``), the segment runs again from that state
+(``map_segments`` does both, map and joints). The workers read and write the files themselves:
+with ``--scheduler`` the dataset and the output folder must lie on a filesystem every worker sees at the same path (a shared mount).
 
 ``dask`` and ``distributed`` are imported inside the functions that need them (the documented
 exception to lanelib's module-level imports, docs/architecture.md): they take a few hundred ms
@@ -259,8 +260,8 @@ def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Cal
     return out, Joints(checked, reruns)
 
 
-def map_segments(client: distributed.Client, fn: Callable[..., list], spans: Sequence[tuple[int, int, int, bool]],
-                 bar: tqdm, carry: Callable[[T], Carry], ended: Callable[[T], bool] = lambda o: False,
+def map_segments(client: distributed.Client, fn: Callable[..., list],
+                 spans: Sequence[tuple[int, int, int, bool]], bar: tqdm, carry: Callable[[T], Carry], ended: Callable[[T], bool] = lambda o: False,
                  **kwargs) -> tuple[list[T], Joints]:
     """Return the outcome of each segment of a video run by the client's workers, every joint
     exact (``settle_joints``), and how many joints needed a re-run.

@@ -437,7 +437,8 @@ def evaluate_video(path: str | os.PathLike, pipeline, use_tracker: bool = True,
                                                                max(1, warmup)), warmup)
         # the last segment reads on to the clip's end (unless --max-frames): a clip longer than
         # its truth is refused, as in one process
-        segs = [(first, start, stop, max_frames is None and stop == frames.stop) for first, start, stop in spans]
+        segs = [(first, start, stop, max_frames is None and stop == frames.stop)
+                for first, start, stop in spans]
         with tqdm(total=len(frames), desc="evaluate", unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
             # the tracker's state checked at each joint (cluster.settle_joints): the rows of one process
@@ -463,13 +464,15 @@ def score_video_segment(chunk: Sequence[tuple[int, int, int, bool]], path: Path,
     """Return the score rows of each segment ``(first, start, stop, to_end)`` of a video (a Dask
     task of ``evaluate_video``) and its tracker's state at its ends (``cluster.Carry``): run from
     ``first`` (a fresh tracker, or a copy of the tracker ``state``: a re-run from the previous
-    segment's state), rows kept from ``start``; a segment that cannot be scored (the clip breaks off, more
-    frames than truth) gives the error's message instead of rows (the client raises the first
-    one in the clip's order)."""
+    segment's state), rows kept from ``start``; a segment that cannot be scored (the clip breaks
+    off, more frames than truth) gives the error's message instead of rows (the client raises
+    the first one in the clip's order)."""
     truth = load_video_truth(path).frames
     out: list[tuple[list[tuple] | str, cluster.Carry]] = []
     for first, start, stop, to_end in chunk:
-        tracked = (copy.deepcopy(state) if state is not None else LaneTracker(pipeline)) if use_tracker else None
+        tracked = None
+        if use_tracker:
+            tracked = copy.deepcopy(state) if state is not None else LaneTracker(pipeline)
         rows: list[tuple] = []
         try:
             entry = _score_segment(path, pipeline, tracked, truth, first, start,

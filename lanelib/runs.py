@@ -16,9 +16,10 @@ On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in c
 (``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
 that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up (a segment whose tracker
 did not reach the previous segment's final state in that warm-up runs again from that state:
-``cluster.settle_joints``, ``FrameState``), joined without re-encoding; the ``process`` callables are built on the workers by picklable factories
-(``lane_image_process``, ``lane_video_process``, ``hough_image_process``,
-``hough_video_process``), so the rows, logs and results are those of one process.
+``cluster.settle_joints``, ``FrameState``), joined without re-encoding; the ``process``
+callables are built on the workers by picklable factories (``lane_image_process``,
+``lane_video_process``, ``hough_image_process``, ``hough_video_process``), so the rows, logs
+and results are those of one process.
 
 Bad inputs: in a folder run, a file that cannot be read or processed (a lanelib error) gets its
 own row with an ``error`` and the run goes on; a video that breaks off half-way keeps the frames

@@ -54,8 +54,8 @@ def country(tmp_path_factory) -> Path:
     warmed up from frame 5; on the hairpin the tracker's state at frame 54 depends on frames
     before 5 (the rows of frames 55..109 differ unless the joint is run again)."""
     out = tmp_path_factory.mktemp("country") / "country.mp4"
-    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-i", str(REPO / "videos/country.mp4"),
-                    "-frames:v", "110", "-vf", "scale=640:360", "-c:v", "libx264", "-preset", "ultrafast",
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-i",
+                    str(REPO / "videos/country.mp4"), "-frames:v", "110", "-vf", "scale=640:360", "-c:v", "libx264", "-preset", "ultrafast",
                     "-pix_fmt", "yuv420p", str(out)], check=True)
     return out
 
