@@ -906,9 +906,10 @@ def hough_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     make = functools.partial(hough_video_process, config)
     with cluster.dask_client(workers, scheduler) as client:
         if client is not None:
+            # a warm-up its smoothing forgets a start in, to the last bit (most joints settle)
             return run_video_segments(in_path, out_path, make, client, log_path=log_path,
                                       progress=progress, desc=Path(in_path).name, threads=threads,
-                                      start_s=start_s, end_s=end_s)
+                                      start_s=start_s, end_s=end_s, warmup=hough.settle_frames(config))
     return run_video(in_path, out_path, make()[0], log_path=log_path, progress=progress,
                      desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
 

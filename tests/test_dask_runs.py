@@ -22,7 +22,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from lanelib import cluster, evaluate, io
+from lanelib import cluster, evaluate, hough, io
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline, PipelineConfig, pipeline_for
@@ -74,6 +74,12 @@ def test_segments_cover_the_frames_in_order_with_their_warm_up():
     assert cluster.segment_count(120, 2) == 2  # short: one per worker
     assert cluster.segment_count(1260, 2) == 3  # each at least 8 warm-ups long
     assert cluster.segment_count(100_000, 2) == 2 * cluster.CHUNKS_PER_THREAD
+
+
+def test_a_hough_segment_warms_up_until_its_smoothing_forgot_the_start():
+    """0.7 ** n below a double's precision (2**-53): 103 frames, and a fifth more."""
+    assert hough.settle_frames(hough.HoughConfig()) == 124
+    assert hough.settle_frames(hough.HoughConfig(smoothing_alpha=1.0)) == 1  # no smoothing
 
 
 def test_join_videos_round_trip(tmp_path):
