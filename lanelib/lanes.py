@@ -34,6 +34,7 @@ import numpy as np
 from .errors import ConfigError
 
 RADIUS_MAX_M = 100_000.0
+NEAR_SHARE = 0.02  # share of a line's pixels nearest the car left out of where it reaches (LineFit.gap_px)
 
 
 @dataclass(frozen=True)
@@ -188,7 +189,10 @@ class LineFit:
     """One fitted line: pixel coefficients (a, b, c) of x = f(y), or not found with a reason.
 
     ``scatter_px`` is the RMS horizontal distance (px) of the line's pixels from the fit (0 for a
-    line not fitted to pixels, e.g. a tracked one).
+    line not fitted to pixels, e.g. a tracked one). ``gap_px`` is how far (rows) the line's pixels
+    stop short of the view's bottom row, the car's end: from the bottom row to the row that all
+    but ``NEAR_SHARE`` of its pixels lie above (0 for a line that reaches the car, or was not
+    fitted to pixels). A few stray pixels near the car do not count as reaching it.
     """
 
     coeffs_px: tuple[float, float, float] | None
@@ -196,6 +200,7 @@ class LineFit:
     span_px: float = 0.0
     reason: str = ""
     scatter_px: float = 0.0
+    gap_px: float = 0.0
 
     @property
     def found(self) -> bool:
@@ -623,7 +628,8 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
             ys, xs, n = ys[idx], xs[idx], keep
             span = float(ys.max() - ys.min())
             a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
-    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n))
+    gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
+    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap)
 
 
 def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
@@ -747,6 +753,18 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
         return (f"{side} line is texture, not a line (its pixels scatter {metres}{scatter:.0%} of "
                 f"an even spread over its search band, limit {checks.max_band_scatter:.0%})")
     return ""
+
+
+def gap_problem(fit: LineFit, ym_per_px: float, max_gap_m: float, side: str = "left") -> str:
+    """Return why a line is not seen at the car: its pixels stop more than ``max_gap_m`` (m of
+    road) short of the view's bottom row (``LineFit.gap_px``), so its position there is an
+    extrapolation ("" when they reach nearer, or the line is not found). ``ym_per_px``: metres
+    per bird's-eye pixel along the road."""
+    gap_m = fit.gap_px * ym_per_px
+    if not fit.found or gap_m <= max_gap_m:
+        return ""
+    return (f"{side} line seen only from {gap_m:.1f} m ahead of the view's bottom row "
+            f"(limit {max_gap_m} m): at the car it is an extrapolation")
 
 
 def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float, ym_per_px: float,

@@ -27,8 +27,16 @@ debug composite work on it unchanged. Per frame:
    follows it). A line is not checked for bending away from a tracked line that was inferred,
    not seen; and when both lines bend away from the track alike and pass the pair's checks on
    their own, the road changed faster than the smoothed track and both are kept
-   (``_pair_outvotes_track``). When the pair fails but a track exists, the line with the higher
-   confidence is kept. A detection that lost a line to the checks is kept in the result's
+   (``_pair_outvotes_track``). A line whose pixels stop more than ``max_gap_m`` short of the
+   view's bottom row (``lanes.LineFit.gap_px``: its paint near the car in an overpass's shade or
+   worn away) is seen only far ahead; its position at the car would be an extrapolation (on
+   ``shadows`` lines seen only 14-20 m ahead put the reported line 45-65 px off at the car in
+   the raw image, false lines by the TuSimple rule). With a track it is
+   kept where it was seen if it lies within ``max_jump_m`` of its tracked line there, and joined
+   nearer the car (one second-order fit to both) to the line inferred from the other line
+   (step 3) when that one reaches the car, or else to its tracked line; otherwise it is refused.
+   Without a track it is taken as ``LanePipeline.detect`` takes it. When the pair fails but a
+   track exists, the line with the higher confidence is kept. A detection that lost a line to the checks is kept in the result's
    ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one and the tracked lane: the
    kept line moved along its normal by the tracked lane's normal width on each row
@@ -115,6 +123,13 @@ class TrackerConfig:
         follows (step 7), from the third accepted frame on; below 3 turns the prediction off.
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
         the lane is held for, beside ``hold_frames`` (step 5); they do not count toward it.
+    max_gap_m : largest distance (m of road) between the view's bottom row and a line's pixels
+        nearest it (``lanes.LineFit.gap_px``) for the line to be taken as seen at the car (step
+        2). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
+        away, a stray edge far ahead) is an extrapolation at the car: a heading error of a degree
+        over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
+        read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
+        has paint within it.
     """
 
     max_jump_m: float = 0.5
@@ -127,6 +142,7 @@ class TrackerConfig:
     lookahead_growth_m: float = 3.0
     trend_frames: int = 5
     blind_hold_frames: int = 12
+    max_gap_m: float = 12.0
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -141,6 +157,8 @@ class TrackerConfig:
             raise ConfigError("tracking: lookahead_growth_m must be positive")
         if self.trend_frames < 0 or self.blind_hold_frames < 0:
             raise ConfigError("tracking: trend_frames >= 0 and blind_hold_frames >= 0")
+        if self.max_gap_m <= 0:
+            raise ConfigError("tracking: max_gap_m must be positive")
 
 
 @dataclass(frozen=True)
@@ -403,6 +421,7 @@ class LaneTracker:
         why: list[str] = []
         kept: dict[str, LineFit | None] = {"left": None, "right": None}
         bent: dict[str, LineFit] = {}  # lines refused only for bending away from the track
+        distant: dict[str, LineFit] = {}  # lines seen only far ahead that lie along their track
         for i, (side, fit) in enumerate((("left", left), ("right", right))):
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
@@ -411,6 +430,15 @@ class LaneTracker:
             if problem:
                 why.append(problem)
                 failed = True
+                continue
+            far = lanes.gap_problem(fit, self._ym, cfg.max_gap_m, side) if track is not None else ""
+            if far:
+                if not self._confirms_track(fit, track[i], top_px):
+                    why.append(far)
+                    failed = True
+                    continue
+                kept[side] = fit
+                distant[side] = fit
                 continue
             if track is not None:
                 dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(track[i], rows)) * self._xm
@@ -426,6 +454,15 @@ class LaneTracker:
                     bent[side] = fit
                     continue
             kept[side] = fit
+        for i, side in enumerate(("left", "right")):
+            if side in distant:  # joined to the other line's inference, or else to its track
+                other = "right" if i == 0 else "left"
+                near = kept[other] is not None and other not in distant
+                ref = self._inferred(np.array(kept[other].coeffs_px), track, i, top_px) if near else track[i]
+                kept[side] = replace(distant[side], coeffs_px=self._joined(distant[side], ref, top_px))
+                why.append(f"{lanes.gap_problem(distant[side], self._ym, cfg.max_gap_m, side)}; it lies "
+                           f"along its track there, and nearer the car "
+                           + ("the line inferred from the other line is taken" if near else "its track is taken"))
         if len(bent) == 2 and self._pair_outvotes_track(bent, track, rows, top_px):
             kept, failed = dict(bent), False
             why.append("both lines bent away from the track together and pass the pair checks: "
@@ -474,6 +511,27 @@ class LaneTracker:
             return False
         return not lanes.pair_problem(bent["left"], bent["right"], self.pipeline.size[1], self._xm,
                                       self._ym, self.checks, top_px)
+
+    def _confirms_track(self, fit: LineFit, tracked: np.ndarray, top_px: int) -> bool:
+        """Return whether a line seen only far ahead (``lanes.gap_problem``) lies along its
+        tracked line where its pixels are: within ``max_jump_m`` of it on the rows from its
+        nearest pixels (``LineFit.gap_px``) up by its span, inside the look-ahead."""
+        near = self._bottom - fit.gap_px
+        rows = np.linspace(max(float(top_px), near - fit.span_px), near, 5)
+        dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(tracked, rows)) * self._xm
+        return bool(np.abs(dx).max() <= self.config.max_jump_m)
+
+    def _joined(self, fit: LineFit, reference: np.ndarray, top_px: int) -> tuple[float, float, float]:
+        """Return the pixel coefficients of a line seen only far ahead, joined to ``reference``
+        (its tracked line, or the line inferred from the other line): a second-order fit to the
+        line where its pixels are and to the reference on the rows between them and the view's
+        bottom row, where nothing was seen (one sample per row)."""
+        near = self._bottom - fit.gap_px
+        seen = np.arange(max(float(top_px), near - fit.span_px), near)
+        unseen = np.arange(near, self._bottom + 1.0)
+        ys = np.concatenate([seen, unseen])
+        xs = np.concatenate([np.polyval(fit.coeffs_px, seen), np.polyval(reference, unseen)])
+        return lanes.least_squares_poly(ys, xs, 2, float(self.pipeline.size[1]))
 
     def _track_inferred(self, side: int) -> bool:
         """Return whether the newest accepted frame inferred line ``side`` (0 left, 1 right): a

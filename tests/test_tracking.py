@@ -396,3 +396,79 @@ def test_two_lines_that_bend_away_together_outvote_a_lagging_track(pipe):
     cv2.polylines(bird, [pts.reshape(-1, 1, 2)], False, (235, 235, 235), 24)
     r = tracker.update(pipe.perspective.unwarp(bird))
     assert "right line bent" in r.reason and "right line inferred" in r.reason
+
+
+def _far_frame(pipe: LanePipeline, right_dx: float = 0.0, right_top_dx: float = 0.0,
+               left_far: bool = False, far_rows: int = 120) -> np.ndarray:
+    """Return a frame whose right line shows only in the top ``far_rows`` rows of the view (its
+    paint near the car in shade), ``right_dx`` px outwards at the top row and ``right_top_dx``
+    more at its nearest row, and a full left line (``left_far``: only in the same top rows)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    cv2.line(bird, (round(LEFT_X), 0), (round(LEFT_X), far_rows if left_far else H - 1),
+             (235, 235, 235), 24)
+    cv2.line(bird, (round(RIGHT_X + right_dx), 0), (round(RIGHT_X + right_dx + right_top_dx), far_rows),
+             (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def _tracked(pipe: LanePipeline, config: TrackerConfig | None = None) -> LaneTracker:
+    tracker = LaneTracker(pipe, config)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    return tracker
+
+
+def test_fit_line_measures_how_far_short_of_the_car_a_line_stops():
+    """``gap_px``: rows from the view's bottom row to where all but 2 % of the pixels lie above,
+    so a few stray pixels near the car do not make a far line reach it."""
+    from lanelib import lanes
+    ys = np.repeat(np.arange(0, 121), 20)
+    far = lanes.fit_line(ys, np.full(ys.shape, 960), H)
+    assert far.gap_px == pytest.approx(H - 1 - 120, abs=3)
+    stray = lanes.fit_line(np.concatenate([ys, [715] * 8]), np.full(ys.size + 8, 960), H)
+    assert stray.span_px > 700 and stray.gap_px == pytest.approx(far.gap_px, abs=3)
+    full = lanes.fit_line(np.repeat(np.arange(H), 5), np.full(5 * H, 960), H)
+    assert full.gap_px < 0.03 * H
+    assert lanes.gap_problem(far, 0.0326, 12.0, "right").startswith(
+        "right line seen only from 19.6 m ahead of the view's bottom row (limit 12.0 m)")
+    assert lanes.gap_problem(full, 0.0326, 12.0, "right") == ""
+
+
+def test_a_line_seen_only_far_ahead_is_joined_to_the_line_inferred_near_the_car(pipe):
+    """A right line seen only 19.6 m ahead and beyond, slanted so that extrapolated to the car
+    it lies 0.42 m outside the lane: it lies along its track where seen, so it is kept there and
+    joined, nearer the car, to the line inferred from the left line (which reaches the car)."""
+    r = _tracked(pipe).update(_far_frame(pipe, right_top_dx=12.0))
+    assert r.found and r.method == "prior"
+    assert "right line seen only from" in r.reason
+    assert "nearer the car the line inferred from the other line is taken" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
+    assert r.lane_width_m == pytest.approx(3.7, abs=0.03)
+    # the rule off: the extrapolated line is taken as seen at the car, and pulls the lane out
+    r_off = _tracked(pipe, TrackerConfig(max_gap_m=100.0)).update(_far_frame(pipe, right_top_dx=12.0))
+    assert "seen only" not in r_off.reason
+    assert bottom_x(r_off, "right") - RIGHT_X > 3 * abs(bottom_x(r, "right") - RIGHT_X) + 3
+
+
+def test_two_lines_seen_only_far_ahead_are_joined_to_their_track(pipe):
+    r = _tracked(pipe).update(_far_frame(pipe, left_far=True))
+    assert r.found and r.reason.count("nearer the car its track is taken") == 2
+    assert bottom_x(r, "left") == pytest.approx(LEFT_X, abs=3)
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
+
+
+def test_a_far_line_off_its_track_is_refused(pipe):
+    """A far line 0.3 m beside its track where seen (inside the prior band; ``max_jump_m`` 0.2 m
+    here) is refused and the right line is inferred from the left one. Without a track there
+    is nothing to join it to: a far line is taken as the per-frame detector takes it."""
+    r = _tracked(pipe, TrackerConfig(max_jump_m=0.2)).update(_far_frame(pipe, right_dx=0.3 / XM))
+    assert "at the car it is an extrapolation" in r.reason and "lies along" not in r.reason
+    assert "right line inferred from the left line" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
+    fresh = LaneTracker(pipe).update(_far_frame(pipe))
+    assert "seen only" not in fresh.reason
+
+
+def test_max_gap_must_be_positive():
+    with pytest.raises(ConfigError, match="max_gap_m must be positive"):
+        TrackerConfig(max_gap_m=0.0)
