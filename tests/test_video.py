@@ -155,8 +155,12 @@ def test_keyboard_interrupt_mid_run_leaves_no_file(clip, tmp_path, monkeypatch):
 
 
 def test_ctrl_c_on_the_command_leaves_no_file(tmp_path):
-    """SIGINT to the whole process group, as a terminal's Ctrl-C does (ffmpeg gets it too)."""
-    src = drawn_clip(tmp_path / "long.mp4", n=150, fps=25)
+    """SIGINT to the whole process group, as a terminal's Ctrl-C does (ffmpeg gets it too).
+
+    The encoder writes its first bytes only after its look-ahead, so the clip is long enough (16
+    s) that the run is still going when they appear, even on a loaded machine (150 frames were
+    once all sent before it)."""
+    src = drawn_clip(tmp_path / "long.mp4", n=400, fps=25, shift_px_per_frame=0.5)
     out_dir = tmp_path / "out"
     out_dir.mkdir()
     proc = subprocess.Popen([sys.executable, "-m", "lanelib", "video", str(src), "-o",
