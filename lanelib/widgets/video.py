@@ -81,8 +81,9 @@ class VideoTuner(Tuner):
     config, calibration, image, tile_width_px, jpeg_quality : as for ``Tuner``.
 
     Sliders ``tracking.smooth_frames``, ``tracking.recency_decay``, ``tracking.hold_frames``,
-    ``tracking.max_jump_m``, ``tracking.base_history_frames`` (0: off) and
-    ``tracking.min_base_peak`` (``TrackerConfig``), ``checks.width_m`` (``min_width_m`` ..
+    ``tracking.max_jump_m``, ``tracking.base_history_frames`` (0: off),
+    ``tracking.min_base_peak``, ``tracking.trend_frames`` (0: off), ``tracking.blind_hold_frames``
+    and ``tracking.max_gap_m`` (``TrackerConfig``), ``checks.width_m`` (``min_width_m`` ..
     ``max_width_m`` of ``LaneChecks``) and ``max_frames``. A change re-runs ``LaneTracker`` over
     the cached frames (``results``: one ``FrameResult`` per frame); the frame slider only picks
     which tracked frame is shown, without re-running it (``runs`` counts the runs). The preview
@@ -272,6 +273,13 @@ class VideoTuner(Tuner):
             c("tracking.min_base_peak", widgets.FloatSlider(
                 value=tc.min_base_peak, min=0.0, max=20.0, step=0.5, description="min_base_peak",
                 **sized(380, 130))),
+            c("tracking.trend_frames", widgets.IntSlider(value=tc.trend_frames, min=0, max=15,
+                                                          description="trend_frames", **sized(380, 130))),
+            c("tracking.blind_hold_frames", widgets.IntSlider(
+                value=tc.blind_hold_frames, min=0, max=60, description="blind_hold_frames",
+                **sized(380, 130))),
+            c("tracking.max_gap_m", widgets.FloatSlider(value=tc.max_gap_m, min=3.0, max=60.0, step=1.0,
+                                                         description="max_gap_m", **sized(380, 130))),
             c("checks.width_m", widgets.FloatRangeSlider(value=(cc.min_width_m, cc.max_width_m), min=1.0,
                                                           max=6.0, step=0.05, description="width_m",
                                                           **sized(380, 130))),
@@ -281,12 +289,13 @@ class VideoTuner(Tuner):
         ]
         for w in made:
             w.continuous_update = False
-        return [row(*made[:2]), row(*made[2:4]), row(*made[4:6]), row(*made[6:])]
+        return [row(*made[:2]), row(*made[2:4]), row(*made[4:6]), row(*made[6:8]), row(*made[8:10]),
+                row(*made[10:])]
 
     def _sync(self) -> None:
         tc, cc = self.config.tracking, self.config.checks
         for k in ("smooth_frames", "recency_decay", "hold_frames", "max_jump_m", "base_history_frames",
-                  "min_base_peak"):
+                  "min_base_peak", "trend_frames", "blind_hold_frames", "max_gap_m"):
             self.controls[f"tracking.{k}"].value = getattr(tc, k)
         self.controls["checks.width_m"].value = (cc.min_width_m, cc.max_width_m)
 
@@ -299,7 +308,10 @@ class VideoTuner(Tuner):
                            hold_frames=int(ctl["tracking.hold_frames"].value),
                            max_jump_m=round(float(ctl["tracking.max_jump_m"].value), 3),
                            base_history_frames=int(ctl["tracking.base_history_frames"].value),
-                           min_base_peak=round(float(ctl["tracking.min_base_peak"].value), 3))
+                           min_base_peak=round(float(ctl["tracking.min_base_peak"].value), 3),
+                           trend_frames=int(ctl["tracking.trend_frames"].value),
+                           blind_hold_frames=int(ctl["tracking.blind_hold_frames"].value),
+                           max_gap_m=round(float(ctl["tracking.max_gap_m"].value), 3))
         lo, hi = ctl["checks.width_m"].value
         checks = replace(cfg.checks, min_width_m=round(float(lo), 3), max_width_m=round(float(hi), 3))
         return replace(cfg, tracking=tracking, checks=checks)
