@@ -264,16 +264,17 @@ class LanePipeline:
         return self._lines_view
 
     def detect_lines(self, raw: np.ndarray, config: LinesConfig = LinesConfig(),
-                     keep_images: bool = False) -> LinesResult:
+                     keep_images: bool = False, ego: bool = True) -> LinesResult:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
 
         The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
         looked for in the lines view (``lines_view``: about 28 m across and 150 m ahead), masked
         by the rule of the thresholds rescaled to it, by ``lanes.find_lines``, and mapped back to
         the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
-        keeps the view ("lines_birdseye") and its mask ("lines_binary").
+        keeps the view ("lines_birdseye") and its mask ("lines_binary"); ``ego=False`` skips
+        ``detect`` (a third of the time) and leaves ``LinesResult.ego`` None.
         """
-        ego = self.detect(raw)
+        ego_result = self.detect(raw) if ego else None
         view, maps, tconf = self.lines_view()
         bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
         mask = thresholds.combine(bird, tconf)
@@ -291,7 +292,7 @@ class LanePipeline:
         lines = tuple(image_line(line, to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
                       for line in lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px))
         images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
-        return LinesResult(lines, ego, images)
+        return LinesResult(lines, ego_result, images)
 
     def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
         """Return the first search in a shorter look-ahead whose lane passes the checks, or None.

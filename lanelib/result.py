@@ -157,9 +157,10 @@ class LinesResult:
     """Every lane line ``LanePipeline.detect_lines`` saw, left to right, and the ego lane.
 
     ``ego`` is the frame's ``FrameResult`` (``detect``): what the overlay, curvature and offset
-    use; ``lines`` holds every line seen, the ego pair's lines among them.
+    use (None when not asked for: ``predict`` needs only the lines); ``lines`` holds every line
+    seen, the ego pair's lines among them.
     """
 
     lines: tuple[ImageLine, ...]
-    ego: FrameResult
+    ego: FrameResult | None
     images: dict = field(default_factory=dict, repr=False)

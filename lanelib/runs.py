@@ -1119,7 +1119,7 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
             cache[key].lines_view()  # per camera, like the pipeline's own maps: not in run_time
         pipe = cache[key]
         t0 = time.perf_counter()
-        lines = seen_lines(pipe.detect_lines(rgb), work.rows_px, w=rgb.shape[1],
+        lines = seen_lines(pipe.detect_lines(rgb, ego=False), work.rows_px, w=rgb.shape[1],
                            per_side=culane.LINES_PER_SIDE if work.benchmark == "culane" else None)
         ms = (time.perf_counter() - t0) * 1000.0
         io.remove_stale_temp_files(work.target)

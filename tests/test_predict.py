@@ -264,7 +264,10 @@ def test_detect_lines_finds_the_labelled_lines_with_the_true_geometry(ts_root):
         rgb = io.read_image(ts_root / rec.raw_file)
         found = pipe.detect_lines(rgb)
         assert found.ego.found == pipe.detect(rgb).found
+        alone = pipe.detect_lines(rgb, ego=False)  # predict's call: the same lines, no ego lane
         preds = runs.seen_lines(found, rec.h_samples, w=rgb.shape[1])
+        assert alone.ego is None and np.array_equal(
+            np.array(runs.seen_lines(alone, rec.h_samples, w=rgb.shape[1])), np.array(preds), equal_nan=True)
         xs = np.array(preds)
         for a, b in zip(xs[:-1], xs[1:]):  # left to right where both are seen
             both = np.isfinite(a) & np.isfinite(b)
