@@ -20,7 +20,7 @@ from . import io
 from .draw import DrawConfig
 from .errors import ConfigError
 from .hough import HoughConfig
-from .lanes import LaneChecks, SearchConfig
+from .lanes import LaneChecks, LinesConfig, SearchConfig
 from .perspective import PerspectiveConfig
 from .thresholds import ThresholdConfig
 from .tracking import TrackerConfig
@@ -37,6 +37,7 @@ class PipelineConfig:
     tracking: TrackerConfig = TrackerConfig()
     draw: DrawConfig = DrawConfig()
     hough: HoughConfig = HoughConfig()
+    lines: LinesConfig = LinesConfig()  # every visible line (``detect_lines``, ``predict``)
 
 
 def to_dict(obj) -> dict:

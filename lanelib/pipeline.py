@@ -263,7 +263,7 @@ class LanePipeline:
                                 thresholds.scaled(self.config.thresholds, view.scale_from_ego))
         return self._lines_view
 
-    def detect_lines(self, raw: np.ndarray, config: LinesConfig = LinesConfig(),
+    def detect_lines(self, raw: np.ndarray, config: LinesConfig | None = None,
                      keep_images: bool = False, ego: bool = True) -> LinesResult:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
 
@@ -271,9 +271,12 @@ class LanePipeline:
         looked for in the lines view (``lines_view``: about 28 m across and 150 m ahead), masked
         by the rule of the thresholds rescaled to it, by ``lanes.find_lines``, and mapped back to
         the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
-        keeps the view ("lines_birdseye") and its mask ("lines_binary"); ``ego=False`` skips
+        keeps the view ("lines_birdseye") and its mask ("lines_binary"). ``config``: the search's
+        parameters (default: ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V``
+        tune ``predict``). ``ego=False`` skips
         ``detect`` (a third of the time) and leaves ``LinesResult.ego`` None.
         """
+        config = self.config.lines if config is None else config
         ego_result = self.detect(raw) if ego else None
         view, maps, tconf = self.lines_view()
         bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
