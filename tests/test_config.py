@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from lanelib.config import PipelineConfig, from_dict, load_config, save_config, to_dict
+from lanelib.config import PipelineConfig, from_dict, load_config, override, save_config, to_dict
 from lanelib.errors import ConfigError, InputError
 from lanelib.lanes import SearchConfig
 from lanelib.thresholds import ChannelMask
@@ -171,3 +171,10 @@ def test_the_trend_and_blind_hold_of_the_tracker_round_trip(tmp_path):
     assert back == cfg
     saved = json.loads((tmp_path / "c.json").read_text())["tracking"]
     assert (saved["trend_frames"], saved["blind_hold_frames"]) == (0, 4)
+
+
+def test_the_lines_part_is_set_saved_and_loaded(tmp_path):
+    cfg = override(PipelineConfig(), ["lines.max_slope=0.3", "lines.bands=3"])
+    assert (cfg.lines.max_slope, cfg.lines.bands) == (0.3, 3)
+    save_config(cfg, tmp_path / "c.json")
+    assert load_config(tmp_path / "c.json").lines == cfg.lines != PipelineConfig().lines
