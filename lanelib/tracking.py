@@ -559,15 +559,26 @@ class LaneTracker:
     def _stripe_spread(self, binary: np.ndarray, coeffs_px, top_px: int) -> np.ndarray | None:
         """Return the flat view's scale across the road relative to the bottom row's, as a
         straight line in (bottom row - row), from the stripes of a double line along the fit
-        ``coeffs_px`` (``lanes.stripe_spacing_px``; at least 4 bands of rows), or None."""
+        ``coeffs_px`` (``lanes.stripe_spacing_px``), or None.
+
+        None unless the stripes show on at least 4 bands of rows covering half the look-ahead
+        (from ``top_px``), their spacing lies within an eighth of ``double_line_px`` (RMS) of
+        the straight line, and the scale at the look-ahead's top is 0.7-2.5: on ``country``
+        spreads taken from fewer or scattered bands swung the clip's point accuracy from 64 to
+        87 % with the number of bands; with these gates it stays at 82-87 % (78 % without).
+        """
         spacing = self.pipeline.config.search.double_line_px
         if not spacing:
             return None
         ys, gaps = lanes.stripe_spacing_px(binary, coeffs_px, spacing, top_px)
-        if len(ys) < 4:
+        depth = self._bottom - top_px
+        if len(ys) < 4 or ys.max() - ys.min() < 0.5 * depth:
             return None
         slope, at_car = np.polyfit(self._bottom - ys, gaps, 1)
-        if at_car <= 0:
+        residual = gaps - np.polyval((slope, at_car), self._bottom - ys)
+        if at_car <= 0 or float(np.sqrt(np.mean(residual ** 2))) > spacing / 8:
+            return None
+        if not 0.7 <= 1.0 + slope / at_car * depth <= 2.5:
             return None
         return np.array([slope / at_car, 1.0])
 
