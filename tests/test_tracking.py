@@ -507,3 +507,18 @@ def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, st
     # the smoothed lane averages this frame with the three before it: read the frame's own fit
     top = float(np.polyval(tracker._history[-1].right, 0.0))
     assert top == pytest.approx(top_x, abs=12)
+
+
+def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
+    """The double left line's outer stripe only on the bottom half of the view: its spacing
+    is read on four bands of rows, but over under half the look-ahead: too short to scale the width ahead, and the
+    inferred line keeps the tracked width."""
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(_pitched_frame(pipe, 1.0, True))
+    bird = pipe.perspective.warp(_pitched_frame(pipe, 1.25, False))
+    bird[: H // 2, : round(LEFT_X) - 20] = 70  # the outer stripe is worn away ahead
+    r = tracker.update(pipe.perspective.unwarp(bird))
+    assert r.found and "right line inferred" in r.reason
+    assert "double stripes" not in r.reason
+    assert float(np.polyval(tracker._history[-1].right, 0.0)) == pytest.approx(RIGHT_X, abs=12)
