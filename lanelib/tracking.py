@@ -638,8 +638,8 @@ class LaneTracker:
                 if side not in coeffs:  # infer from the other line and the tracked lane width
                     coeffs[side] = self._inferred(coeffs[other], track, i, search.top_px, spread)
                     confs[side] = round(0.5 * confs[other], 3)
-                    notes.append(f"{side} line inferred from the {other} line and the tracked width"
-                                 + (" at the car, widened ahead as its double stripes" if spread is not None else ""))
+                    widened = " at the car, widened ahead as its double stripes" if spread is not None else ""
+                    notes.append(f"{side} line inferred from the {other} line and the tracked width{widened}")
             accepted = _Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
                                  search.top_px, self._frame, (left is None, right is None))
             self._history.append(accepted)

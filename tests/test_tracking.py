@@ -491,7 +491,8 @@ def _pitched_frame(pipe: LanePipeline, spread_top: float, right: bool) -> np.nda
     return pipe.perspective.unwarp(bird)
 
 
-@pytest.mark.parametrize("stripe_spread, top_x", [(True, LEFT_X + 1.25 * (RIGHT_X - LEFT_X)), (False, RIGHT_X)])
+@pytest.mark.parametrize("stripe_spread, top_x",
+                         [(True, LEFT_X + 1.25 * (RIGHT_X - LEFT_X)), (False, RIGHT_X)])
 def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, stripe_spread, top_x):
     """A straight lane tracked with both lines; then the right line goes and the view spreads the
     road ahead by 1.25 at the top row: the double left line's stripes spread with it, and the
@@ -510,9 +511,9 @@ def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, st
 
 
 def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
-    """The double left line's outer stripe only on the bottom half of the view: its spacing
-    is read on four bands of rows, but over under half the look-ahead: too short to scale the width ahead, and the
-    inferred line keeps the tracked width."""
+    """The double left line's outer stripe only on the bottom half of the view: its spacing is
+    read on four bands of rows, but over under half the look-ahead, too short to scale the
+    width ahead: the inferred line keeps the tracked width."""
     tracker = LaneTracker(pipe)
     for _ in range(3):
         tracker.update(_pitched_frame(pipe, 1.0, True))
