@@ -544,6 +544,50 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     return ys[keep], xs[keep]
 
 
+def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int = 0,
+                      bands: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows (px) and the measured centre-to-centre spacing (px) of a double line's two
+    stripes along the fit ``coeffs_px`` (of either stripe or between them), one per band of rows
+    from ``top_px`` down where both stripes show.
+
+    In each of ``bands`` bands of rows the mask's pixels within 2.5 x ``spacing_px`` of the fit
+    are split into two groups by their x residual (two-means); the band counts when each group
+    holds at least a fifth of them, their centres lie 0.5-2.5 x ``spacing_px`` apart and the gap
+    between them is clear (as in ``inner_stripe``; the split starts from the residuals' extremes, as
+    the spacing ahead is not known). The flat view spreads or narrows the road
+    ahead where it pitches, the stripes' spacing with it: its change along the rows is the
+    change of the view's scale across the road.
+    """
+    h = binary.shape[0]
+    ys, xs = np.nonzero(binary[top_px:])
+    ys = ys + top_px
+    r = xs - np.polyval(coeffs_px, ys.astype(np.float64))
+    near = np.abs(r) < 2.5 * spacing_px
+    ys, r = ys[near], r[near]
+    edges = np.linspace(float(top_px), float(h), bands + 1)
+    out_y, out_s = [], []
+    for lo_y, hi_y in zip(edges[:-1], edges[1:]):
+        sel = (ys >= lo_y) & (ys < hi_y)
+        rb = r[sel]
+        if len(rb) < 20:
+            continue
+        lo, hi = float(rb.min()), float(rb.max())
+        for _ in range(8):  # two-means on the residuals, from their extremes
+            upper = rb > (lo + hi) / 2
+            if upper.all() or not upper.any():
+                break  # one group: no two stripes in this band
+            lo, hi = float(rb[~upper].mean()), float(rb[upper].mean())
+        else:
+            n = len(rb)
+            gap = hi - lo
+            if (min(int(upper.sum()), int((~upper).sum())) >= 0.2 * n
+                    and 0.5 * spacing_px <= gap <= 2.5 * spacing_px
+                    and np.count_nonzero(np.abs(rb - (lo + hi) / 2) < gap / 8) <= 0.05 * n):
+                out_y.append(0.5 * (lo_y + hi_y))
+                out_s.append(gap)
+    return np.array(out_y), np.array(out_s)
+
+
 def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
               missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner

@@ -44,7 +44,10 @@ debug composite work on it unchanged. Per frame:
    ahead, which the track follows, is carried over): the kept line's shape (the lines of a
    lane are parallel; the tracked difference of their shapes was measured on older frames, and
    on a bend that tightens or opens it bends the inferred line off the lane ahead), not shifted
-   by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead).
+   by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead). When the kept
+   line is a double line whose two stripes show on enough rows (``TrackerConfig.stripe_spread``),
+   the width ahead is the tracked width at the car scaled as the stripes' spacing: the tracked
+   width ahead is only as new as the last frame that saw both lines.
    Its confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
    ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
@@ -130,6 +133,15 @@ class TrackerConfig:
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
         has paint within it.
+    stripe_spread : while one line is inferred (step 4), take the change of the lane's width
+        ahead from the seen line's double stripes (``lanes.stripe_spacing_px``) when they show on
+        enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
+        the stripes' spacing with it, so the lane's width on a row is its tracked width at the car
+        times the stripes' spacing there over their spacing at the car (a straight line fitted in
+        the distance from the bottom row). Without such stripes the tracked width is kept. The
+        tracked width ahead is only as new as the last frame that saw both lines: on ``country``
+        over the crest and the hairpin the flat view's lane widens from 3.4 m at the car to 6 m
+        at the view's top while the right line is missing.
     """
 
     max_jump_m: float = 0.5
@@ -143,6 +155,7 @@ class TrackerConfig:
     trend_frames: int = 5
     blind_hold_frames: int = 12
     max_gap_m: float = 12.0
+    stripe_spread: bool = True
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -375,7 +388,11 @@ class LaneTracker:
             images["binary"] = images["fallback binary"]  # the views show the mask the lane came from
         images.pop("fallback binary", None)
         blind = not any(s.left.found or s.right.found for s in looked)
-        result = self._advance(search, left, right, why, track, images, blind)
+        spread = None  # one line to infer: the view's scale ahead from the other's double stripes
+        if self.config.stripe_spread and track is not None and (left is None) != (right is None):
+            seen = left if left is not None else right
+            spread = self._stripe_spread(mask(), seen.coeffs_px, search.top_px)
+        result = self._advance(search, left, right, why, track, images, blind, spread)
         if not failed:
             return result
         rejected = Rejected(search.left, search.right, pipe.measure(search.left, search.right),
@@ -486,13 +503,19 @@ class LaneTracker:
             return None, None, why, failed
         return kept["left"], kept["right"], why, failed
 
-    def _inferred(self, seen: np.ndarray, track, side: int, top_px: int) -> np.ndarray:
+    def _inferred(self, seen: np.ndarray, track, side: int, top_px: int,
+                  spread: np.ndarray | None = None) -> np.ndarray:
         """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
         ``seen`` line moved along its normal by the tracked lane's normal width on each row from
         ``top_px`` down (``lanes.normal_width_m``, ``lanes.offset_line``): where a grade widens or
-        narrows the flat view's lane ahead, the track's width carries that change."""
+        narrows the flat view's lane ahead, the track's width carries that change. With a
+        ``spread`` (``_stripe_spread``) the width is the tracked width at the car times it."""
         rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
-        width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym)
+        if spread is not None:
+            width = (lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
+                     * np.polyval(spread, self._bottom - rows))
+        else:
+            width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym)
         return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
                                           self.pipeline.size[1], top_px))
 
@@ -533,6 +556,32 @@ class LaneTracker:
         xs = np.concatenate([np.polyval(fit.coeffs_px, seen), np.polyval(reference, unseen)])
         return lanes.least_squares_poly(ys, xs, 2, float(self.pipeline.size[1]))
 
+    def _stripe_spread(self, binary: np.ndarray, coeffs_px, top_px: int) -> np.ndarray | None:
+        """Return the flat view's scale across the road relative to the bottom row's, as a
+        straight line in (bottom row - row), from the stripes of a double line along the fit
+        ``coeffs_px`` (``lanes.stripe_spacing_px``), or None.
+
+        None unless the stripes show on at least 4 bands of rows covering half the look-ahead
+        (from ``top_px``), their spacing lies within an eighth of ``double_line_px`` (RMS) of
+        the straight line, and the scale at the look-ahead's top is 0.7-2.5: on ``country``
+        spreads taken from fewer or scattered bands swung the clip's point accuracy from 64 to
+        87 % with the number of bands; with these gates it stays at 82-87 % (78 % without).
+        """
+        spacing = self.pipeline.config.search.double_line_px
+        if not spacing:
+            return None
+        ys, gaps = lanes.stripe_spacing_px(binary, coeffs_px, spacing, top_px)
+        depth = self._bottom - top_px
+        if len(ys) < 4 or ys.max() - ys.min() < 0.5 * depth:
+            return None
+        slope, at_car = np.polyfit(self._bottom - ys, gaps, 1)
+        residual = gaps - np.polyval((slope, at_car), self._bottom - ys)
+        if at_car <= 0 or float(np.sqrt(np.mean(residual ** 2))) > spacing / 8:
+            return None
+        if not 0.7 <= 1.0 + slope / at_car * depth <= 2.5:
+            return None
+        return np.array([slope / at_car, 1.0])
+
     def _track_inferred(self, side: int) -> bool:
         """Return whether the newest accepted frame inferred line ``side`` (0 left, 1 right): a
         seen line is not checked for bending away from a line that was never seen."""
@@ -572,9 +621,11 @@ class LaneTracker:
         return (out[0], out[1]) if weak else None
 
     def _advance(self, search: LaneSearch, left: LineFit | None, right: LineFit | None,
-                 why: list[str], track, images: dict, blind: bool = False) -> FrameResult:
+                 why: list[str], track, images: dict, blind: bool = False,
+                 spread: np.ndarray | None = None) -> FrameResult:
         """Update the state with this frame's accepted lines and return the frame's result
-        (``blind``: no search saw a line at all in this frame)."""
+        (``blind``: no search saw a line at all in this frame; ``spread``: the view's scale
+        across the road ahead for an inferred line, ``_stripe_spread``)."""
         notes = list(why)
         if left is not None or right is not None:
             coeffs = {}
@@ -585,9 +636,10 @@ class LaneTracker:
                     confs[side] = self._conf_of(fit)
             for side, other, i in (("left", "right", 0), ("right", "left", 1)):
                 if side not in coeffs:  # infer from the other line and the tracked lane width
-                    coeffs[side] = self._inferred(coeffs[other], track, i, search.top_px)
+                    coeffs[side] = self._inferred(coeffs[other], track, i, search.top_px, spread)
                     confs[side] = round(0.5 * confs[other], 3)
-                    notes.append(f"{side} line inferred from the {other} line and the tracked width")
+                    widened = " at the car, widened ahead as its double stripes" if spread is not None else ""
+                    notes.append(f"{side} line inferred from the {other} line and the tracked width{widened}")
             accepted = _Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
                                  search.top_px, self._frame, (left is None, right is None))
             self._history.append(accepted)

@@ -380,3 +380,20 @@ def test_offset_line_takes_a_distance_per_row():
     assert np.polyval(moved, 0.0) == pytest.approx(320.0 + 4.5 / XM_DEFAULT, abs=0.5)
     widths = lanes.normal_width_m((0.0, 0.0, 320.0), moved, rows, XM_DEFAULT, YM_DEFAULT)
     assert np.abs(widths - offset).max() < 0.01
+
+
+def test_stripe_spacing_is_measured_per_band_of_rows():
+    """Two stripes 38 px apart at the bottom row and 57 px at the top (a flat view spreading the
+    road ahead): the spacing is read on each band of rows; one stripe alone gives no band."""
+    m = np.zeros((H, W), np.uint8)
+    draw_curve(m, (0.0, 0.0, 400.0), 15)
+    ys = np.arange(H)
+    outer = 400.0 - (38.0 + 19.0 * (H - 1 - ys) / (H - 1))
+    pts = np.column_stack([outer, ys]).round().astype(np.int32)
+    cv2.polylines(m, [pts.reshape(-1, 1, 2)], False, 255, 15)
+    rows, gaps = lanes.stripe_spacing_px(m, (0.0, 0.0, 400.0), 38.0)
+    assert len(rows) == 8
+    assert gaps == pytest.approx(38.0 + 19.0 * (H - 1 - rows) / (H - 1), abs=2.0)
+    single = np.zeros((H, W), np.uint8)
+    draw_curve(single, (0.0, 0.0, 400.0), 15)
+    assert len(lanes.stripe_spacing_px(single, (0.0, 0.0, 400.0), 38.0)[0]) == 0

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -472,3 +473,53 @@ def test_a_far_line_off_its_track_is_refused(pipe):
 def test_max_gap_must_be_positive():
     with pytest.raises(ConfigError, match="max_gap_m must be positive"):
         TrackerConfig(max_gap_m=0.0)
+
+
+def _pitched_frame(pipe: LanePipeline, spread_top: float, right: bool) -> np.ndarray:
+    """Return a frame whose bird's-eye view shows a double left line (stripes 38 px apart at the
+    bottom row) and, with ``right``, the right line, the view spreading the road ahead by
+    ``spread_top`` at the top row (1 at the bottom, linear in between)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(H, dtype=float)
+    k = 1.0 + (spread_top - 1.0) * (H - 1 - ys) / (H - 1)
+    lines = [(LEFT_X + 0 * ys, 16), (LEFT_X - 38.0 * k, 16)]
+    if right:
+        lines.append((LEFT_X + (RIGHT_X - LEFT_X) * k, 24))
+    for xs, thickness in lines:
+        pts = np.column_stack([xs, ys]).round().astype(np.int32)
+        cv2.polylines(bird, [pts.reshape(-1, 1, 2)], False, (235, 235, 235), thickness)
+    return pipe.perspective.unwarp(bird)
+
+
+@pytest.mark.parametrize("stripe_spread, top_x",
+                         [(True, LEFT_X + 1.25 * (RIGHT_X - LEFT_X)), (False, RIGHT_X)])
+def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, stripe_spread, top_x):
+    """A straight lane tracked with both lines; then the right line goes and the view spreads the
+    road ahead by 1.25 at the top row: the double left line's stripes spread with it, and the
+    inferred right line follows (at the car it stays at the tracked width). With the switch off
+    it keeps the tracked width on every row."""
+    tracker = LaneTracker(pipe, replace(pipe.config.tracking, stripe_spread=stripe_spread))
+    for _ in range(3):
+        tracker.update(_pitched_frame(pipe, 1.0, True))
+    r = tracker.update(_pitched_frame(pipe, 1.25, False))
+    assert r.found and "right line inferred" in r.reason
+    assert ("widened ahead as its double stripes" in r.reason) == stripe_spread
+    assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=4)
+    # the smoothed lane averages this frame with the three before it: read the frame's own fit
+    top = float(np.polyval(tracker._history[-1].right, 0.0))
+    assert top == pytest.approx(top_x, abs=12)
+
+
+def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
+    """The double left line's outer stripe only on the bottom half of the view: its spacing is
+    read on four bands of rows, but over under half the look-ahead, too short to scale the
+    width ahead: the inferred line keeps the tracked width."""
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(_pitched_frame(pipe, 1.0, True))
+    bird = pipe.perspective.warp(_pitched_frame(pipe, 1.25, False))
+    bird[: H // 2, : round(LEFT_X) - 20] = 70  # the outer stripe is worn away ahead
+    r = tracker.update(pipe.perspective.unwarp(bird))
+    assert r.found and "right line inferred" in r.reason
+    assert "double stripes" not in r.reason
+    assert float(np.polyval(tracker._history[-1].right, 0.0)) == pytest.approx(RIGHT_X, abs=12)
