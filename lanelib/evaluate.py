@@ -391,13 +391,9 @@ def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None 
         If the folder does not exist or holds no images, or no Dask scheduler answers.
     """
     files = list_images(folder)[:max_frames]
-    with cluster.dask_client(workers, scheduler) as client:
-        if client is None:
-            scored = score_images(files, pipeline)
-        else:
-            with tqdm(total=len(files), desc="evaluate", unit="image", disable=not progress,
-                      dynamic_ncols=True) as bar:
-                scored = cluster.map_items(client, score_images, files, bar, pipeline=pipeline)
+    on_dask = workers != 1 or scheduler is not None  # a bar only there, as before
+    scored = cluster.run_items(score_images, files, workers, scheduler, "evaluate", "image",
+                               progress and on_dask, pipeline=pipeline)
     col = _Collector(pipeline, str(folder), "frame")
     col.rows = [row for row, _ in scored if row is not None]
     return col.report([fail for _, fail in scored if fail is not None])

@@ -62,6 +62,7 @@ class LanePipeline:
                                     if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
         self.car_x_px = self.perspective.car_x_px
         self._lines_view = None  # (view, remap maps, thresholds), made by the first detect_lines
+        self._lines_to_raw = None  # the lines view's transform back to the raw frame, made with it
 
     def __reduce__(self):
         return LanePipeline, (self.config, self.undistorter.calibration, self.size)
@@ -256,11 +257,14 @@ class LanePipeline:
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
         """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
-        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked."""
+        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked
+        (with the view's transform back to the raw frame, ``_lines_to_raw``)."""
         if self._lines_view is None:
             view = LinesView(self.perspective)
-            self._lines_view = (view, (self.lens.inverse + view).remap_maps(view.size),
+            raw_to_view = self.lens.inverse + view
+            self._lines_view = (view, raw_to_view.remap_maps(view.size),
                                 thresholds.scaled(self.config.thresholds, view.scale_from_ego))
+            self._lines_to_raw = raw_to_view.inverse
         return self._lines_view
 
     def detect_lines(self, raw: np.ndarray, config: LinesConfig | None = None,
@@ -291,8 +295,7 @@ class LanePipeline:
             mask = cv2.bitwise_or(mask, low)
         wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
         mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
-        to_raw = (self.lens.inverse + view).inverse
-        lines = tuple(image_line(line, to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
+        lines = tuple(image_line(line, self._lines_to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
                       for line in lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px))
         images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
         return LinesResult(lines, ego_result, images)
