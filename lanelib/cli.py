@@ -637,16 +637,17 @@ def _add_synth(sub) -> None:
         "synth", help="render synthetic chessboards, road images and videos with ground truth",
         description="Render lanelib's synthetic data with exact ground truth from fixed seeds (the "
                     "same bytes on one machine). --all rewrites the bundled camera_cal/ (20 chessboards and "
-                    "camera_truth.json), test_images/ (8 scenes, NAME.json beside each) and videos/ "
-                    "(project, challenge, harder: 10 s each, NAME.csv per frame and NAME.json beside "
-                    "each). The subcommands render one part.",
+                    "camera_truth.json), test_images/ (8 scenes and the 6 hard-road stills in hard/, NAME.json "
+                    "beside each) and videos/ (project, challenge, harder, shadows, seams, glare, "
+                    "country: 10 s each, NAME.csv per frame and NAME.json beside each). The "
+                    "subcommands render one part.",
         epilog=_exit_codes())
     p.add_argument("--all", action="store_true", help="render all the bundled data")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="with --all: folder to write camera_cal/, test_images/ and videos/ into "
                         "(default: the repository root)")
     kinds = p.add_subparsers(dest="synth_kind", metavar="KIND")
-    k = kinds.add_parser("images", help="the 8 test scenes, each with its JSON truth")
+    k = kinds.add_parser("images", help="the 8 test scenes and the 6 hard-road stills (in hard/), each with its JSON truth")
     k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
     k = kinds.add_parser("boards", help="the 20 chessboard photographs and camera_truth.json")
     k.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="folder to write")
