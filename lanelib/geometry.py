@@ -270,11 +270,8 @@ class RoadGeometry:
         """Return the ``PerspectiveConfig`` of these bird's-eye points and scale."""
         d = np.asarray(self.dst_px, np.float64)
         car_x = float((d[:, 0].min() + d[:, 0].max()) / 2)  # the camera's own line: the car's centre
-        # the camera's foot: the view's rows are even in distance, its bottom edge near_m ahead
-        top, bottom = float(d[:, 1].min()), float(d[:, 1].max())
-        car_y = bottom + (bottom - top) * self.near_m / self.visible_length_m
         return PerspectiveConfig(self.src_px, self.dst_px, self.size_px, self.lane_width_m,
-                                 self.visible_length_m, car_x, round(car_y, 3))
+                                 self.visible_length_m, car_x)
 
     def perspective(self) -> Perspective:
         """Return the ``Perspective`` (undistorted image <-> bird's-eye view) of these points."""

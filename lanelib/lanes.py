@@ -20,10 +20,7 @@ Curvature, offset and width are read on the bird's-eye view's bottom row, the ne
 camera sees (4.8 m ahead with the default points), as the Udacity convention has it; the fits are
 not extrapolated to the car itself. Where the car is not parallel to the lane, the offset there
 differs from the offset below the camera by heading x 4.8 m (about 5 cm per 0.01 rad); the
-synthetic ground truth is given at the car, so ``evaluate`` counts that term as error. A view
-that knows where the car is (``PerspectiveConfig.car_y_px``, set by an estimated geometry, whose
-bottom row lies a measured distance ahead) reads the offset at the car instead: the lane's centre
-line carried down along its tangent at the bottom row.
+synthetic ground truth is given at the car, so ``evaluate`` counts that term as error.
 """
 from __future__ import annotations
 
@@ -742,16 +739,12 @@ def support(fit: LineFit) -> float:
 
 
 def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
-            xm_per_px: float, ym_per_px: float, car_y_px: float | None = None) -> LaneMeasurement:
+            xm_per_px: float, ym_per_px: float) -> LaneMeasurement:
     """Return curvature, radius, offset and lane width in metres on the view's bottom row.
 
     The lane's centre line has the mean position of the two lines and their shape (a, b)
     weighted by each line's ``support``, so a line resting on one dash does not bend the lane.
-    With ``car_y_px`` (the car's row in the view, below its bottom row: ``PerspectiveConfig``)
-    the offset is read at the car: the centre line carried down from the bottom row along its
-    tangent there (a curve's own bend over those few metres is a centimetre on a 1 km radius,
-    less than what its quadratic term would add by extrapolation). Anything needing a line
-    that was not found is NaN.
+    Anything needing a line that was not found is NaN.
     """
     y_px = height_px - 1
     y_m = y_px * ym_per_px
@@ -768,10 +761,7 @@ def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
     centre[2] = (cl[2] + cr[2]) / 2
     k = curvature(fit_to_metres(centre, xm_per_px, ym_per_px), y_m)
     xl, xr = float(left.x_at(y_px)), float(right.x_at(y_px))
-    x_centre = (xl + xr) / 2
-    if car_y_px is not None:
-        x_centre += (2 * centre[0] * y_px + centre[1]) * (car_y_px - y_px)
-    offset = (car_x_px - x_centre) * xm_per_px
+    offset = (car_x_px - (xl + xr) / 2) * xm_per_px
     width = (xr - xl) * xm_per_px
     return LaneMeasurement(k, radius(k), offset, width, kl, kr)
 

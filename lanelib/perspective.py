@@ -59,13 +59,6 @@ class PerspectiveConfig:
         measured and the search splits left from right; None (the default): where the bottom
         row's centre pixel of the image lands, right for a camera that looks straight ahead.
         ``geometry.RoadGeometry`` sets it (a turned camera's image centre is not the car's).
-    car_y_px : y (px) of the car (the camera's foot) in the bird's-eye view, below its bottom row
-        (h + near / ym_per_px when the bottom row lies ``near`` metres ahead); the offset is read
-        there, each line carried down along its tangent at the bottom row, so a car not parallel
-        to its lane reads its own offset and not the one ``near`` metres ahead (heading x near:
-        5 cm per 0.01 rad at 5 m). None (the default): on the bottom row, for points that do not
-        know how far ahead their bottom row lies (hand-tuned ones). ``geometry.RoadGeometry``
-        sets it.
     """
 
     src_px: tuple[Point, ...] = DEFAULT_SRC_1280x720
@@ -74,7 +67,6 @@ class PerspectiveConfig:
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
     visible_length_m: float = DEFAULT_VISIBLE_LENGTH_M
     car_x_px: float | None = None
-    car_y_px: float | None = None
 
     def __post_init__(self):
         for name in ("src_px", "dst_px"):
@@ -140,8 +132,7 @@ def scaled(config: PerspectiveConfig, size_px: tuple[int, int]) -> PerspectiveCo
     sc = lambda pts: tuple((x * sx, y * sy) for x, y in pts)  # noqa: E731
     return PerspectiveConfig(sc(config.src_px), sc(config.dst_px), tuple(size_px),
                              config.lane_width_m, config.visible_length_m,
-                             None if config.car_x_px is None else config.car_x_px * sx,
-                             None if config.car_y_px is None else config.car_y_px * sy)
+                             None if config.car_x_px is None else config.car_x_px * sx)
 
 
 # --------------------------------------------------------------------------- transforms of points
@@ -292,8 +283,6 @@ class Perspective(Homography):
         # the car's centre line in the bird's-eye view (``PerspectiveConfig.car_x_px``)
         self.car_x_px = (float(config.car_x_px) if config.car_x_px is not None
                          else float(self([(w / 2, h - 1)])[0, 0]))
-        # the car's row: where the offset is read (``PerspectiveConfig.car_y_px``; None: the bottom row)
-        self.car_y_px = None if config.car_y_px is None else float(config.car_y_px)
 
     def _check(self, image: np.ndarray) -> None:
         io.check_rgb(image, "image", self.size, owner="the perspective",

@@ -118,7 +118,7 @@ class LanePipeline:
     def measure(self, left: LineFit, right: LineFit) -> LaneMeasurement:
         """Return curvature, radius, offset and lane width in metres for two fits."""
         p = self.perspective
-        return lanes.measure(left, right, self.size[1], self.car_x_px, p.xm_per_px, p.ym_per_px, p.car_y_px)
+        return lanes.measure(left, right, self.size[1], self.car_x_px, p.xm_per_px, p.ym_per_px)
 
     # ---- one frame ------------------------------------------------------------------------
 

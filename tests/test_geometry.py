@@ -16,14 +16,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import geometry, lanes
+from lanelib import geometry
 from lanelib.camera import Calibration, undistort_points
 from lanelib.errors import GeometryError, LaneLibError
 from lanelib.geometry import LOW_CONFIDENCE, RoadGeometry, RoadLineFinder, estimate_geometry, vanishing_point
 from lanelib.config import PipelineConfig
 from lanelib.evaluate import evaluate_video
 from lanelib.io import VideoReader, read_image
-from lanelib.lanes import LineFit
 from lanelib.perspective import DEFAULT_SRC_1280x720, Perspective, PerspectiveConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.synth import (Camera, CarPose, CurvatureProfile, GroundGrid, Layout, Look, Renderer, Scene,
@@ -175,23 +174,6 @@ def check_lane_width(camera: Camera, geom: RoadGeometry, lane_width_m: float) ->
             slope = np.polyfit(left[:, 1], left[:, 0], 1)[0] * geom.xm_per_px / geom.ym_per_px
             width = (xr - xl) * geom.xm_per_px * math.cos(math.atan(slope))
             assert width == pytest.approx(lane_width_m, rel=0.03), (offset, row)
-
-
-@pytest.mark.parametrize("name", ["yaw_+3", "yaw_-3", "bundled", "wide_960x540"])
-def test_offset_through_the_estimated_view_is_the_cars_own(estimates, name):
-    """The car's column in the estimated view is the camera's foot (the vanishing point's column
-    for a turned camera, not the image centre), and its row lies near_m below the bottom row:
-    a car turned by 0.01 rad reads its own offset within 1 cm (on the bottom row, 4.5-5.4 m
-    ahead, it read heading x near_m = 5 cm more)."""
-    camera, _, geom = estimates[name]
-    persp = Perspective(geom.perspective_config())
-    assert persp.car_y_px == pytest.approx(geom.size_px[1] * (1 + geom.near_m / geom.visible_length_m), abs=1e-3)
-    h = geom.size_px[1]
-    for offset, heading in ((0.3, 0.0), (-0.45, 0.0), (0.3, 0.01), (-0.2, -0.01)):
-        fits = [LineFit(tuple(np.polyfit(line[:, 1], line[:, 0], 2)), 1000, float(h))
-                for line in birdseye_lines(camera, geom, offset, heading)]
-        m = lanes.measure(*fits, h, persp.car_x_px, geom.xm_per_px, geom.ym_per_px, persp.car_y_px)
-        assert m.offset_m == pytest.approx(offset, abs=0.01), (offset, heading)
 
 
 def test_a_car_in_a_middle_lane_measures_its_own_lane_not_three():

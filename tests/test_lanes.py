@@ -128,17 +128,6 @@ def test_offset_is_read_on_the_bottom_row():
     assert lanes.measure(left, right, H, 640.0, xm, ym).offset_m == pytest.approx(0.0, abs=1e-9)
 
 
-def test_offset_is_read_at_the_car_when_the_view_knows_its_row():
-    xm, ym = 3.7 / 640, 23.5 / 720
-    b = 0.05   # the same lane, seen at a heading; the car is 150 rows below the bottom row
-    left = LineFit((0.0, b, 320.0 - b * (H - 1)), 1000, 700.0)
-    right = LineFit((0.0, b, 960.0 - b * (H - 1)), 1000, 700.0)
-    m = lanes.measure(left, right, H, 640.0, xm, ym, car_y_px=H - 1 + 150.0)
-    # the lane's centre there lies 150 * 0.05 px to the right of the car's column
-    assert m.offset_m == pytest.approx(-150 * b * xm, abs=1e-9)
-    assert m.lane_width_m == lanes.measure(left, right, H, 640.0, xm, ym).lane_width_m
-
-
 def test_lane_curvature_follows_the_better_supported_line():
     xm, ym = 3.7 / 640, 23.5 / 720
     strong = LineFit((2e-4, -0.3, 300.0), 20000, 719.0)
