@@ -327,7 +327,8 @@ class LaneTracker:
         on the same next frames, whichever frame each started from: the remembered fits (their
         coefficients' bytes), confidences, look-ahead rows and seen/inferred flags of the smoothing
         and the trend, each frame's number counted back from the last frame tracked, the
-        remembered bases, the hold's counters and the held confidences. A Dask segment's
+        remembered bases, the hold's counters, the held confidences and the widths seen at the car
+        (``seen_width_m``). A Dask segment's
         warm-up compares it with the previous segment's (``cluster.settle_joints``).
         """
         def accepted(acc: _Accepted) -> tuple:
