@@ -46,8 +46,15 @@ debug composite work on it unchanged. Per frame:
    on a bend that tightens or opens it bends the inferred line off the lane ahead), not shifted
    by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead). When the kept
    line is a double line whose two stripes show on enough rows (``TrackerConfig.stripe_spread``),
-   the width ahead is the tracked width at the car scaled as the stripes' spacing: the tracked
+   the width ahead is the width at the car scaled as the stripes' spacing: the tracked
    width ahead is only as new as the last frame that saw both lines.
+   The width at the car is not the tracked lane's but the median of the normal widths at the car
+   of the last ``smooth_frames`` frames that saw both lines reaching the car (``seen_width_m``;
+   the tracked width on the other rows is scaled to it): once one line is inferred, the
+   tracked lane holds inferred lines, and a width read back from them each frame drifts (on a
+   bend that turns from frame to frame by 0.26 m in 24 frames on drawn lines; on a 4.4 m
+   country lane whose left line went unseen for 200 frames from 4.4 to 2.8 m, the search then
+   looking for the line 1.5 m beside it).
    Its confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
    ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
@@ -233,6 +240,8 @@ class LaneTracker:
         self._trend: deque[_Accepted] = deque(maxlen=max(self.config.trend_frames, 1))
         self._lost = 0
         self._blind = 0  # frames since the last accepted one in which nothing was seen (step 5)
+        # the lane's normal width at the car (m) in the last frames that saw both lines (step 3)
+        self._seen_widths: deque[float] = deque(maxlen=self.config.smooth_frames)
         self._conf = (0.0, 0.0)
 
     @property
@@ -295,6 +304,13 @@ class LaneTracker:
         return lane[0] + rate * (target - times[0]), lane[1] + rate * (target - times[1])
 
     @property
+    def seen_width_m(self) -> float:
+        """Return the lane's width at the car (m, along the normal on the view's bottom row) that a
+        missing line is inferred at (step 3): the median over the last ``smooth_frames`` frames
+        that saw both lines, NaN before any."""
+        return float(np.median(self._seen_widths)) if self._seen_widths else float("nan")
+
+    @property
     def frame_number(self) -> int:
         """Return the number of the last frame tracked (1 for the first after ``reset``)."""
         return self._frame
@@ -311,7 +327,8 @@ class LaneTracker:
         on the same next frames, whichever frame each started from: the remembered fits (their
         coefficients' bytes), confidences, look-ahead rows and seen/inferred flags of the smoothing
         and the trend, each frame's number counted back from the last frame tracked, the
-        remembered bases, the hold's counters and the held confidences. A Dask segment's
+        remembered bases, the hold's counters, the held confidences and the widths seen at the car
+        (``seen_width_m``). A Dask segment's
         warm-up compares it with the previous segment's (``cluster.settle_joints``).
         """
         def accepted(acc: _Accepted) -> tuple:
@@ -319,7 +336,7 @@ class LaneTracker:
                     acc.top_px, self._frame - acc.frame, acc.inferred)
 
         state = ([accepted(a) for a in self._history], [accepted(a) for a in self._trend],
-                 list(self._base_history), self._lost, self._blind, self._conf)
+                 list(self._base_history), self._lost, self._blind, self._conf, list(self._seen_widths))
         return hashlib.sha256(repr(state).encode()).digest()
 
     # ---- one frame ------------------------------------------------------------------------
@@ -508,14 +525,21 @@ class LaneTracker:
         """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
         ``seen`` line moved along its normal by the tracked lane's normal width on each row from
         ``top_px`` down (``lanes.normal_width_m``, ``lanes.offset_line``): where a grade widens or
-        narrows the flat view's lane ahead, the track's width carries that change. With a
-        ``spread`` (``_stripe_spread``) the width is the tracked width at the car times it."""
+        narrows the flat view's lane ahead, the track's width carries that change. At the car the
+        width is the one measured in the last frames that saw both lines there (``seen_width_m``),
+        not the tracked lane's: the track holds the lines inferred in earlier frames, and a width
+        read back from them drifts frame after frame (step 3); the track's width on the other
+        rows is scaled by the same factor. With a ``spread`` (``_stripe_spread``) the width is
+        the seen width at the car times it."""
         rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
+        tracked = lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
+        at_car = self.seen_width_m if self._seen_widths else tracked
         if spread is not None:
-            width = (lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
-                     * np.polyval(spread, self._bottom - rows))
-        else:
-            width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym)
+            width = at_car * np.polyval(spread, self._bottom - rows)
+        elif tracked > 0.5 * at_car:  # the track's change of width ahead, at the seen width at the car
+            width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym) * (at_car / tracked)
+        else:  # a track whose width has collapsed: no shape ahead to keep
+            width = np.full(len(rows), at_car)
         return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
                                           self.pipeline.size[1], top_px))
 
@@ -582,6 +606,12 @@ class LaneTracker:
             return None
         return np.array([slope / at_car, 1.0])
 
+    def _reach_car(self, fit: LineFit | None) -> bool:
+        """Return whether ``fit`` is a line seen in this frame whose pixels reach within
+        ``max_gap_m`` of the view's bottom row (not one seen only far ahead and joined nearer the
+        car to another line)."""
+        return fit is not None and fit.gap_px * self._ym <= self.config.max_gap_m
+
     def _track_inferred(self, side: int) -> bool:
         """Return whether the newest accepted frame inferred line ``side`` (0 left, 1 right): a
         seen line is not checked for bending away from a line that was never seen."""
@@ -644,6 +674,9 @@ class LaneTracker:
                                  search.top_px, self._frame, (left is None, right is None))
             self._history.append(accepted)
             self._trend.append(accepted)
+            if self._reach_car(left) and self._reach_car(right):  # both seen at the car: measured there
+                self._seen_widths.append(lanes.normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
+                                                              self._xm, self._ym))
             if self._base_history.maxlen:
                 self._base_history.append(self._bases((coeffs["left"], coeffs["right"])))
             self._lost = self._blind = 0

@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+from lanelib import lanes
 from lanelib.config import PipelineConfig
 from lanelib.perspective import PerspectiveConfig
 from lanelib.errors import ConfigError
@@ -523,3 +524,41 @@ def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
     assert r.found and "right line inferred" in r.reason
     assert "double stripes" not in r.reason
     assert float(np.polyval(tracker._history[-1].right, 0.0)) == pytest.approx(RIGHT_X, abs=12)
+
+
+def _turning_frame(pipe: LanePipeline, n: int, right: bool = True) -> np.ndarray:
+    """Frame ``n`` of a bend that turns and tightens from frame to frame: the left line is
+    x = a*d**2 + b*d + LEFT_X (d = H - 1 - y, a and b growing with n) and the right line its
+    parallel curve 3.7 m to the right along the normal (``lanes.offset_line``)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(0, H, 4, dtype=float)
+    d = H - 1 - ys
+    xl = 1.2e-4 * n * d * d - 0.08 * n * d + LEFT_X
+    curves = [xl]
+    if right:
+        ym = pipe.perspective.ym_per_px
+        rc = lanes.offset_line(np.polyfit(ys, xl, 2), 3.7, XM, ym, H)
+        curves.append(np.polyval(rc, ys))
+    for xs in curves:
+        cv2.polylines(bird, [np.round(np.column_stack([xs, ys])).astype(np.int32)], False,
+                      (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def test_an_inferred_line_keeps_the_width_seen_at_the_car(pipe):
+    """Both lines seen for 3 frames (3.7 m), then the right line is lost for 24 frames of a bend
+    that turns further each frame: the right line is inferred at the width measured while both
+    were seen (``seen_width_m``), not at the width read back from the tracked lane, which holds
+    the lines inferred before (that one drifted 3.70 -> 3.44 m over these frames)."""
+    ym = pipe.perspective.ym_per_px
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(_turning_frame(pipe, 0))
+    assert tracker.seen_width_m == pytest.approx(3.7, abs=0.02)
+    widths = []
+    for n in range(1, 25):
+        r = tracker.update(_turning_frame(pipe, n, right=False))
+        assert r.found and "right line inferred from the left line" in r.reason
+        widths.append(lanes.normal_width_m(r.left.coeffs_px, r.right.coeffs_px, H - 1.0, XM, ym))
+    assert tracker.seen_width_m == pytest.approx(3.7, abs=0.02)  # inferred frames add nothing
+    assert max(abs(w - 3.7) for w in widths) < 0.05
