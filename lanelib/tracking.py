@@ -27,12 +27,14 @@ debug composite work on it unchanged. Per frame:
    follows it). A line is not checked for bending away from a tracked line that was inferred,
    not seen; and when both lines bend away from the track alike and pass the pair's checks on
    their own, the road changed faster than the smoothed track and both are kept
-   (``_pair_outvotes_track``). A line whose pixels stop more than ``max_gap_m`` short of the
-   view's bottom row (``lanes.LineFit.gap_px``: its paint near the car in an overpass's shade or
-   worn away) is seen only far ahead; its position at the car would be an extrapolation (on
-   ``shadows`` lines seen only 14-20 m ahead put the reported line 45-65 px off at the car in
-   the raw image, false lines by the TuSimple rule). With a track it is
-   kept where it was seen if it lies within ``max_jump_m`` of its tracked line there, and joined
+   (``_pair_outvotes_track``). A pair refused as not parallel against the track is kept when
+   it is parallel on the road ahead's grade: its width changes along the view as the seen
+   double line's two stripes' spacing does (``grade_pair_check``). A line whose pixels stop
+   more than ``max_gap_m`` short of the view's bottom row (``lanes.LineFit.gap_px``: its paint
+   near the car in an overpass's shade or worn away) is seen only far ahead; its position at
+   the car would be an extrapolation (on ``shadows`` lines seen only 14-20 m ahead put the
+   reported line 45-65 px off at the car in the raw image, false lines by the TuSimple rule).
+   With a track it is kept where it was seen if it lies within ``max_jump_m`` of its tracked line there, and joined
    nearer the car (one second-order fit to both) to the line inferred from the other line
    (step 3) when that one reaches the car, or else to its tracked line; otherwise it is refused.
    Without a track it is taken as ``LanePipeline.detect`` takes it. When the pair fails but a
@@ -140,6 +142,15 @@ class TrackerConfig:
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
         has paint within it.
+    grade_pair_check : with a track, a pair whose width changes along the view otherwise than the
+        tracked width's does (``lanes.pair_problem``: "lines not parallel") is checked again
+        against the width the road ahead's grade gives it in the flat view: its width at the car
+        times the view's scale across the road read from a double line's stripes in this frame
+        (``stripe_spread``'s measure, along either line), and kept when it passes. The tracked
+        width ahead is only as new as the last frame that saw both lines; where a crest or a dip
+        comes into view it lags, and the pair is refused though it is the lane. Not without a
+        track: on unbundled country clips (other seeds, grades and widths) starting a track so
+        found 8 % more frames, over half of whose lines were false.
     stripe_spread : while one line is inferred (step 4), take the change of the lane's width
         ahead from the seen line's double stripes (``lanes.stripe_spacing_px``) when they show on
         enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
@@ -163,6 +174,7 @@ class TrackerConfig:
     blind_hold_frames: int = 12
     max_gap_m: float = 12.0
     stripe_spread: bool = True
+    grade_pair_check: bool = True
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -220,6 +232,7 @@ class LaneTracker:
         h = pipeline.size[1]
         self._bottom = float(h - 1)
         self._rows = np.linspace(0.0, h - 1.0, self.checks.check_rows)
+        self._frame_mask = None  # this frame's whole-view mask, made on demand (``update``)
         self._xm = pipeline.perspective.xm_per_px
         self._ym = pipeline.perspective.ym_per_px
         self.reset()
@@ -352,10 +365,6 @@ class LaneTracker:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
         search, det_images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None,
                                                top_px=top)
-        ran: list[str] = []  # the fallback searches this frame needed (``retries``)
-        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
-        first = search
-        looked = [search]  # every search this frame ran: did any see a line at all (step 5)?
 
         def mask() -> np.ndarray:
             """The whole view under the fallback masks' rule, thresholded once."""
@@ -367,6 +376,12 @@ class LaneTracker:
                 else:
                     det_images["fallback binary"] = det_images["binary"]
             return det_images["fallback binary"]
+
+        ran: list[str] = []  # the fallback searches this frame needed (``retries``)
+        self._frame_mask = mask
+        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
+        first = search
+        looked = [search]  # every search this frame ran: did any see a line at all (step 5)?
 
         def better(retry: LaneSearch | None, name: str, note: str = "") -> None:
             """Keep ``retry`` when more of its lines pass the checks than of the best so far."""
@@ -399,6 +414,7 @@ class LaneTracker:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
             better(pipe.robust_search(mask(), best[0]), "other peaks")
         self.retries = tuple(ran)
+        self._frame_mask = None  # the frame's images are not kept past it
         search, left, right, why, failed = best
         images = det_images if keep_images else {}
         if keep_images and search is not first and "fallback binary" in images:
@@ -505,6 +521,15 @@ class LaneTracker:
             problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
                                          self._xm, self._ym, self.checks, top_px,
                                          width_reference_px=self._width_reference(track, rows))
+            graded_check = self.config.grade_pair_check and track is not None
+            if graded_check and problem.startswith("lines not parallel"):
+                graded = self._graded_reference(kept["left"], kept["right"], rows, top_px)
+                if graded is not None and not lanes.pair_problem(
+                        kept["left"], kept["right"], self.pipeline.size[1], self._xm, self._ym,
+                        self.checks, top_px, width_reference_px=graded):
+                    why.append(f"{problem} against the track, but parallel on the road ahead's grade "
+                               "(the double stripes' spread)")
+                    problem = ""
             if problem:
                 why.append(problem)
                 failed = True
@@ -611,6 +636,26 @@ class LaneTracker:
         ``max_gap_m`` of the view's bottom row (not one seen only far ahead and joined nearer the
         car to another line)."""
         return fit is not None and fit.gap_px * self._ym <= self.config.max_gap_m
+
+    def _graded_reference(self, left: LineFit, right: LineFit, rows: np.ndarray,
+                          top_px: int) -> np.ndarray | None:
+        """Return the lane's width (px) on ``rows`` as the road ahead's grade makes it in the flat
+        view (``TrackerConfig.grade_pair_check``): the pair's width at the car times the view's
+        scale across the road read from a double line's stripes along either line
+        (``_stripe_spread``, a straight line in the distance from the bottom row: a grade that
+        changes at the car), or None when no stripes tell it (or no mask was made for this
+        frame). Costs a threshold of the whole view (shared with the fallback searches) and a
+        pass over its pixels near the line, on frames whose pair failed against the track only."""
+        mask = self._frame_mask
+        if mask is None:
+            return None
+        for fit in (left, right):
+            spread = self._stripe_spread(mask(), fit.coeffs_px, top_px)
+            if spread is not None:
+                at_car = float(np.polyval(right.coeffs_px, self._bottom)
+                               - np.polyval(left.coeffs_px, self._bottom))
+                return at_car * np.polyval(spread, self._bottom - rows)
+        return None
 
     def _track_inferred(self, side: int) -> bool:
         """Return whether the newest accepted frame inferred line ``side`` (0 left, 1 right): a

@@ -3,15 +3,21 @@ the bundled clips' ground truth with ``lanelib.evaluate``: what a change to the 
 buys on a class, and that the cheap path's failure there is real (the same frames without it)."""
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
+from lanelib import lanes
 from lanelib.config import PipelineConfig, override
-from lanelib.evaluate import calibration_from_truth, evaluate_video
+from lanelib.evaluate import _truth_x, calibration_from_truth, evaluate_video
 from lanelib.pipeline import LanePipeline
+from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
+from lanelib.synth.sets import SUNNY, country_layout
+from lanelib.synth.truth import lane_truth
+from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
 SEAMS = REPO / "videos" / "seams.mp4"
@@ -77,8 +83,6 @@ def test_a_lane_in_deep_shade_is_found_by_the_fallback_masks_and_shown_on_them()
     """The cheap masks see nothing in deep shade; the fallback searches threshold the view
     again with the shade top-hat and find the 3.7 m lane; the kept views show that mask (the
     one the lane came from), in a single image and in the tracker alike."""
-    from lanelib.tracking import LaneTracker
-
     pipe = LanePipeline(PipelineConfig())
     raw = _shaded_lane(pipe)
     bird = pipe.birdseye(raw)
@@ -91,3 +95,38 @@ def test_a_lane_in_deep_shade_is_found_by_the_fallback_masks_and_shown_on_them()
     assert "fallback binary" not in t.images
     off = LanePipeline(override(PipelineConfig(), ["thresholds.fallback_rule="]))
     assert not off.detect(raw).found and not LaneTracker(off).update(raw).found
+
+
+@pytest.mark.parametrize("grade, rows_scale", [(0.08, (1.75, 1.45, 1.21)), (0.0, (1.0, 1.0, 1.0))])
+def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb(grade, rows_scale):
+    """A straight country road (``sets.country_layout``) rendered with the road climbing at 8 %
+    from 14-22 m ahead of the car (the camera level with the road under the car): the flat
+    bird's-eye view spreads the road ahead, the lane's width by 1.21 / 1.45 / 1.75 on rows
+    500 / 300 / 100 (the generator's truth lines mapped into the view). The double yellow's two
+    stripes spread alike, and their spacing (``LaneTracker._stripe_spread``, a straight line in
+    the distance from the bottom row) reads the spread within 0.15 (about 0.1 high: the grade
+    begins some metres ahead, not at the car); a level road reads 1 within 0.03."""
+    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    h = pipe.size[1]
+    look = replace(SUNNY, tree_shadows_per_100m=0.0, patches_per_100m=0.0)
+    scene = Scene(CurvatureProfile(), country_layout(3.4), look, seed=5,
+                  grades=((0.0, 0.0), (14.0, 0.0), (22.0, grade), (300.0, grade)))
+    renderer = Renderer(scene, GroundGrid.build())
+    pose = CarPose(10.0, 0.0)
+    raw, lane = renderer.render(pose), lane_truth(renderer, pose)
+    fits = []
+    for xs in (lane.left_x_px, lane.right_x_px):
+        x = _truth_x(xs)
+        ok = np.isfinite(x)
+        bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
+        inside = (bird[:, 1] >= 0) & (bird[:, 1] < h)
+        fits.append(np.polyfit(bird[inside, 1], bird[inside, 0], 2))
+    rows = np.array([500.0, 300.0, 100.0])
+    xm, ym = pipe.perspective.xm_per_px, pipe.perspective.ym_per_px
+    width = lanes.normal_width_m(fits[0], fits[1], rows, xm, ym)
+    true_scale = width / lanes.normal_width_m(fits[0], fits[1], h - 1.0, xm, ym)
+    assert true_scale == pytest.approx(rows_scale[::-1], abs=0.02)
+    spread = LaneTracker(pipe)._stripe_spread(pipe.binary(pipe.birdseye(raw), fallback=True), fits[0], 0)
+    assert spread is not None
+    read = np.polyval(spread, h - 1.0 - rows)
+    assert read == pytest.approx(true_scale, abs=0.15 if grade else 0.03)

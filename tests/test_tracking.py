@@ -476,14 +476,17 @@ def test_max_gap_must_be_positive():
         TrackerConfig(max_gap_m=0.0)
 
 
-def _pitched_frame(pipe: LanePipeline, spread_top: float, right: bool) -> np.ndarray:
+def _pitched_frame(pipe: LanePipeline, spread_top: float, right: bool,
+                   stripes_top: float | None = None) -> np.ndarray:
     """Return a frame whose bird's-eye view shows a double left line (stripes 38 px apart at the
     bottom row) and, with ``right``, the right line, the view spreading the road ahead by
-    ``spread_top`` at the top row (1 at the bottom, linear in between)."""
+    ``spread_top`` at the top row (1 at the bottom, linear in between); the stripes spread by
+    ``stripes_top`` (default: ``spread_top``)."""
     bird = np.full((H, W, 3), 70, np.uint8)
     ys = np.arange(H, dtype=float)
     k = 1.0 + (spread_top - 1.0) * (H - 1 - ys) / (H - 1)
-    lines = [(LEFT_X + 0 * ys, 16), (LEFT_X - 38.0 * k, 16)]
+    ks = k if stripes_top is None else 1.0 + (stripes_top - 1.0) * (H - 1 - ys) / (H - 1)
+    lines = [(LEFT_X + 0 * ys, 16), (LEFT_X - 38.0 * ks, 16)]
     if right:
         lines.append((LEFT_X + (RIGHT_X - LEFT_X) * k, 24))
     for xs, thickness in lines:
@@ -562,3 +565,48 @@ def test_an_inferred_line_keeps_the_width_seen_at_the_car(pipe):
         widths.append(lanes.normal_width_m(r.left.coeffs_px, r.right.coeffs_px, H - 1.0, XM, ym))
     assert tracker.seen_width_m == pytest.approx(3.7, abs=0.02)  # inferred frames add nothing
     assert max(abs(w - 3.7) for w in widths) < 0.05
+
+
+def _short_track(grade_pair_check: bool = True) -> LaneTracker:
+    """Return a tracker of a level straight lane measured on the bottom 320 rows of the view (as
+    on a tight bend), so its look-ahead is some 390 rows (``TrackerConfig.lookahead_growth_m``),
+    where the pair's width may vary by 0.4 m; searched 150 px either side of the track, so the
+    search around it sees a line that spreads away from it by 87 px at the look-ahead's top (on
+    a clip the windows from the track find such a line, ``LaneTracker.update``)."""
+    config = PipelineConfig()
+    pipe = LanePipeline(replace(config, search=replace(config.search, prior_margin_px=150),
+                                tracking=replace(config.tracking, grade_pair_check=grade_pair_check)))
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(_pitched_frame(pipe, 1.0, True))
+    tracker._history = type(tracker._history)([replace(a, top_px=H // 2 + 40) for a in tracker._history],
+                                              maxlen=tracker._history.maxlen)
+    return tracker
+
+
+@pytest.mark.parametrize("grade_pair_check", [True, False])
+def test_a_tracked_lane_that_spreads_as_its_double_stripes_keeps_both_lines(pipe, grade_pair_check):
+    """Tracked on a level road, then the flat view spreads the road ahead by 1.25 at the top row
+    (a climb comes into view): against the tracked width the pair is not parallel (0.53 m over
+    the look-ahead, limit 0.4 m), but the double left line's stripes spread alike, so on the
+    road ahead's grade the lines are parallel and both are kept. With the switch off the right
+    line is dropped and inferred."""
+    tracker = _short_track(grade_pair_check)
+    r = tracker.update(_pitched_frame(tracker.pipeline, 1.25, True))
+    assert r.found and "lines not parallel" in r.reason
+    assert ("parallel on the road ahead's grade" in r.reason) == grade_pair_check
+    assert ("right line inferred" in r.reason) != grade_pair_check
+
+
+@pytest.mark.parametrize("stripes_top", [1.0, 1.6])
+def test_a_lane_that_spreads_unlike_its_double_stripes_stays_refused(pipe, stripes_top):
+    """The right line spreads by 1.25 at the top row but the stripes keep their spacing (the
+    road ahead is level: the right line is something else) or spread by 1.6: refused as before.
+    And without a track the flat check alone decides (no lane is started on the stripes' word)."""
+    tracker = _short_track()
+    r = tracker.update(_pitched_frame(tracker.pipeline, 1.25, True, stripes_top=stripes_top))
+    assert "lines not parallel" in r.reason and "road ahead's grade" not in r.reason
+    assert "right line inferred" in r.reason
+    fresh = LaneTracker(pipe).update(_pitched_frame(pipe, 1.3, True))
+    assert not fresh.found and "lines not parallel" in fresh.reason
+
