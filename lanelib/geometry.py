@@ -82,8 +82,11 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   3.7 m by default), so xm_per_px = lane_width_m / (w/2). Along the road: the distance ahead
   of a point v px below the horizon is s = C / v + s0 (a pinhole over a flat road; s0 =
   -H tan(pitch)/cos(yaw), a few cm, 0 when the focal length is unknown). C is measured, in this
-  order: from the dash period where dashed lines are seen (``_dash_scale``: along each line
-  the dashes fall at even steps of 1/v, (dash_m + gap_m) / C apart), else from the focal length
+  order: from the dash period where dashed lines are seen (``_dash_scale``: along each lane
+  line the dashes fall at even steps of 1/v, (dash_m + gap_m) / C apart; only lines a whole
+  lane width from the ego lane's count, runs that are not a dash's length once the blur is
+  allowed for (raised markers, flecks, merged dashes) are dropped, and the period must hold
+  without any one frame), else from the focal length
   (a calibration's K or ``focal_px``) and the lane width
   (C = f lane_width_m / (r cos(pitch) cos^2(yaw))), else from an assumed focal length (a 60 deg
   horizontal field of view), which the result states. With the dash period, the focal length
@@ -96,7 +99,10 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   disagreeing by more than 8 % 0.75, and then the focal length is used, assumed focal length 0.4), 0.9 when the hood was not
   found, and 0.4 when the focal length and the lane width put the camera at an implausible
   height (``CAMERA_HEIGHT_RANGE_M``, 0.7-4 m: the lines were paired wrongly; the assumptions
-  say so). Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
+  say so), and 0.4 again when the ego lane's lines, carried into the bird's-eye view, are not
+  parallel: its width at the top differs from that at the bottom by more than
+  LANE_PARALLEL_TOLERANCE (2.5 %; frames' median; ``_view_widening``): a lens that distorts
+  and was not given (a straight line's image bends), or a road that is not flat. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
@@ -158,6 +164,10 @@ DASH_V_MIN_FRACTION = 0.02
 DASH_MIN_PERIODS = 1.5
 DASH_MIN_FIT = 0.5             # mean cos of the dash pairs' phase at the period found
 DASH_MIN_PAIRS = 3
+DASH_LANE_TOLERANCE = 0.25     # lane widths: a line this near a whole number of lanes from the ego lane's is a lane line
+DASH_BLUR_MIN_RUNS = 5         # long single dashes it takes to fit the blur (b); fewer: b = 0
+DASH_LENGTH_WINDOW = (0.6, 1.6)  # a run less its blur, in dash lengths, to be a dash
+DASH_CONSISTENCY = DASH_DISAGREEMENT  # a sub-sample's best period within this fraction of the period found
 # The period is searched from C / DASH_LENGTH_RANGE to C * DASH_LENGTH_UP, C what the dashes'
 # lengths say. Higher up because a dash's length in the image is biased long (blur, a smeared or
 # dilated mask, a raised marker at its end), so its C low; never up to 2: the period's harmonic
@@ -169,6 +179,9 @@ FOCAL_RANGE_W = (0.3, 3.5)     # else focal lengths from 0.3 to 3.5 image widths
 # A camera this high above the road or more, or this low or less, is no road camera (a car's
 # dashcam sits 1.0-1.6 m up, a truck's 2-3 m): the lane width was measured between the wrong lines
 CAMERA_HEIGHT_RANGE_M = (0.7, 4.0)
+# the ego lane may widen or narrow by this fraction from the bottom third of the bird's-eye view to
+# its top third (frames' median) before the view is taken as wrong: a lens not given, a road not flat
+LANE_PARALLEL_TOLERANCE = 0.025
 IMPLAUSIBLE_CONFIDENCE = 0.4   # the confidence is multiplied by this then (below LOW_CONFIDENCE)
 
 Point = tuple[float, float]
@@ -1126,7 +1139,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         c_range = (c_focal / DASH_FOCAL_RANGE, c_focal * DASH_FOCAL_RANGE)
     else:
         c_range = tuple(f * w * lane_width_m / r_k for f in FOCAL_RANGE_W)
-    c_dash, dash_fit = _dash_scale(analyses, used, hood, roll, dash_m, gap_m, (w, h), c_range)
+    c_dash, dash_fit = _dash_scale(analyses, used, ego, hood, roll, dash_m, gap_m, (w, h), c_range)
     scale_conf = 1.0
     if c_dash is not None:
         f_dash = c_dash * r_k / lane_width_m
@@ -1209,6 +1222,17 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     dst = ((w / 4, 0.0), (w / 4, float(h)), (3 * w / 4, float(h)), (3 * w / 4, 0.0))
     visible = C / v_top - C / v_bottom
     xm, ym = lane_width_m / (w / 2), visible / h
+    widening = _view_widening([(analyses[i].mask, [analyses[i].line_fits[j] for j in ego[i][:2]]) for i in ego],
+                              src, dst, (w, h))
+    if widening is not None and abs(widening - 1) > LANE_PARALLEL_TOLERANCE:
+        parallel_conf = IMPLAUSIBLE_CONFIDENCE
+        assumptions.append(
+            f"the ego lane {'widens' if widening > 1 else 'narrows'} by {100 * abs(widening - 1):.1f} % from the "
+            "bottom third of the bird's-eye view to the top third (frames' median): "
+            + ("a lens that distorts (give --calibration)" if calibration is None else "")
+            + (" or " if calibration is None else "") + "a road that is not flat; the scale is not to be trusted")
+    else:
+        parallel_conf = 1.0
 
     # confidence
     n_used = len(used)
@@ -1224,6 +1248,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         conf *= 0.9
     if implausible:
         conf *= IMPLAUSIBLE_CONFIDENCE
+    conf *= parallel_conf
     return RoadGeometry(
         size_px=(w, h), vanishing_point_px=(float(vp[0]), float(vp[1])), horizon_row_px=horizon_row,
         horizon_slope=slope, roll_deg=roll, roll_source=roll_source, pitch_deg=pitch, yaw_deg=yaw,
@@ -1246,6 +1271,38 @@ def _no_frame_message(rejected: list[tuple[int, str]], n: int) -> str:
     first = sorted(rejected)[0][1] if rejected else ""
     return (f"no consistent vanishing point in {n} frame{'s' if n > 1 else ''}: {'; '.join(parts)}. "
             f"First: {first}")
+
+
+def _view_widening(frames: list[tuple[np.ndarray, tuple]], src, dst, size: tuple[int, int]) -> float | None:
+    """Return the median over frames of the ego lane's width at the top of the bird's-eye view
+    (a sixth down) over its width at the bottom (a sixth up): 1 when its lines are parallel, as
+    they are through a pinhole over a flat road (a lens not given bends them, a road not flat
+    spreads them). ``frames``: (mask, the ego lane's two line fits) each. Each line is a straight
+    line fitted to the paint of the view within w/32 of the line fit carried into the view (not
+    to a seam or the next line); frames where either spans under half the view are left out,
+    and fewer than 3 frames give None."""
+    w, h = size
+    M = cv2.getPerspectiveTransform(np.float32(src), np.float32(dst))
+    band = w / 32
+    ratios = []
+    for mask, fits in frames:
+        top_down = cv2.warpPerspective(mask, M, (w, h), flags=cv2.INTER_NEAREST)
+        ys, xs = np.nonzero(top_down)
+        ends = []
+        for c, d, top, bottom in fits:
+            pts = np.array([c + d * (r - c[1]) / d[1] for r in (top, bottom)], np.float64)
+            (x0, y0), (x1, y1) = cv2.perspectiveTransform(pts[None], M)[0]
+            if abs(y1 - y0) < 1.0:
+                break
+            on = np.abs(xs - (x0 + (ys - y0) * (x1 - x0) / (y1 - y0))) <= band
+            if on.sum() < 20 or np.ptp(ys[on]) < h / 2:
+                break
+            slope, icpt = np.polyfit(ys[on].astype(np.float64), xs[on].astype(np.float64), 1)
+            ends.append(icpt + slope * np.array([h / 6, 5 * h / 6]))
+        if len(ends) == 2:
+            top, bottom = np.abs(ends[1] - ends[0])
+            ratios.append(top / bottom)
+    return float(np.median(ratios)) if len(ratios) >= 3 else None
 
 
 def _bottom_v(basis: _Basis, ks: tuple[float, float], hood: np.ndarray, margin: float,
@@ -1289,37 +1346,102 @@ def _dash_runs(on: np.ndarray, q0: float, dq: float, max_len_q: float,
     return centre[keep], (qe - qs)[keep]
 
 
-def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, gap_m: float,
-                size: tuple[int, int], c_range: tuple[float, float]) -> tuple[float | None, float]:
+def _dash_lines(analyses, used, ego: dict[int, tuple[int, int, float]], roll: float) -> list[tuple[int, int]]:
+    """Return the (frame, line) of the lines whose dashes measure the dash period: in the frames
+    that show the ego lane, the lines a whole lane width (within DASH_LANE_TOLERANCE of one) from
+    its left line, from one lane left of the ego lane to one lane right of it. A barrier, a kerb
+    or a shoulder's edge is no lane line (its flecks and joints are no dashes), and lines farther
+    out are seen at a grazing angle that merges their dashes."""
+    out = []
+    for i in used:
+        if i not in ego:
+            continue
+        left, _, r = ego[i]
+        lines = analyses[i].vp.lines
+        k = _k(np.array([l.angle_deg for l in lines]), roll)
+        n = (k - k[left]) / r
+        for j in np.flatnonzero((np.abs(n - np.round(n)) <= DASH_LANE_TOLERANCE)
+                                & (np.round(n) >= -1) & (np.round(n) <= 2)):
+            out.append((i, int(j)))
+    return out
+
+
+def _dash_length_model(centre: np.ndarray, length: np.ndarray) -> tuple[float, float] | None:
+    """Return (a, b): a run of a dash at q = 1/v is a + b q^2 long in q (a = dash_m / C, b the px
+    the blur and the mask add to its ends), fitted to the long runs (10 px or more) that are
+    single dashes (at most twice their median: merged dashes are three times as long), robustly
+    (Theil-Sen: the median of the pairwise slopes); None with fewer than two such runs."""
+    long = length * centre ** -2 >= 10.0
+    if long.sum() < 2:
+        return None
+    single = long & (length <= 2 * np.median(length[long]))
+    q2, y = centre[single] ** 2, length[single]
+    b = 0.0
+    if len(y) >= DASH_BLUR_MIN_RUNS:
+        jj, kk = np.triu_indices(len(y), 1)
+        dq2 = q2[kk] - q2[jj]
+        ok = dq2 > 1e-3 * q2.max()
+        if ok.any():
+            b = max(0.0, float(np.median((y[kk] - y[jj])[ok] / dq2[ok])))
+    a = float(np.median(y - b * q2))
+    return (a, b) if a > 0 else None
+
+
+def _dash_pairs(runs: list[np.ndarray]) -> np.ndarray:
+    """Return the pairs of dashes of one line, 3 x N: their distance in q, weight (the inverse
+    variance of their centres: a centre's error in q is its error in px times q^2) and the index
+    of their line in ``runs``."""
+    out = [np.zeros((3, 0))]
+    for n, centre in enumerate(runs):
+        if len(centre) >= 2:
+            jj, kk = np.triu_indices(len(centre), 1)
+            out.append(np.stack([centre[kk] - centre[jj], 1.0 / (centre[kk] ** 4 + centre[jj] ** 4),
+                                 np.full(len(jj), float(n))]))
+    return np.concatenate(out, axis=1)
+
+
+def _dash_fit_curve(pairs: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """Return the fit of each frequency ``nu`` (1 / period in q) to the pairs (``_dash_pairs``):
+    their weighted mean of cos(2 pi nu distance)."""
+    d, weight = pairs[0], pairs[1]
+    return np.cos(2 * np.pi * np.multiply.outer(nu, d)) @ (weight / weight.sum())
+
+
+def _dash_scale(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np.ndarray, roll: float,
+                dash_m: float, gap_m: float, size: tuple[int, int],
+                c_range: tuple[float, float]) -> tuple[float | None, float]:
     """Return (C from the dash period, how well the dashes fit it), or (None, fit) without a
     clear dash period; C is searched within ``c_range``.
 
-    Each line of each frame is sampled along its length at even steps of q = 1/v (v: px below
-    the frame's horizon), where s = C q + s0 makes a dash pattern periodic; the runs of paint
-    that end inside the sampled stretch are its dashes (``_dash_runs``). The long ones (10 px or
-    more) give a first C = dash_m / length (the median); runs under 40 % of a dash's length
-    there (a raised marker in a gap, a fleck) are dropped. For a period P in q, the fit is the
-    weighted mean over all pairs of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair
-    lies a whole number of periods apart (each pair weighted by the inverse variance of its
-    centres, whose error in q grows as q^2); the period is the best fit within a factor
+    The lane lines of the frames that show the ego lane (``_dash_lines``) are sampled along
+    their length at even steps of q = 1/v (v: px below the frame's horizon), where s = C q + s0
+    makes a dash pattern periodic; the runs of paint that end inside the sampled stretch are its
+    dashes (``_dash_runs``). Their lengths give a + b q^2 (``_dash_length_model``): a first
+    C = dash_m / a, and b, what blur adds to a run. A run is a dash when its length less b q^2
+    is within DASH_LENGTH_WINDOW of a: far away a raised marker in a gap or a fleck blurs to
+    half a dash's length in q, and a marker beside a dash merges with it; either would put a
+    "dash" half a period off. For a period P in q, the fit is the weighted mean over all pairs
+    of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair lies a whole number of
+    periods apart (``_dash_fit_curve``); the period is the best fit within a factor
     DASH_LENGTH_RANGE below and DASH_LENGTH_UP above what the lengths say (which rules out the
-    harmonic at twice C), used from a fit
-    of DASH_MIN_FIT; C = (dash_m + gap_m) / P.
+    harmonic at twice C), used from a fit of DASH_MIN_FIT and only when it holds without any one
+    frame (or, from one frame, any one line): each such sub-sample's best period within
+    DASH_CONSISTENCY of it and fitting it from DASH_MIN_FIT; C = (dash_m + gap_m) / P.
     """
     w, h = size
     period_m = dash_m + gap_m
     v_min = max(6.0, DASH_V_MIN_FRACTION * h)
     signals_meta = []
     v_max = 0.0
-    for i in used:
+    for i, j in _dash_lines(analyses, used, ego, roll):
         a = analyses[i]
         fb = _basis(a.vp.point_px, roll)
-        for c, d, _, bottom in a.line_fits:
-            v_line = float(fb.to_uv(c + d * (bottom - c[1]) / d[1])[1])
-            if v_line <= 2 * v_min:
-                continue
-            v_max = max(v_max, v_line)
-            signals_meta.append((i, fb, c, d, v_line))
+        c, d, _, bottom = a.line_fits[j]
+        v_line = float(fb.to_uv(c + d * (bottom - c[1]) / d[1])[1])
+        if v_line <= 2 * v_min:
+            continue
+        v_max = max(v_max, v_line)
+        signals_meta.append((i, j, fb, c, d, v_line))
     if not signals_meta:
         return None, 0.0
     q_lo, q_hi = 1.0 / v_max, 1.0 / v_min
@@ -1340,7 +1462,7 @@ def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, ga
     kernel = np.ones((1, 5), np.uint8)
     dilated = {}
     runs = []
-    for i, fb, c, d, v_line in signals_meta:
+    for i, j, fb, c, d, v_line in signals_meta:
         if i not in dilated:
             dilated[i] = cv2.dilate(analyses[i].mask, kernel)
         m = dilated[i]
@@ -1357,41 +1479,53 @@ def _dash_scale(analyses, used, hood: np.ndarray, roll: float, dash_m: float, ga
         stretch = slice(idx[0], idx[-1] + 1)
         on = np.zeros(idx[-1] - idx[0] + 3, np.int8)
         on[1:-1] = (m[np.clip(yi[stretch], 0, h - 1), np.clip(xi[stretch], 0, w - 1)] > 0) & inside[stretch]
-        runs.append(_dash_runs(on, q[idx[0]] - dq, dq, 0.6 / lo, v_resolved))
-    # the dashes' own lengths: C = dash_m / length for the long ones (10 px or more)
-    cen = np.concatenate([r[0] for r in runs]) if runs else np.zeros(0)
-    lq = np.concatenate([r[1] for r in runs]) if runs else np.zeros(0)
-    long = lq * cen ** -2 >= 10.0
-    if long.sum() < 2:
+        runs.append(((i, j),) + _dash_runs(on, q[idx[0]] - dq, dq, 0.6 / lo, v_resolved))
+    if not runs:
         return None, 0.0
-    c_len = float(np.median(dash_m / lq[long]))
+    model = _dash_length_model(np.concatenate([r[1] for r in runs]), np.concatenate([r[2] for r in runs]))
+    if model is None:
+        return None, 0.0
+    a_q, b_q = model
+    c_len = dash_m / a_q
     lo = max(lo, c_len / DASH_LENGTH_RANGE / period_m)
     hi = min(hi, c_len * DASH_LENGTH_UP / period_m)
     if hi <= lo:
         return None, 0.0
-    diffs = []
-    for centre, length in runs:
-        # runs much shorter than a dash there (a raised marker in a gap, a fleck) are not dashes
-        # and, with C known roughly, runs nearer the horizon than where a gap spans 6 px
-        ok = (length >= 0.4 * dash_m / c_len) & (centre <= 1.0 / math.sqrt(6.0 * c_len / gap_m))
-        centre = centre[ok]
-        if len(centre) >= 2:
-            jj, kk = np.triu_indices(len(centre), 1)
-            # a centre's error in q is its error in px times q^2: weight each pair by 1 / variance
-            diffs.append(np.stack([centre[kk] - centre[jj], 1.0 / (centre[kk] ** 4 + centre[jj] ** 4)]))
-    if not diffs or sum(d.shape[1] for d in diffs) < DASH_MIN_PAIRS:
-        return None, 0.0
-    diffs, weights = np.concatenate(diffs, axis=1)
-    weights = weights / weights.sum()
+    dashes = []
+    for key, centre, length in runs:
+        # runs much shorter or longer than a dash there, less its blur, are not dashes; and,
+        # with C known roughly, runs nearer the horizon than where a gap spans 6 px
+        own = length - b_q * centre ** 2
+        ok = ((own >= DASH_LENGTH_WINDOW[0] * a_q) & (own <= DASH_LENGTH_WINDOW[1] * a_q)
+              & (centre <= 1.0 / math.sqrt(6.0 * c_len / gap_m)))
+        if ok.sum() >= 2:
+            dashes.append((key, centre[ok]))
     step = 1.0 / (40 * span)
     nu = np.arange(lo, hi + step, step)
     if len(nu) < 3:
         return None, 0.0
-    fit = np.cos(2 * np.pi * np.multiply.outer(nu, diffs)) @ weights
+    pairs = _dash_pairs([c for _, c in dashes])
+    if pairs.shape[1] < DASH_MIN_PAIRS:
+        return None, 0.0
+    fit = _dash_fit_curve(pairs, nu)
     b = int(np.argmax(fit))
     if fit[b] < DASH_MIN_FIT or b in (0, len(nu) - 1):
         return None, float(fit[b])
     c0, c1, c2 = fit[b - 1], fit[b], fit[b + 1]
     den = c0 - 2 * c1 + c2
     f = nu[b] + (0.5 * (c0 - c2) / den * step if den < 0 else 0.0)
+    # consistency: the period holds without any one frame (from one frame: without any one line)
+    line = pairs[2].astype(int)
+    frames = np.array([key[0] for key, _ in dashes])[line]
+    group = frames if len(np.unique(frames)) > 1 else line
+    if len(np.unique(group)) < 2:
+        return None, float(c1)
+    worst = float(c1)
+    for g in np.unique(group):
+        keep = group != g
+        sub = _dash_fit_curve(pairs[:, keep], nu)
+        sb = int(np.argmax(sub))
+        worst = min(worst, float(sub[b]))
+        if sub[b] < DASH_MIN_FIT or abs(nu[sb] / f - 1) > DASH_CONSISTENCY:
+            return None, worst
     return float(f * period_m), float(c1)

@@ -386,3 +386,21 @@ def test_auto_geometry_scores_like_the_true_one(tmp_path):
     assert scores["auto"]["found_rate"] == 1.0
     assert scores["auto"]["curvature_err_median"] <= 1.5 * scores["true"]["curvature_err_median"]
     assert scores["auto"]["point_accuracy"] >= scores["true"]["point_accuracy"] - 0.02
+
+
+def test_the_dash_length_model_allows_for_blur_and_ignores_markers_and_merged_runs():
+    """Runs of dashes a + b q^2 long in q (b px of blur), raised markers (3 px) and two dashes
+    merged into one run: the model is the dashes' (Theil-Sen over the single long runs), and a
+    marker less the blur is far shorter than a dash, so the period finder drops it."""
+    a, b = 3.0 / 1100, 3.0
+    q = np.linspace(0.008, 0.026, 12)
+    dashes = a + b * q ** 2
+    markers_q = np.array([0.013, 0.018, 0.023])
+    markers = 3.0 * markers_q ** 2
+    merged_q, merged = np.array([0.02]), np.array([3 * a + b * 0.02 ** 2])
+    centre = np.concatenate([q, markers_q, merged_q])
+    length = np.concatenate([dashes, markers, merged])
+    got_a, got_b = geometry._dash_length_model(centre, length)
+    assert got_a == pytest.approx(a, rel=0.02) and got_b == pytest.approx(b, rel=0.05)
+    own = markers - got_b * markers_q ** 2
+    assert np.all(own < geometry.DASH_LENGTH_WINDOW[0] * got_a)
