@@ -92,7 +92,8 @@ debug composite work on it unchanged. Per frame:
    other side (a country road whose right side is only the asphalt edge, then grass or gravel),
    the unpainted edge on that side is taken as the line (``LanePipeline.edge_search``,
    ``lanes.road_edge``) if the pair passes every check above. With a track only where the
-   track's line on that side was an edge already: a painted line that fades out is inferred as
+   track's line on that side was an edge already (what the search found there failed the checks
+   and is dropped for it, ``_edge_candidate``): a painted line that fades out is inferred as
    in step 3, never moved out to the asphalt edge beyond it. The result's ``sources`` say
    "edge" for it ("seen", "inferred", "held" for the others).
 
@@ -423,14 +424,12 @@ class LaneTracker:
         if track is None and best[1] is None and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
             better(pipe.robust_search(mask(), best[0]), "other peaks")
-        if (pipe.config.edge.enabled and (best[1] is None or best[2] is None)
-                and best[0].left.found != best[0].right.found
-                and (track is None or self._edge[0 if best[0].right.found else 1])):
-            # one line, no paint at all on the other side: its asphalt edge (step 8)
+        if pipe.config.edge.enabled and (edgeless := self._edge_candidate(best, track)) is not None:
+            # one line, and no paint on the other side: its asphalt edge (step 8)
             bird = det_images.get("birdseye")
             if bird is None:
                 bird = det_images["birdseye"] = pipe.birdseye(raw)
-            better(pipe.edge_search(bird, best[0]), "asphalt edge")
+            better(pipe.edge_search(bird, edgeless), "asphalt edge")
         self.retries = tuple(ran)
         self._frame_mask = None  # the frame's images are not kept past it
         search, left, right, why, failed = best
@@ -449,6 +448,24 @@ class LaneTracker:
         rejected = Rejected(search.left, search.right, pipe.measure(search.left, search.right),
                             "; ".join(why))
         return replace(result, rejected=rejected)
+
+    def _edge_candidate(self, best: tuple, track) -> LaneSearch | None:
+        """Return the search whose missing line the asphalt edge may stand for (step 8), or None.
+
+        Without a track: a best search that found one line and nothing on the other side (a line
+        alone cannot start a track). With a track: a frame that kept one line, where the other
+        side's tracked line was the asphalt edge (no paint was tracked there); what the search
+        found on that side failed the checks, so it is dropped for the edge.
+        """
+        search, left, right = best[:3]
+        if track is None:
+            return search if search.left.found != search.right.found else None
+        if (left is None) == (right is None):
+            return None
+        side = "left" if left is None else "right"
+        if not self._edge[0 if side == "left" else 1]:
+            return None
+        return replace(search, **{side: LineFit(None, reason="refused by the checks")})
 
     def lookahead_top_px(self, track: tuple[np.ndarray, np.ndarray]) -> int:
         """Return the first row (px) of this frame's look-ahead for the tracked lane ``track``.
