@@ -20,7 +20,7 @@ from . import io
 from .draw import DrawConfig
 from .errors import ConfigError
 from .hough import HoughConfig
-from .lanes import LaneChecks, LinesConfig, SearchConfig
+from .lanes import EdgeConfig, LaneChecks, LinesConfig, SearchConfig
 from .perspective import PerspectiveConfig
 from .thresholds import ThresholdConfig
 from .tracking import TrackerConfig
@@ -38,6 +38,7 @@ class PipelineConfig:
     draw: DrawConfig = DrawConfig()
     hough: HoughConfig = HoughConfig()
     lines: LinesConfig = LinesConfig()  # every visible line (``detect_lines``, ``predict``)
+    edge: EdgeConfig = EdgeConfig()  # the asphalt edge of a side without paint (``lanes.road_edge``)
 
 
 def to_dict(obj) -> dict:

@@ -121,9 +121,10 @@ STRAIGHT_M = 10_000.0  # a radius at least this long is reported as "straight"
 
 
 def measurement_lines(radius_m: float, offset_m: float, lane_width_m: float, found: bool,
-                      reason: str = "", held: bool = False) -> list[str]:
+                      reason: str = "", held: bool = False, edges: tuple[str, ...] = ()) -> list[str]:
     """Return the text lines that report a lane's measurements ("no lane found" when not found;
-    a last line "Held: ..." for a lane held from earlier frames, not seen in this one)."""
+    a last line "Held: ..." for a lane held from earlier frames, not seen in this one; a line
+    "Asphalt edge, no paint: ..." naming the sides in ``edges`` whose line is the road's edge)."""
     if not found or any(math.isnan(v) for v in (radius_m, offset_m, lane_width_m)):
         return ["No lane found" + (f": {reason}" if reason else "")]
     side = "right" if offset_m > 0 else "left"
@@ -133,6 +134,8 @@ def measurement_lines(radius_m: float, offset_m: float, lane_width_m: float, fou
              f"Lane width: {lane_width_m:.2f} m"]
     if held:
         lines.append("Held: not seen in this frame")
+    if edges:
+        lines.append("Asphalt edge, no paint: " + " and ".join(edges))
     return lines
 
 

@@ -240,6 +240,8 @@ class LaneSearch:
     base_confidence: tuple[float | None, float | None] = (None, None)
     # the look-ahead: the first row (px) of the view the search read (0: the whole view)
     top_px: int = 0
+    # (left, right): the line is the unpainted asphalt edge (``road_edge``), not paint
+    edge: tuple[bool, bool] = (False, False)
 
 
 @dataclass(frozen=True)
@@ -924,6 +926,165 @@ def search_bands_px(search: LaneSearch, size_px: tuple[int, int],
         xs = fit.x_at(np.linspace(float(search.top_px), h - 1.0, 8))
         out.append(float(np.mean(np.clip(xs + half, 0, w) - np.clip(xs - half, 0, w))))
     return out[0], out[1]
+
+
+# --------------------------------------------------------------------------- the asphalt edge
+
+@dataclass(frozen=True)
+class EdgeConfig:
+    """Parameters of the road-edge candidate (``road_edge``): the unpainted asphalt edge of a
+    side with no paint line, where the grey road surface meets a verge of another kind.
+
+    Parameters
+    ----------
+    enabled : look for the asphalt edge where a side has no paint line (the lane's other line
+        found); off: a side without paint gives no line, as before.
+    scale : the bird's-eye view is shrunk by this factor each way before the edge is looked for
+        (the edge is a wide step, not a thin stroke; 4: a 320 x 180 grid in the default view).
+    step_m : width (m) of the window inside a candidate edge whose verge score is compared with
+        that of the window beyond it, twice as wide (the verge must go on beyond the edge: a
+        seam, a shadow line or a yellow line is narrow).
+    min_saturation_step : the verge's saturation (HSV S, 0-1) above the road surface's (its
+        median between the lines) at which a pixel counts fully as verge (grass, dirt: colour).
+    min_texture_ratio : 0 (off), or the rise of the verge's grain (local std / mean of V) over
+        the road surface's, as a ratio less 1, at which a pixel counts fully as verge (gravel).
+        Off by default: on the synthetic country road the bird's-eye view's grain changes with
+        its blur ahead and under dappled shade as much as at a verge, and at 1-3 it put edge
+        points in the middle of the lane.
+    max_road_saturation : a row whose road surface (the median between the lines) is more
+        saturated than this is not grey asphalt there (the view has left the road: grass in a
+        hairpin's inside); it gives no edge point.
+    min_step : least rise of the mean verge score (0-1) from the inner window to the outer one.
+    max_inner : largest mean verge score of the inner (road) window; min_outer : least of the outer.
+    min_points : least rows (of the shrunk grid) with an edge for a line; min_span_fraction :
+        least share of the look-ahead's rows they span.
+    trim_outliers_pct : share (%) of the edge points kept for the fit (``fit_line``'s trim).
+    """
+
+    enabled: bool = True
+    scale: int = 4
+    step_m: float = 0.4
+    min_saturation_step: float = 0.15
+    min_texture_ratio: float = 0.0
+    min_step: float = 0.5
+    max_inner: float = 0.3
+    min_outer: float = 0.7
+    max_road_saturation: float = 0.2
+    min_points: int = 30
+    min_span_fraction: float = 0.3
+    trim_outliers_pct: float = 80.0
+
+    def __post_init__(self):
+        if self.scale < 1 or self.step_m <= 0 or self.min_points < 3 or self.min_texture_ratio < 0:
+            raise ConfigError("edge: need scale >= 1, step_m > 0, min_points >= 3 and min_texture_ratio >= 0")
+        if not 0 < self.trim_outliers_pct <= 100:
+            raise ConfigError(f"edge: trim_outliers_pct {self.trim_outliers_pct} must lie in (0, 100]")
+
+
+DARK_V = 80.0  # saturation below this value (V, 0-255) is measured against it: a shadow's tint is not colour
+
+
+def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the per-pixel features that tell a verge from the road surface in a (shrunk)
+    bird's-eye image: saturation ((max - min) / max of R, G, B, 0-1; the max taken as at least
+    ``DARK_V``, so the bluish tint of a shadow or the noise of a dark pixel is not colour), grain (local std / mean of V over 3 x 3 px) and
+    where the camera sees (not black). Both are free of the light's brightness, so a shadow on
+    the road, a repaved strip, a tar seam and a concrete barrier (grey and smooth like the road)
+    look like road; grass and dirt differ in saturation, gravel in grain."""
+    hi = rgb.max(axis=2).astype(np.float32)
+    sat = (hi - rgb.min(axis=2)) / np.maximum(hi, DARK_V)
+    mean = cv2.blur(hi, (3, 3))
+    var = np.maximum(cv2.blur(hi * hi, (3, 3)) - mean * mean, 0.0)
+    return sat, np.sqrt(var) / np.maximum(mean, 8.0), hi > 0
+
+
+def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,
+              checks: LaneChecks = LaneChecks(), config: EdgeConfig = EdgeConfig(),
+              top_px: int = 0) -> tuple[LineFit, np.ndarray]:
+    """Return the fit of the asphalt edge on ``side`` ("left"/"right") of the lane whose other
+    line is ``other``, and its edge points ((N, 2) x, y px); a not-found fit says why.
+
+    In the bird's-eye view shrunk by ``config.scale``, each pixel of a row gets a 0-1 verge
+    score: its saturation above the road surface's (``verge_features``; the road is that row's
+    median between ``other`` and the nearest the edge can be) over ``min_saturation_step``, or
+    its grain's ratio to the road's, less 1, over ``min_texture_ratio``, whichever is larger
+    (per row: the view blurs with distance, the grain with it). On each row, between ``checks.min_width_m`` and ``max_width_m`` (along the normal) from
+    ``other``, the edge is the column where the mean score of the ``2 * step_m`` window beyond it
+    minus that of the ``step_m`` window inside is largest, kept when the inside is road (``max_inner``),
+    the outside verge (``min_outer``) and the rise at least ``min_step``. The points are fitted
+    by ``fit_line`` with ``trim_outliers_pct``, then refitted up to three times without the
+    points beyond 3 robust standard deviations (1.4826 x the median distance) of the fit (a
+    robust fit: a patch of darker grass or a shadow does not bend it). A seam, a repaved strip's edge, a shadow's edge or a concrete barrier's has grey
+    road-like surface beyond it and gives no edge.
+    """
+    h, w = bird.shape[:2]
+    k = config.scale
+    small = cv2.resize(bird, (w // k, h // k), interpolation=cv2.INTER_AREA) if k > 1 else bird
+    sh, sw = small.shape[:2]
+    sat, grain, seen = verge_features(small)
+    sign = 1.0 if side == "right" else -1.0
+    rows = np.arange(max(0, top_px // k), sh)
+    yf = rows * k + (k - 1) / 2.0  # the full view's rows at the shrunk rows' centres
+    x_line = np.polyval(other.coeffs_px, yf)
+    slope = np.polyval(np.polyder(np.asarray(other.coeffs_px, float)), yf) * xm_per_px / ym_per_px
+    stretch = np.sqrt(1.0 + slope * slope) / xm_per_px  # px across per metre along the normal
+    win = max(2, int(round(config.step_m / xm_per_px / k)))
+    ys, xs = [], []
+    for i, r in enumerate(rows):
+        # the road surface of this row: between the line and the nearest the edge may be
+        near = int(round((x_line[i] + sign * 0.3 * checks.min_width_m * stretch[i]) / k))
+        far = int(round((x_line[i] + sign * (checks.min_width_m - 0.3) * stretch[i]) / k))
+        p0, p1 = max(0, min(near, far)), min(sw, max(near, far) + 1)
+        if p1 - p0 < win or not seen[r, p0:p1].all():
+            continue
+        road_sat = float(np.median(sat[r, p0:p1]))
+        if road_sat > config.max_road_saturation:
+            continue
+        road_grain = max(float(np.median(grain[r, p0:p1])), 1e-3)
+        x0 = x_line[i] + sign * (checks.min_width_m - 0.2) * stretch[i]
+        x1 = x_line[i] + sign * (checks.max_width_m + 0.2) * stretch[i]
+        a, b = sorted((int(x0 // k), int(np.ceil(x1 / k))))
+        pad_lo, pad_hi = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
+        a, b = max(a, pad_lo), min(b, sw - pad_hi)
+        if b <= a or not seen[r, a - pad_lo:b + pad_hi].all():
+            continue
+        score = np.clip((sat[r, a - pad_lo:b + pad_hi] - road_sat) / config.min_saturation_step, 0, 1)
+        if config.min_texture_ratio > 0:
+            score = np.maximum(score, np.clip((grain[r, a - pad_lo:b + pad_hi] / road_grain - 1.0)
+                                              / config.min_texture_ratio, 0, 1))
+        if sign < 0:
+            score = score[::-1]
+        c = np.concatenate([[0.0], np.cumsum(score)])
+        idx = np.arange(win, len(score) - 2 * win + 1)
+        inner = (c[idx] - c[idx - win]) / win
+        outer = (c[idx + 2 * win] - c[idx]) / (2 * win)
+        step = outer - inner
+        j = int(np.argmax(step))
+        if step[j] < config.min_step or inner[j] > config.max_inner or outer[j] < config.min_outer:
+            continue
+        # the boundary between the last inner and the first outer column, in the full view
+        x = (a - pad_lo + int(idx[j])) if sign > 0 else (b + pad_hi - int(idx[j]))
+        ys.append(yf[i])
+        xs.append(float(x * k))
+    ys_a, xs_a = np.asarray(ys, float), np.asarray(xs, float)
+    depth = h - top_px
+    fit_cfg = SearchConfig(min_line_pixels=config.min_points, min_span_fraction=0.3,
+                           min_found_span_fraction=config.min_span_fraction * depth / h,
+                           trim_outliers_pct=config.trim_outliers_pct)
+    fit = fit_line(ys_a, xs_a, h, fit_cfg, missing=f"no {side} asphalt edge (no road-to-verge step)")
+    for _ in range(3):  # refit without the points far from the fit (robust: a patch, a shadow)
+        if not fit.found:
+            break
+        res = np.abs(xs_a - fit.x_at(ys_a))
+        keep = res <= max(2.0 * k, 3.0 * 1.4826 * float(np.median(res)))
+        if keep.all():
+            break
+        ys_a, xs_a = ys_a[keep], xs_a[keep]
+        fit = fit_line(ys_a, xs_a, h, replace(fit_cfg, trim_outliers_pct=0.0),
+                       missing=f"no {side} asphalt edge (no road-to-verge step)")
+    if not fit.found:
+        fit = replace(fit, reason=f"{side} asphalt edge: {fit.reason}")
+    return fit, np.column_stack([xs_a, ys_a])
 
 
 # --------------------------------------------------------------------------- every line in view

@@ -232,7 +232,8 @@ class LanePipeline:
         the whole view that fails is looked for again: on the fallback masks
         (``ThresholdConfig.fallback_rule``) in the whole view, then in shorter views
         (``short_view_search``), then from other histogram peaks (``robust_search``, when
-        ``candidates`` > 1).
+        ``candidates`` > 1), then, when one line was found and the other side has no paint
+        line, with the asphalt edge on that side (``edge_search``).
         """
         search, images = self.search_frame(raw, prior, keep_images)
         result = self.result(search, images if keep_images else {})
@@ -249,6 +250,8 @@ class LanePipeline:
             retry = self.short_view_search(mask)
         if retry is None and self.config.search.candidates > 1:
             retry = self.robust_search(mask, search)
+        if retry is None:
+            retry = self.edge_search(images["birdseye"], search)
         if retry is None:
             return result
         if keep_images:
@@ -336,6 +339,45 @@ class LanePipeline:
                 return replace(search, method="robust")
         return None
 
+    def edge_search(self, bird: np.ndarray, search: LaneSearch) -> LaneSearch | None:
+        """Return ``search`` with its missing line replaced by the asphalt edge on that side,
+        when the lane then passes the checks; else None.
+
+        Only for a search that found one line, which passes its own check, and no paint at all
+        on the other side (its fit not found): a painted line that is seen is never replaced.
+        The edge (``lanes.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
+        ``bird``) is then checked with the found line as a lane (``check``: width within the
+        road's range, parallel, equally curved) over the rows where the edge is seen (the
+        search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
+        beyond); its search's ``edge`` flags the side.
+        """
+        cfg = self.config.edge
+        if not cfg.enabled or search.left.found == search.right.found:
+            return None
+        side, other = ("right", search.left) if search.left.found else ("left", search.right)
+        first = self.check(search)
+        if first.left or first.right:
+            return None
+        p = self.perspective
+        fit, _ = lanes.road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, self.config.checks,
+                                 cfg, search.top_px)
+        if not fit.found:
+            return None
+        # the look-ahead ends where the edge is seen: its fit is not extrapolated beyond, and
+        # the other line is refitted on its pixels there (an S-bend's two halves are not one
+        # second-order curve: the whole view's fit would not be parallel to the edge's)
+        top = max(search.top_px, int(self.size[1] - 1 - fit.gap_px - fit.span_px))
+        fits = {side: fit}
+        if top > search.top_px:
+            ys, xs = search.right_pixels if side == "left" else search.left_pixels
+            near = ys >= top
+            refit = lanes.fit_line(ys[near], xs[near], self.size[1], self.config.search)
+            if not refit.found:
+                return None
+            fits["left" if side == "right" else "right"] = refit
+        found = replace(search, **fits, edge=(side == "left", side == "right"), top_px=top)
+        return found if self.check(found).ok else None
+
     def result(self, search: LaneSearch, images: dict | None = None) -> FrameResult:
         """Return the FrameResult of a search: its fits if they pass ``check``, else not found.
 
@@ -355,9 +397,12 @@ class LanePipeline:
                    for side, fit in (("left", search.left), ("right", search.right)) if not fit.found]
         if check.reason:
             reasons.append(check.reason)
+        sources = tuple(("edge" if edge else "seen") if fit.found else ""
+                        for fit, edge in ((left, search.edge[0]), (right, search.edge[1])))
         return FrameResult(left, right, self.measure(left, right), search.method,
                            self.line_confidence(left), self.line_confidence(right),
-                           "; ".join(reasons), search, images if images is not None else {}, rejected)
+                           "; ".join(reasons), search, images if images is not None else {}, rejected,
+                           sources)
 
     def process(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
         """Return the lane in one RAW frame with the annotated frame in ``images["result"]``.
@@ -381,9 +426,10 @@ class LanePipeline:
         held = result.method == "hold"  # held from earlier frames: drawn in the held colour
         out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px, to_frame,
                                 self.config.draw, self.size[1], held=held)
+        edges = tuple(side for side, src in zip(("left", "right"), result.sources) if src == "edge")
         return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
                                                           result.lane_width_m, result.found,
-                                                          result.reason, held), self.config.draw)
+                                                          result.reason, held, edges), self.config.draw)
 
     def draw_views(self, result: FrameResult, raw: np.ndarray) -> dict:
         """Return ``result.images`` with the drawn views added: undistorted, result and search.

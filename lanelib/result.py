@@ -62,7 +62,10 @@ class FrameResult:
     (``LaneChecks``); ``reason`` says what was missing or implausible otherwise, and the
     measurements are NaN. A detection that failed the checks is kept apart in ``rejected``, never
     reported as the lane. ``left_conf``/``right_conf`` are 0-1 confidences per line (0 for a line
-    not found or rejected). ``images`` holds the stage images (undistorted, birdseye, binary,
+    not found or rejected). ``sources`` says where each reported line comes from: "seen" (paint
+    found in this frame), "edge" (the unpainted asphalt edge, ``lanes.road_edge``), "inferred"
+    (from the other line and the tracked width), "held" (from earlier frames), "" (no line).
+    ``images`` holds the stage images (undistorted, birdseye, binary,
     search, result) when the pipeline was asked to keep them.
     """
 
@@ -76,6 +79,7 @@ class FrameResult:
     search: LaneSearch | None = field(default=None, repr=False)
     images: dict = field(default_factory=dict, repr=False)
     rejected: Rejected | None = None
+    sources: tuple[str, str] = ("", "")
 
     @property
     def left_found(self) -> bool:

@@ -720,7 +720,8 @@ def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLik
 
 
 VIDEO_LOG_COLUMNS = ("frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
-                     "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c")
+                     "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c",
+                     "left_source", "right_source")
 
 
 def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
@@ -729,6 +730,8 @@ def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
     The fit coefficients are the tracked bird's-eye pixel fits x = a*y**2 + b*y + c. ``method``
     is how the lane was found: ``windows`` or ``prior`` (seen in this frame), ``hold`` (held
     from earlier frames, not seen in this one), or the search tried when none was found.
+    ``left_source``/``right_source`` say where each line comes from (``FrameResult.sources``:
+    seen, edge, inferred, held, or empty without a line).
     """
     nan = float("nan")
     row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),
@@ -739,6 +742,7 @@ def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
     for side, fit in (("left", result.left), ("right", result.right)):
         coeffs = fit.coeffs_px if fit.found else (nan, nan, nan)
         row.update({f"{side}_{k}": v for k, v in zip("abc", coeffs)})
+    row["left_source"], row["right_source"] = result.sources
     return row
 
 

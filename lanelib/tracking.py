@@ -88,6 +88,15 @@ debug composite work on it unchanged. Per frame:
    too, it carries the trend's noise into every frame: the offset error on every bundled clip
    grew, e.g. ``project`` 1.5 -> 2.0 cm median).
 
+8. **The asphalt edge.** When a search's best lane has one line and no paint at all on the
+   other side (a country road whose right side is only the asphalt edge, then grass or gravel),
+   the unpainted edge on that side is taken as the line (``LanePipeline.edge_search``,
+   ``lanes.road_edge``) if the pair passes every check above. With a track only where the
+   track's line on that side was an edge already (what the search found there failed the checks
+   and is dropped for it, ``_edge_candidate``): a painted line that fades out is inferred as
+   in step 3, never moved out to the asphalt edge beyond it. The result's ``sources`` say
+   "edge" for it ("seen", "inferred", "held" for the others).
+
 Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
 the share of the hold that is left for a held line, 0 when no lane is reported.
@@ -220,7 +229,7 @@ class LaneTracker:
     Call ``update`` once per frame, in order; ``reset`` before a new video. After each
     ``update``, ``retries`` names the fallback searches that frame needed, in the order they
     ran (none when the cheap search passed): "windows from the track", "remembered bases",
-    "fallback masks", "shorter views", "other peaks". Every fallback search reads the whole
+    "fallback masks", "shorter views", "other peaks", "asphalt edge". Every fallback search reads the whole
     view under ``ThresholdConfig.fallback_rule`` (the cheap search, its rule). ``python -m lanelib bench`` counts them and times them.
     """
 
@@ -256,6 +265,7 @@ class LaneTracker:
         # the lane's normal width at the car (m) in the last frames that saw both lines (step 3)
         self._seen_widths: deque[float] = deque(maxlen=self.config.smooth_frames)
         self._conf = (0.0, 0.0)
+        self._edge = [False, False]  # (left, right): the track's line is the asphalt edge (step 8)
 
     @property
     def remembered_bases(self) -> tuple[float, float] | None:
@@ -340,8 +350,8 @@ class LaneTracker:
         on the same next frames, whichever frame each started from: the remembered fits (their
         coefficients' bytes), confidences, look-ahead rows and seen/inferred flags of the smoothing
         and the trend, each frame's number counted back from the last frame tracked, the
-        remembered bases, the hold's counters, the held confidences and the widths seen at the car
-        (``seen_width_m``). A Dask segment's
+        remembered bases, the hold's counters, the held confidences, the widths seen at the car
+        (``seen_width_m``) and which sides' tracked lines are asphalt edges (step 8). A Dask segment's
         warm-up compares it with the previous segment's (``cluster.settle_joints``).
         """
         def accepted(acc: _Accepted) -> tuple:
@@ -349,7 +359,8 @@ class LaneTracker:
                     acc.top_px, self._frame - acc.frame, acc.inferred)
 
         state = ([accepted(a) for a in self._history], [accepted(a) for a in self._trend],
-                 list(self._base_history), self._lost, self._blind, self._conf, list(self._seen_widths))
+                 list(self._base_history), self._lost, self._blind, self._conf, list(self._seen_widths),
+                 self._edge)
         return hashlib.sha256(repr(state).encode()).digest()
 
     # ---- one frame ------------------------------------------------------------------------
@@ -413,6 +424,12 @@ class LaneTracker:
         if track is None and best[1] is None and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
             better(pipe.robust_search(mask(), best[0]), "other peaks")
+        if pipe.config.edge.enabled and (edgeless := self._edge_candidate(best, track)) is not None:
+            # one line, and no paint on the other side: its asphalt edge (step 8)
+            bird = det_images.get("birdseye")
+            if bird is None:
+                bird = det_images["birdseye"] = pipe.birdseye(raw)
+            better(pipe.edge_search(bird, edgeless), "asphalt edge")
         self.retries = tuple(ran)
         self._frame_mask = None  # the frame's images are not kept past it
         search, left, right, why, failed = best
@@ -431,6 +448,24 @@ class LaneTracker:
         rejected = Rejected(search.left, search.right, pipe.measure(search.left, search.right),
                             "; ".join(why))
         return replace(result, rejected=rejected)
+
+    def _edge_candidate(self, best: tuple, track) -> LaneSearch | None:
+        """Return the search whose missing line the asphalt edge may stand for (step 8), or None.
+
+        Without a track: a best search that found one line and nothing on the other side (a line
+        alone cannot start a track). With a track: a frame that kept one line, where the other
+        side's tracked line was the asphalt edge (no paint was tracked there); what the search
+        found on that side failed the checks, so it is dropped for the edge.
+        """
+        search, left, right = best[:3]
+        if track is None:
+            return search if search.left.found != search.right.found else None
+        if (left is None) == (right is None):
+            return None
+        side = "left" if left is None else "right"
+        if not self._edge[0 if side == "left" else 1]:
+            return None
+        return replace(search, **{side: LineFit(None, reason="refused by the checks")})
 
     def lookahead_top_px(self, track: tuple[np.ndarray, np.ndarray]) -> int:
         """Return the first row (px) of this frame's look-ahead for the tracked lane ``track``.
@@ -728,10 +763,15 @@ class LaneTracker:
             self._conf = (confs["left"], confs["right"])
             method = search.method
             sources = {"left": left, "right": right}
+            for i, fit in enumerate((left, right)):
+                if fit is not None:  # an inferred line keeps the side's kind
+                    self._edge[i] = bool(search.edge[i])
+            kinds = tuple("inferred" if fit is None else "edge" if search.edge[i] else "seen"
+                          for i, fit in enumerate((left, right)))
         elif track is not None and (note := self._hold(blind)):
             lc, rc = (round(c * self._hold_share(), 3) for c in self._conf)
             notes.append(note)
-            return self._result(track, (lc, rc), "hold", {}, search, notes, images)
+            return self._result(track, (lc, rc), "hold", {}, search, notes, images, ("held", "held"))
         else:
             if track is not None:
                 blinds = f" beside {self._blind} frames with nothing seen" if self._blind else ""
@@ -742,7 +782,7 @@ class LaneTracker:
                 self._lost += 1
             return self._not_found(search, notes, images)
         smoothed = self.lane
-        return self._result(smoothed, self._conf, method, sources, search, notes, images)
+        return self._result(smoothed, self._conf, method, sources, search, notes, images, kinds)
 
     def _hold(self, blind: bool) -> str:
         """Count one more frame without a lane and return the note of its hold, or "" when the
@@ -771,7 +811,7 @@ class LaneTracker:
         return (1.0 - counted / (cfg.hold_frames + 1)) * (1.0 - self._blind / (cfg.blind_hold_frames + 1))
 
     def _result(self, coeffs, confs, method: str, sources: dict, search: LaneSearch,
-                notes: list[str], images: dict) -> FrameResult:
+                notes: list[str], images: dict, kinds: tuple[str, str]) -> FrameResult:
         fits = []
         for side, c in zip(("left", "right"), coeffs):
             src = sources.get(side)
@@ -779,7 +819,8 @@ class LaneTracker:
                                 src.span_px if src else 0.0, "" if src else _note_for(side, notes)))
         left, right = fits
         return FrameResult(left, right, self.pipeline.measure(left, right), method,
-                           float(confs[0]), float(confs[1]), "; ".join(notes), search, images)
+                           float(confs[0]), float(confs[1]), "; ".join(notes), search, images,
+                           sources=kinds)
 
     def _not_found(self, search: LaneSearch, notes: list[str], images: dict) -> FrameResult:
         reason = "; ".join(notes) or "no lane"

@@ -130,3 +130,86 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
     assert spread is not None
     read = np.polyval(spread, h - 1.0 - rows)
     assert read == pytest.approx(true_scale, abs=0.15 if grade else 0.03)
+
+
+# --------------------------------------------------------------------------- the asphalt edge
+
+XM, YM = 0.00578125, 0.03263888888888889  # the default 1280 x 720 view's metres per pixel
+
+
+def _edge_view(beyond_rgb, edge_m: float = 3.6, seed: int = 5, texture: float = 6.0) -> tuple[np.ndarray, float]:
+    """A bird's-eye view of grey asphalt with a white left line at x = 300 px and, from
+    ``edge_m`` right of it (along the row), the surface ``beyond_rgb``; return it and the edge's x."""
+    rng = np.random.default_rng(seed)
+    h, w = 720, 1280
+    bird = np.full((h, w, 3), 105.0)
+    edge_x = 300 + edge_m / XM
+    bird[:, int(round(edge_x)):] = beyond_rgb
+    bird += rng.normal(0.0, texture, (h, w, 1))  # grain, the same in every channel
+    bird[:, 293:308] = 225.0
+    return np.clip(bird, 0, 255).astype(np.uint8), float(int(round(edge_x)))
+
+
+def _left_line() -> "LineFit":
+    from lanelib.lanes import LineFit
+    return LineFit((0.0, 0.0, 300.0), 5000, 719.0)
+
+
+def test_the_asphalt_edge_is_found_within_a_few_cm():
+    """Grass (96, 120, 60) beyond grey asphalt, 3.6 m from the left line and no paint on the right:
+    ``lanes.road_edge`` puts the right line on the asphalt edge within 3 cm on every row, and the
+    pair passes the lane checks."""
+    from lanelib import lanes
+    bird, edge_x = _edge_view((96, 120, 60))
+    fit, points = lanes.road_edge(bird, _left_line(), "right", XM, YM)
+    assert fit.found and len(points) >= 100
+    rows = np.linspace(0, 719, 8)
+    assert np.abs(fit.x_at(rows) - edge_x).max() * XM <= 0.03
+    assert not lanes.pair_problem(_left_line(), fit, 720, XM, YM)
+
+
+@pytest.mark.parametrize("beyond, what", [((80, 80, 80), "a darker repaved strip"),
+                                          ((135, 135, 135), "a lighter repaved strip"),
+                                          ((175, 175, 172), "a concrete barrier"),
+                                          ((45, 45, 50), "a shadow's edge")])
+def test_no_asphalt_edge_where_grey_road_like_surface_lies_beyond(beyond, what):
+    """Beyond the step is grey and smooth like the road (a repaved strip, a concrete barrier, a
+    shadow): no edge candidate, however strong the step in brightness."""
+    from lanelib import lanes
+    bird, _ = _edge_view(beyond)
+    fit, points = lanes.road_edge(bird, _left_line(), "right", XM, YM)
+    assert not fit.found, what
+    assert "asphalt edge" in fit.reason
+
+
+@pytest.mark.parametrize("name", ["hard_seams_repaved", "hard_barrier_left"])
+def test_no_asphalt_edge_on_the_seams_and_barrier_stills(name):
+    """The bundled seams and barrier stills (test_images/hard): both lines are painted; looked for
+    beside either line all the same, no asphalt edge is found on either side (the seams, the
+    repaved strips' edges and the barrier are grey like the road)."""
+    from lanelib import io, lanes
+    image = REPO / "test_images" / "hard" / f"{name}.jpg"
+    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(image.parent))
+    raw = io.read_image(image)
+    bird = pipe.birdseye(raw)
+    search, _ = pipe.search_frame(raw)
+    assert search.left.found and search.right.found
+    p = pipe.perspective
+    for other, side in ((search.left, "right"), (search.right, "left")):
+        fit, _ = lanes.road_edge(bird, other, side, p.xm_per_px, p.ym_per_px)
+        assert not fit.found, (name, side)
+
+
+def test_a_lane_whose_right_side_is_only_the_asphalt_edge_is_found_and_says_so():
+    """A still whose right side has no paint, only the asphalt edge and grass: ``detect`` finds the
+    lane with the edge as its right line, and the result's ``sources`` say so ("seen", "edge");
+    with ``edge.enabled=false`` the right line is not found, as before."""
+    from lanelib.lanes import LaneSearch
+    bird, edge_x = _edge_view((96, 120, 60))
+    pipe = LanePipeline(PipelineConfig())
+    raw = pipe.perspective.unwarp(bird)
+    result = pipe.detect(raw)
+    assert result.found and result.sources == ("seen", "edge")
+    assert abs(result.right.x_at(719.0) - edge_x) * XM <= 0.05
+    off = LanePipeline(override(PipelineConfig(), ["edge.enabled=false"]))
+    assert not off.detect(raw).found

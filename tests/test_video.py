@@ -23,7 +23,8 @@ from lanelib.pipeline import LanePipeline
 from lanelib.runs import VIDEO_LOG_COLUMNS, process_video
 
 COLUMNS = ["frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
-           "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c"]
+           "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c",
+           "left_source", "right_source"]
 
 
 def run(*args, **kw):
