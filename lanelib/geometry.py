@@ -104,6 +104,15 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   LANE_PARALLEL_TOLERANCE (2.5 %; frames' median; ``_view_widening``): a lens that distorts
   and was not given (a straight line's image bends), or a road that is not flat. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
 
+- **Lens** (no ``lens`` given; ``estimate_lens``): the bend of the lines on the straight frames
+  measures a one-parameter radial model about the image centre; when it is clearly non-zero
+  and well determined the frames are undistorted with it, everything above is measured again
+  in the undistorted frames, and ``RoadGeometry.lens`` holds it (a ``camera.Calibration`` marked
+  ``estimated``, its focal length the one the geometry found or assumed). When the undistorted
+  frames show too few dashes for a period, the raw frames' dash period gives the focal length
+  and the confidence is multiplied by RAW_DASH_CONFIDENCE (0.6): measured through the lens, it
+  is a few % off. Otherwise the assumptions say why no lens was used.
+
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
 points that disagree between frames), road not straight.
@@ -816,7 +825,7 @@ LENS_KAPPA_RANGE = (-0.6, 0.3)   # searched: a point at the corner's distance mo
 LENS_KAPPA_STEP = 0.03
 LENS_MIN_SIGMAS = 5.0           # kappa this many standard errors from 0 to be used
 LENS_MIN_BEND_PX = 0.3           # the lines' mean bow (px) the model must explain to be used
-LENS_MIN_EXPLAINED = 0.5         # share of that bow it must explain
+LENS_MIN_EXPLAINED = 0.6         # share of that bow it must explain
 LENS_MIN_FRAMES = 3
 LENS_MAX_SPREAD = 0.35           # frames' kappas' median absolute deviation, of |kappa|
 LENS_MIN_SAME_SIGN = 0.65        # share of the frames whose kappa has its sign

@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from lanelib.camera import undistort_points
+from lanelib import io, runs
+from lanelib.camera import Calibration, undistort_points
+from lanelib.cli import main
 from lanelib.geometry import RoadLineFinder, detect_hood, estimate_geometry, estimate_lens
 from lanelib.perspective import Perspective
 from lanelib.synth import (Camera, CarPose, CurvatureProfile, GroundGrid, Layout, Look, Renderer, Scene,
@@ -237,3 +239,23 @@ def test_a_barrel_lens_not_given_is_measured_from_the_road(barrel_estimate):
     assert abs(horizon) <= 2.0
     assert max(map(abs, widths)) <= 0.03
     assert max(map(abs, along)) <= 0.05
+
+
+def test_the_geometry_command_writes_the_estimated_lens_for_reuse(barrel_frames, tmp_path, capsys):
+    """`geometry FOLDER -o g.json` of the barrel camera writes the lens it measured beside the
+    perspective (g.lens.json, readable by --calibration), and a run with --auto-geometry
+    undistorts with it (``runs.geometry_calibration``)."""
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, frame in enumerate(barrel_frames):
+        io.write_image(folder / f"{i:02d}.png", frame)
+    out = tmp_path / "g.json"
+    assert main(["geometry", str(folder), "-o", str(out), "--accept-low-confidence"]) == 0
+    printed = capsys.readouterr().out
+    assert "lens not given: its radial distortion was estimated" in printed
+    lens = Calibration.load(tmp_path / "g.lens.json")
+    assert lens.estimated and lens.dist_coeffs[0] < 0
+    geo = runs.estimate_road_geometry(folder, None, runs.GeometryOptions(accept_low_confidence=True))
+    assert runs.geometry_calibration(None, geo) is geo.lens
+    given = Calibration(BARREL.K, np.asarray(BARREL.dist, float), BARREL.size_px)
+    assert runs.geometry_calibration(given, geo) is given
