@@ -108,10 +108,12 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   measures a one-parameter radial model about the image centre; when it is clearly non-zero
   and well determined the frames are undistorted with it, everything above is measured again
   in the undistorted frames, and ``RoadGeometry.lens`` holds it (a ``camera.Calibration`` marked
-  ``estimated``, its focal length the one the geometry found or assumed). When the undistorted
-  frames show too few dashes for a period, the raw frames' dash period gives the focal length
-  and the confidence is multiplied by RAW_DASH_CONFIDENCE (0.6): measured through the lens, it
-  is a few % off. Otherwise the assumptions say why no lens was used.
+  ``estimated``, its focal length the one the geometry found or assumed). Undistortion with the
+  frame's own camera matrix pushes the near dashes out of the frame: when too few are left for
+  a period, it is measured on the frames undistorted onto a canvas LENS_CANVAS_PAD (10 %)
+  larger each side, and its focal length sets the scale; failing that, the raw frames' dash
+  period does, with the confidence multiplied by RAW_DASH_CONFIDENCE (0.6): measured through
+  the lens, it is a few % off. Otherwise the assumptions say why no lens was used.
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
@@ -829,6 +831,7 @@ LENS_MIN_EXPLAINED = 0.6         # share of that bow it must explain
 LENS_MIN_FRAMES = 3
 LENS_MAX_SPREAD = 0.35           # frames' kappas' median absolute deviation, of |kappa|
 LENS_MIN_SAME_SIGN = 0.65        # share of the frames whose kappa has its sign
+LENS_CANVAS_PAD = 0.1           # undistorted frames on a canvas this much of the frame larger each side, for dashes
 RAW_DASH_CONFIDENCE = 0.6       # the confidence is multiplied by this when the scale is the raw frames' dashes'
 LENS_MIN_LINE_ROWS = 0.1         # a line spans this share of the height to count
 
@@ -1478,15 +1481,40 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
     fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
     common = dict(lane_width_m=lane_width_m, look_ahead_m=look_ahead_m, dash_m=dash_m, gap_m=gap_m,
                   hood_row_px=hood_row_px, estimate_roll=estimate_roll, lens_from_road=False)
-    geo = estimate_geometry(frames, found.calibration((w, h), fa), focal_px, **common)
+    cal = found.calibration((w, h), fa)
+    geo = estimate_geometry(frames, cal, focal_px, **common)
     raw_note = ""
+    if focal_px is None and not geo.scale_source.startswith("dash period"):
+        # the dashes on a larger canvas: the frames undistorted with what they push out kept
+        pad = (int(round(LENS_CANVAS_PAD * w)), int(round(LENS_CANVAS_PAD * h)))
+        grid, _ = Lens(cal, (w, h)).undistort_maps(pad=pad, m1type=cv2.CV_32FC2)
+        if found.lam < 0:   # past the model's fold the map turns back: nothing there
+            cw, ch = w + 2 * pad[0], h + 2 * pad[1]
+            yy, xx = np.mgrid[0:ch, 0:cw]
+            grid[np.hypot(xx - cw / 2, yy - ch / 2) > 1 / math.sqrt(-3 * found.lam)] = -1
+        wide = [cv2.remap(f, grid, None, cv2.INTER_LINEAR) for f in frames]
+        try:
+            canvas = estimate_geometry(wide, None, None, **(common | {"hood_row_px": None}))
+        except GeometryError:
+            canvas = None
+        if canvas is not None and canvas.focal_source == "dash period and lane width":
+            again = estimate_geometry(frames, cal, canvas.focal_px, **common)
+            # the dash period is measured: not the focal length's 0.9 of the confidence
+            geo = _replace(again, focal_source="dash period and lane width",
+                           confidence=round(min(1.0, again.confidence / 0.9), 4),
+                           scale_source=f"dash period of the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % "
+                                        f"larger each side ({canvas.scale_source[len('dash period '):].strip('()')}; "
+                                        f"focal {canvas.focal_px:.0f} px)")
+            raw_note = (f"undistortion pushes the near dashes out of the frame: the dash period was measured on "
+                        f"the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % larger each side "
+                        f"(focal length {canvas.focal_px:.0f} px)")
     if focal_px is None and not geo.scale_source.startswith("dash period"):
         try:
             raw = estimate_geometry(frames, None, None, **common)
         except GeometryError:
             raw = None
         if raw is not None and raw.focal_source == "dash period and lane width":
-            again = estimate_geometry(frames, found.calibration((w, h), fa), raw.focal_px, **common)
+            again = estimate_geometry(frames, cal, raw.focal_px, **common)
             # the raw frames' dashes are measured through the lens (4 % short on the synthetic
             # 90 deg camera with k1 = -0.25): a scale not to be trusted
             geo = _replace(again, focal_source="dash period of the raw frames and lane width",
