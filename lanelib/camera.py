@@ -48,6 +48,9 @@ class Calibration:
     image_size : (width, height) in pixels the matrix belongs to.
     rms_px : RMS reprojection error of the calibration (pixels).
     used, skipped : image file names used and skipped; ``skip_reasons`` says why each was skipped.
+    estimated : '' for a calibration measured on boards; else how it was estimated without
+        them (``geometry.estimate_geometry``'s lens from the road's lines: its focal length is
+        then not measured, only the distortion).
     """
 
     camera_matrix: np.ndarray
@@ -57,10 +60,11 @@ class Calibration:
     used: tuple[str, ...] = ()
     skipped: tuple[str, ...] = ()
     skip_reasons: dict = field(default_factory=dict)
+    estimated: str = ""
 
     def to_dict(self) -> dict:
         """Return the record as JSON-able lists and numbers."""
-        return {
+        return ({"estimated": self.estimated} if self.estimated else {}) | {
             "camera_matrix": np.asarray(self.camera_matrix, float).round(6).tolist(),
             "dist_coeffs": np.asarray(self.dist_coeffs, float).ravel().round(8).tolist(),
             "image_size": [int(v) for v in self.image_size],
@@ -87,7 +91,7 @@ class Calibration:
             raise CalibrationError(f"{source}: camera_matrix must be 3x3, dist_coeffs 4/5/8/12/14 "
                                    "numbers, image_size [w, h]")
         return cls(K, dist, size, float(d.get("rms_px", float("nan"))), tuple(d.get("used", ())),
-                   tuple(d.get("skipped", ())), dict(d.get("skip_reasons", {})))
+                   tuple(d.get("skipped", ())), dict(d.get("skip_reasons", {})), str(d.get("estimated", "")))
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the record as JSON (atomically); return the path."""

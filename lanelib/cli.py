@@ -188,6 +188,7 @@ def _run_images(args) -> int:
         geo = runs.estimate_road_geometry(args.in_dir, calibration, _geometry_options(args))
         _print_geometry(geo)
         config = runs.with_geometry(config, geo)
+        calibration = runs.geometry_calibration(calibration, geo)
     rows = runs.process_images(files, args.output, config, calibration, debug=args.debug,
                                workers=args.workers, scheduler=args.scheduler,
                                progress=not args.no_progress)
@@ -308,6 +309,11 @@ def _add_geometry(sub) -> None:
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="for a new OUT: the config whose other parts it holds (default: built-in)")
     p.add_argument("--json", type=Path, metavar="FILE", help="also write every figure as JSON")
+    p.add_argument("--lens-out", type=Path, metavar="FILE",
+                   help="where to write the lens estimated from the road's lines when no --calibration "
+                        "is given and the lines measure one (a calibration JSON for --calibration; "
+                        "default: OUT with the suffix .lens.json); the perspective of OUT is then for "
+                        "frames undistorted with it")
     _geometry_args(p, auto=False)
     p.set_defaults(func=_run_geometry)
 
@@ -322,7 +328,14 @@ def _run_geometry(args) -> int:
     geo = runs.estimate_road_geometry(args.input, calibration, _geometry_options(args))
     _print_geometry(geo)
     save_parts(runs.with_geometry(base, geo), args.output, ("perspective",))
-    print(f"perspective written to {args.output} (use it with --config {args.output})")
+    if geo.lens is not None:
+        lens_out = args.lens_out or args.output.with_suffix(".lens.json")
+        check_not_input(lens_out, inputs + [args.output])
+        geo.lens.save(lens_out)
+        print(f"perspective written to {args.output}, the estimated lens to {lens_out} (use them together: "
+              f"--config {args.output} --calibration {lens_out})")
+    else:
+        print(f"perspective written to {args.output} (use it with --config {args.output})")
     if args.json:
         write_json(args.json, geo.to_dict(), inputs=inputs)
         print(f"figures written to {args.json}")

@@ -104,6 +104,17 @@ How each quantity is found (all in the undistorted image: frames are undistorted
   LANE_PARALLEL_TOLERANCE (2.5 %; frames' median; ``_view_widening``): a lens that distorts
   and was not given (a straight line's image bends), or a road that is not flat. Below ``LOW_CONFIDENCE`` a pipeline should refuse the result unless told to use it.
 
+- **Lens** (no ``lens`` given; ``estimate_lens``): the bend of the lines on the straight frames
+  measures a one-parameter radial model about the image centre; when it is clearly non-zero
+  and well determined the frames are undistorted with it, everything above is measured again
+  in the undistorted frames, and ``RoadGeometry.lens`` holds it (a ``camera.Calibration`` marked
+  ``estimated``, its focal length the one the geometry found or assumed). Undistortion with the
+  frame's own camera matrix pushes the near dashes out of the frame: when too few are left for
+  a period, it is measured on the frames undistorted onto a canvas LENS_CANVAS_PAD (10 %)
+  larger each side, and its focal length sets the scale; failing that, the raw frames' dash
+  period does, with the confidence multiplied by RAW_DASH_CONFIDENCE (0.6): measured through
+  the lens, it is a few % off. Otherwise the assumptions say why no lens was used.
+
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
 points that disagree between frames), road not straight.
@@ -111,7 +122,7 @@ points that disagree between frames), road not straight.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace as _replace
 from typing import Iterable
 
 import cv2
@@ -245,7 +256,10 @@ class RoadGeometry:
     between them. ``inverse_depth_scale_px_m`` is C in s = C / v + s0 and ``lane_width_ratio``
     the ego lane's r (see the module docstring); ``dash_fit`` how well the dashes fit the dash
     period found (1: perfectly; 0: no dashes seen; used from DASH_MIN_FIT).
-    ``frames_rejected`` holds (frame index, reason) pairs.
+    ``frames_rejected`` holds (frame index, reason) pairs. ``lens`` is the lens estimated from
+    the road's lines when none was given (``estimate_lens``; a ``camera.Calibration`` marked
+    ``estimated``): the positions are then in the image undistorted with it, and a pipeline
+    must undistort with it too. None: the lens given, or none (see the assumptions).
     """
 
     size_px: tuple[int, int]
@@ -278,6 +292,7 @@ class RoadGeometry:
     frames_used: tuple[int, ...]
     frames_rejected: tuple[tuple[int, str], ...]
     frame_vanishing_points: tuple[tuple[int, float, float], ...] = field(default=(), repr=False)
+    lens: Calibration | None = field(default=None, repr=False)
 
     def perspective_config(self) -> PerspectiveConfig:
         """Return the ``PerspectiveConfig`` of these bird's-eye points and scale."""
@@ -348,7 +363,7 @@ class RoadGeometry:
             "confidence": r(self.confidence, 3), "assumptions": list(self.assumptions),
             "frames_used": list(self.frames_used),
             "frames_rejected": [[i, why] for i, why in self.frames_rejected],
-        }
+        } | ({} if self.lens is None else {"lens": self.lens.to_dict()})
 
 
 # --------------------------------------------------------------------------- masks and segments
@@ -538,6 +553,7 @@ class _FrameAnalysis:
     vp: VanishingPoint
     mask: np.ndarray
     line_fits: tuple[tuple[np.ndarray, np.ndarray, float, float], ...]   # (point, dir, top row, bottom row)
+    line_points: tuple[np.ndarray, ...] = ()   # per line, its run centres (N, 2), followed up across bends
 
 
 class RoadLineFinder:
@@ -634,7 +650,7 @@ class RoadLineFinder:
                 current = []
             current.append(i)
         groups.append(current)
-        lines, fits = [], []
+        lines, fits, points = [], [], []
         for g in groups:
             runs = np.isin(seg.run_segment, g)
             x, y = seg.run_x[runs], seg.run_y[runs]
@@ -647,6 +663,8 @@ class RoadLineFinder:
             lines.append(RoadLine((float(c[0]), float(c[1])), (float(d[0]), float(d[1])),
                                   (float(y.min()), float(y.max())), a, bow, len(x), len(g)))
             fits.append((c, d, float(y.min()), float(y.max()), len(x)))
+            both = runs | chain
+            points.append(np.column_stack([seg.run_x[both], seg.run_y[both]]))
         if len(lines) < 2 or (max(l.angle_deg for l in lines) - min(l.angle_deg for l in lines)
                               < MIN_LINE_SEPARATION_DEG):
             return fail(f"too few lines: the segments form {len(lines)} line(s) through the vanishing "
@@ -664,7 +682,7 @@ class RoadLineFinder:
         if len(below) < 2:
             return fail("too few lines: fewer than two lines lie below the point where they meet; give "
                         "frames of a road ahead (is the video rotated?)", None, int(inliers.sum()), tuple(lines))
-        lines, fits = [lines[i] for i in below], [fits[i] for i in below]
+        lines, fits, points = [lines[i] for i in below], [fits[i] for i in below], [points[i] for i in below]
         vpt = (float(vp[0]), float(vp[1]))
         if not (0.15 * w <= vp[0] <= 0.85 * w and 0.05 * h <= vp[1] <= 0.85 * h):
             return fail(f"inconsistent: the lines meet at ({vp[0]:.0f}, {vp[1]:.0f}) px, far from where "
@@ -697,7 +715,7 @@ class RoadLineFinder:
                               "the near ones (a crest or a dip); give frames of a level stretch of road")
         fits_out = tuple((f[0], f[1], f[2], f[3]) for f in fits)
         return _FrameAnalysis(VanishingPoint(vpt, n, int(inliers.sum()), tuple(lines), straight, reason),
-                              mask, fits_out)
+                              mask, fits_out, tuple(points))
 
 
 def _band_vp(seg: _Segments, vp: np.ndarray, v_from: float, v_to: float) -> np.ndarray | None:
@@ -761,6 +779,180 @@ def _check_frame(frame, name: str) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- hood
+
+# --------------------------------------------------------------------------- the lens, from the lines' bend
+
+@dataclass(frozen=True)
+class LensEstimate:
+    """A one-parameter radial model of a lens, measured from straight road lines (plumb lines).
+
+    A point at distance r_u from the image centre in the undistorted image lies at
+    r_d = r_u (1 + lam r_u^2) in the raw one (lam in px^-2: negative for barrel distortion,
+    positive for pincushion; OpenCV's k1 is lam f^2 for a focal length f, and no focal length is
+    needed to measure it). ``kappa`` is lam times the squared half-diagonal R (dimensionless: the
+    relative shift of a point R from the centre). ``bend_px`` is the lines' mean bow (px,
+    weighted by their points) through no model and ``residual_bend_px`` through this one;
+    ``frames``, ``lines`` how many gave it; ``frame_kappas`` each frame's own kappa and
+    ``frame_z`` how many of their own standard errors each lies from ``kappa``; ``kappa_se`` its
+    standard error (from the points' scatter about each line's parabola).
+    ``applied`` says whether it is clearly non-zero and well determined (``reason`` why not).
+    """
+
+    lam: float
+    kappa: float
+    kappa_se: float
+    bend_px: float
+    residual_bend_px: float
+    frames: int
+    lines: int
+    frame_kappas: tuple[float, ...]
+    frame_z: tuple[float, ...]
+    applied: bool
+    reason: str
+
+    def calibration(self, size_px: tuple[int, int], focal_px: float) -> Calibration:
+        """Return the model as a ``camera.Calibration`` (principal point at the centre, focal
+        ``focal_px``, k1 and k2 fitted to the division model over the frame's radii), marked
+        estimated."""
+        w, h = size_px
+        K = np.array([[focal_px, 0.0, w / 2], [0.0, focal_px, h / 2], [0.0, 0.0, 1.0]])
+        k1 = self.lam * focal_px ** 2
+        return Calibration(K, np.array([k1, 0.0, 0.0, 0.0, 0.0]), (int(w), int(h)),
+                           estimated=(f"from the road's straight lines (radial model lam {self.lam:.4g} "
+                                      f"px^-2, kappa {self.kappa:+.4f}); focal length "
+                                      f"{focal_px:.0f} px as the geometry has it"))
+
+
+LENS_KAPPA_RANGE = (-0.6, 0.3)   # searched: a point at the corner's distance moved up to 45 % in, 30 % out
+LENS_KAPPA_STEP = 0.03
+LENS_MIN_SIGMAS = 5.0           # kappa this many standard errors from 0 to be used
+LENS_MIN_BEND_PX = 0.3           # the lines' mean bow (px) the model must explain to be used
+LENS_MIN_EXPLAINED = 0.6         # share of that bow it must explain
+LENS_MIN_FRAMES = 3
+LENS_MAX_SPREAD = 0.35           # frames' kappas' median absolute deviation, of |kappa|
+LENS_MIN_SAME_SIGN = 0.65        # share of the frames whose kappa has its sign
+LENS_CANVAS_PAD = 0.1           # undistorted frames on a canvas this much of the frame larger each side, for dashes
+RAW_DASH_CONFIDENCE = 0.6       # the confidence is multiplied by this when the scale is the raw frames' dashes'
+LENS_MIN_LINE_ROWS = 0.1         # a line spans this share of the height to count
+
+
+def radial_undistort(points: np.ndarray, lam: float, size_px: tuple[int, int]) -> np.ndarray:
+    """Return ``points`` (N, 2) of the raw image undistorted by the one-parameter radial model
+    about the centre: the raw point lies at r_d = r_u (1 + lam r_u^2) (px) from the centre, r_u its
+    undistorted distance. Points past the model's fold (barrel, lam < 0: r_d above
+    2 / (3 sqrt(-3 lam))) are NaN (they are left out of the fits of that model)."""
+    c = np.array([size_px[0] / 2, size_px[1] / 2])
+    d = np.asarray(points, np.float64) - c
+    rd = np.hypot(d[:, 0], d[:, 1])
+    ru = rd.copy()
+    for _ in range(8):   # Newton on r + lam r^3 = r_d, from r = r_d
+        ru = ru - (ru + lam * ru ** 3 - rd) / (1 + 3 * lam * ru ** 2)
+    if lam < 0:
+        ru[rd > 2 / (3 * math.sqrt(-3 * lam))] = np.nan
+    scale = np.where(rd > 0, ru / np.maximum(rd, 1e-12), 1.0)
+    return c + d * scale[:, None]
+
+
+def _signed_bows(points: np.ndarray, line_id: np.ndarray, n_lines: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return per line (signed bow px: how far the parabola fitted along it bows from its chord,
+    across its own straight fit; the RMS px of its points off that parabola)."""
+    bows, rms = np.zeros(n_lines), np.full(n_lines, np.inf)
+    ok = np.isfinite(points[:, 0])
+    for i in range(n_lines):
+        p = points[(line_id == i) & ok]
+        if len(p) < 10:
+            continue
+        c = p.mean(0)
+        q = p - c
+        _, _, vt = np.linalg.svd(q, full_matrices=False)
+        d = vt[0] if vt[0, 1] >= 0 else -vt[0]
+        along, across = q @ d, q @ np.array([-d[1], d[0]])
+        span = max(float(np.ptp(along)), 1e-9)
+        coef = np.polyfit(along / span, across, 2)
+        bows[i] = coef[0] * 0.25
+        rms[i] = float(np.sqrt(np.mean((across - np.polyval(coef, along / span)) ** 2)))
+    return bows, rms
+
+
+def estimate_lens(lines_by_frame: list[list[np.ndarray]], size_px: tuple[int, int]) -> LensEstimate | None:
+    """Return the division model (``LensEstimate``) that makes the lines straight, or None when
+    fewer than two lines are long enough.
+
+    ``lines_by_frame``: per frame, the run centres (N, 2) of each painted line found on straight
+    road (``_FrameAnalysis.line_points``). Each line's signed bow (the parabola fitted along it,
+    from its chord) is nearly linear in kappa; kappa is the weighted least-squares zero of all
+    the bows (weights: the bow's inverse variance from the points' scatter about the parabola),
+    by Newton steps. Lines through the centre do not bend whatever the lens (a radial line stays
+    straight), so they weigh nothing. It is applied when the lines' mean bow through no model is
+    ``LENS_MIN_BEND_PX`` or more, the model removes ``LENS_MIN_EXPLAINED`` of it, kappa is
+    ``LENS_MIN_SIGMAS`` standard errors from 0, and ``LENS_MIN_FRAMES`` frames or more each give
+    a kappa of its sign within ``LENS_MAX_SPREAD`` (median absolute deviation) of it: a lens
+    bends every line its way about the centre, a bend of the road bends them all one way.
+    """
+    w, h = size_px
+    pts, lid, fid = [], [], []
+    n_lines = 0
+    for f, lines in enumerate(lines_by_frame):
+        for p in lines:
+            if len(p) < 20 or np.ptp(p[:, 1]) < LENS_MIN_LINE_ROWS * h:
+                continue
+            pts.append(p)
+            lid.append(np.full(len(p), n_lines))
+            fid.append(f)
+            n_lines += 1
+    if n_lines < 2:
+        return None
+    pts_all = np.concatenate(pts).astype(np.float64)
+    lid_all = np.concatenate(lid)
+    fid = np.array(fid)
+    cnt = np.bincount(lid_all, minlength=n_lines).astype(np.float64)
+    r2 = (math.hypot(w, h) / 2) ** 2
+
+    def bows(kappa: float) -> tuple[np.ndarray, np.ndarray]:
+        return _signed_bows(radial_undistort(pts_all, kappa / r2, size_px), lid_all, n_lines)
+
+    b0, rms0 = bows(0.0)
+    weight = cnt / (11.25 * np.maximum(rms0, 0.1) ** 2)     # 1 / var(bow) of a parabola's fit
+    grid = np.arange(LENS_KAPPA_RANGE[0], LENS_KAPPA_RANGE[1] + 1e-9, LENS_KAPPA_STEP)
+    chi = np.array([weight * np.nan_to_num(bows(k)[0], nan=0.0) ** 2 for k in grid])   # (grid, lines)
+    chi[:, ~np.isfinite(weight)] = 0.0
+    step = float(grid[1] - grid[0])
+
+    def best(total: np.ndarray) -> tuple[float, float]:
+        """(kappa, standard error) at the least chi-square, refined by a parabola."""
+        i = int(np.argmin(total))
+        if 0 < i < len(grid) - 1:
+            y0, y1, y2 = total[i - 1:i + 2]
+            den = y0 - 2 * y1 + y2
+            if den > 0:
+                return float(grid[i] + 0.5 * (y0 - y2) / den * step), math.sqrt(2 * step ** 2 / den)
+        return float(grid[i]), float("inf")
+
+    kappa, se = best(chi.sum(1))
+    frames = np.unique(fid)
+    per_frame = [best(chi[:, fid == f].sum(1)) for f in frames]
+    frame_kappas = tuple(k for k, _ in per_frame)
+    frame_z = tuple(abs(k - kappa) / e for k, e in per_frame)
+    bend = float(np.sqrt(np.average(b0 ** 2, weights=weight)))
+    rest = float(np.sqrt(np.average(np.nan_to_num(bows(kappa)[0]) ** 2, weights=weight)))
+    fk = np.array(frame_kappas)
+    spread = float(np.median(np.abs(fk - kappa)))
+    same = float(np.mean(np.sign(fk) == np.sign(kappa)))
+    if bend < LENS_MIN_BEND_PX:
+        reason = f"the lines bow {bend:.2f} px on average, under {LENS_MIN_BEND_PX:g} px: too little to measure a lens by"
+    elif bend - rest < LENS_MIN_EXPLAINED * bend:
+        reason = f"the model straightens the lines' {bend:.2f} px bow only to {rest:.2f} px: the bends are not a lens's"
+    elif abs(kappa) < LENS_MIN_SIGMAS * se:
+        reason = f"kappa {kappa:+.3f} is within {LENS_MIN_SIGMAS:g} standard errors ({se:.3f}) of 0"
+    elif len(frames) < LENS_MIN_FRAMES:
+        reason = f"only {len(frames)} frames show long lines (it takes {LENS_MIN_FRAMES})"
+    elif same < LENS_MIN_SAME_SIGN or spread > LENS_MAX_SPREAD * abs(kappa):
+        reason = (f"the frames disagree (their kappas {np.min(fk):+.3f} to {np.max(fk):+.3f}, median "
+                  f"deviation {spread:.3f}): the bends are the road's, not the lens's")
+    else:
+        reason = ""
+    return LensEstimate(kappa / r2, kappa, se, bend, rest, len(frames), n_lines, frame_kappas, frame_z,
+                        not reason, reason)
 
 def detect_hood(frames: list[np.ndarray]) -> np.ndarray | None:
     """Return the hood's top row in every column (float; h where there is none) from 3+ frames of
@@ -963,7 +1155,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
                       focal_px: float | None = None, lane_width_m: float = DEFAULT_LANE_WIDTH_M,
                       look_ahead_m: float = DEFAULT_LOOK_AHEAD_M, dash_m: float = DEFAULT_DASH_M,
                       gap_m: float = DEFAULT_GAP_M, hood_row_px: float | None = None,
-                      estimate_roll: bool = True) -> RoadGeometry:
+                      estimate_roll: bool = True, lens_from_road: bool = True) -> RoadGeometry:
     """Return the bird's-eye geometry of a camera estimated from RAW frames of the road.
 
     Parameters
@@ -979,6 +1171,10 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     dash_m, gap_m : the painted and empty lengths of the dashed lines.
     hood_row_px : the top row of the car's hood; None: detected from the frames.
     estimate_roll : False assumes a roll of 0 (to measure what ignoring it costs).
+    lens_from_road : with no ``lens``, measure the lens's radial distortion from the bend of the
+        lines on straight road (``estimate_lens``); when it is clearly non-zero and well
+        determined, the frames are undistorted with it and the estimate is made again; the
+        result's ``lens`` holds it. The assumptions say what was found either way.
 
     Raises
     ------
@@ -1015,6 +1211,14 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
             hood_source = "not detected"
     finder = RoadLineFinder((w, h), lens, hood)
     analyses = [finder.analyse(f) for f in frames]
+    if calibration is None and lens_from_road:
+        found = estimate_lens([list(a.line_points) for a in analyses if a.vp.ok], (w, h))
+        if found is not None and found.applied:
+            return _with_estimated_lens(found, frames, focal_px, lane_width_m, look_ahead_m, dash_m, gap_m,
+                                        hood_row_px, estimate_roll)
+        assumptions.append("lens not given and taken as distortion-free: " + (
+            "no lines long enough to measure it" if found is None else
+            f"the lines cannot measure it ({found.reason}; kappa {found.kappa:+.3f})"))
 
     # frames with a vanishing point on a straight road, consistent with the others
     rejected: list[tuple[int, str]] = []
@@ -1095,7 +1299,9 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     ego_both = len(ego)
 
     # focal length and principal point
-    if calibration is not None:
+    if calibration is not None and calibration.estimated:
+        assumptions.append(f"the lens was estimated ({calibration.estimated}): its focal length is not used")
+    if calibration is not None and not calibration.estimated:
         K = calibration.camera_matrix
         fx, fy, pp = float(K[0, 0]), float(K[1, 1]), np.array([K[0, 2], K[1, 2]], np.float64)
         focal_source = "calibration"
@@ -1107,7 +1313,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         fy = float(focal_px) if fx is None else fy * float(focal_px) / fx
         fx = float(focal_px)
         focal_source = "given"
-    if calibration is None:
+    if calibration is None or calibration.estimated:
         assumptions.append("principal point at the image centre")
     pp_u, pp_v = basis.to_uv(pp)
 
@@ -1260,6 +1466,72 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         confidence=float(round(conf, 4)),
         assumptions=tuple(assumptions), frames_used=tuple(used), frames_rejected=tuple(rejected),
         frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, vps)))
+
+
+def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px, lane_width_m, look_ahead_m,
+                         dash_m, gap_m, hood_row_px, estimate_roll) -> RoadGeometry:
+    """Return the geometry of ``frames`` undistorted with the lens ``found`` from their lines.
+
+    Undistorting with the frame's own camera matrix pushes the periphery out of the frame, and
+    with it the near dashes, the longest: so the dash period is also measured in the raw frames
+    (where the far dashes, near the centre, are barely distorted), and the focal length it gives
+    is the one used when the undistorted frames show too few dashes to give one themselves.
+    """
+    h, w = frames[0].shape[:2]
+    fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
+    common = dict(lane_width_m=lane_width_m, look_ahead_m=look_ahead_m, dash_m=dash_m, gap_m=gap_m,
+                  hood_row_px=hood_row_px, estimate_roll=estimate_roll, lens_from_road=False)
+    cal = found.calibration((w, h), fa)
+    geo = estimate_geometry(frames, cal, focal_px, **common)
+    raw_note = ""
+    if focal_px is None and not geo.scale_source.startswith("dash period"):
+        # the dashes on a larger canvas: the frames undistorted with what they push out kept
+        pad = (int(round(LENS_CANVAS_PAD * w)), int(round(LENS_CANVAS_PAD * h)))
+        grid, _ = Lens(cal, (w, h)).undistort_maps(pad=pad, m1type=cv2.CV_32FC2)
+        if found.lam < 0:   # past the model's fold the map turns back: nothing there
+            cw, ch = w + 2 * pad[0], h + 2 * pad[1]
+            yy, xx = np.mgrid[0:ch, 0:cw]
+            grid[np.hypot(xx - cw / 2, yy - ch / 2) > 1 / math.sqrt(-3 * found.lam)] = -1
+        wide = [cv2.remap(f, grid, None, cv2.INTER_LINEAR) for f in frames]
+        try:
+            canvas = estimate_geometry(wide, None, None, **(common | {"hood_row_px": None}))
+        except GeometryError:
+            canvas = None
+        if canvas is not None and canvas.focal_source == "dash period and lane width":
+            again = estimate_geometry(frames, cal, canvas.focal_px, **common)
+            # the dash period is measured: not the focal length's 0.9 of the confidence
+            geo = _replace(again, focal_source="dash period and lane width",
+                           confidence=round(min(1.0, again.confidence / 0.9), 4),
+                           scale_source=f"dash period of the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % "
+                                        f"larger each side ({canvas.scale_source[len('dash period '):].strip('()')}; "
+                                        f"focal {canvas.focal_px:.0f} px)")
+            raw_note = (f"undistortion pushes the near dashes out of the frame: the dash period was measured on "
+                        f"the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % larger each side "
+                        f"(focal length {canvas.focal_px:.0f} px)")
+    if focal_px is None and not geo.scale_source.startswith("dash period"):
+        try:
+            raw = estimate_geometry(frames, None, None, **common)
+        except GeometryError:
+            raw = None
+        if raw is not None and raw.focal_source == "dash period and lane width":
+            again = estimate_geometry(frames, cal, raw.focal_px, **common)
+            # the raw frames' dashes are measured through the lens (4 % short on the synthetic
+            # 90 deg camera with k1 = -0.25): a scale not to be trusted
+            geo = _replace(again, focal_source="dash period of the raw frames and lane width",
+                           confidence=round(again.confidence * RAW_DASH_CONFIDENCE, 4),
+                           scale_source=f"dash period of the raw frames (focal {raw.focal_px:.0f} px) and lane "
+                                        "width: the undistorted frames show too few dashes")
+            raw_note = (f"the undistorted frames show too few dashes: the focal length, {raw.focal_px:.0f} px, "
+                        "is the one the dash period gives in the raw frames, through the lens: the scale "
+                        "along the road may be a few % off and is not to be trusted")
+    f = geo.focal_px or fa
+    lens = found.calibration((w, h), f)
+    note = (f"lens not given: its radial distortion was estimated from the bend of {found.lines} lines in "
+            f"{found.frames} frames (r_d = r_u (1 + lam r_u^2), lam {found.lam:.3g} px^-2: "
+            f"{100 * found.kappa:+.1f} % at the half-diagonal; k1 {lens.dist_coeffs[0]:+.3f} at focal {f:.0f} px), "
+            f"their bow {found.bend_px:.2f} px -> {found.residual_bend_px:.2f} px; the frames are undistorted with it")
+    return _replace(geo, lens=lens, assumptions=(note,) + ((raw_note,) if raw_note else ()) + tuple(
+        a for a in geo.assumptions if not a.startswith("the lens was estimated")))
 
 
 def _no_frame_message(rejected: list[tuple[int, str]], n: int) -> str:

@@ -502,6 +502,9 @@ class GeometryOptions:
         for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
         too little confidence for a new estimate to be used).
     accept_low_confidence : use an estimate below ``geometry.LOW_CONFIDENCE`` (refused otherwise).
+    lens_from_road : with no calibration, let the estimate measure the lens from the lane lines'
+        bend (``geometry.estimate_lens``); the run then undistorts with it
+        (``geometry_calibration``).
     """
 
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
@@ -514,6 +517,7 @@ class GeometryOptions:
     check_every_s: float = 0.5
     drift_checks: int = 5
     accept_low_confidence: bool = False
+    lens_from_road: bool = True
 
     def __post_init__(self):
         if not (self.seconds > 0 and self.max_frames >= 1 and self.check_every_s > 0
@@ -526,7 +530,8 @@ class GeometryOptions:
         """Return ``geometry.estimate_geometry`` of ``frames`` with these options."""
         return geometry.estimate_geometry(frames, calibration, focal_px=self.focal_px,
                                           lane_width_m=self.lane_width_m, look_ahead_m=self.look_ahead_m,
-                                          dash_m=self.dash_m, gap_m=self.gap_m, hood_row_px=hood_row_px)
+                                          dash_m=self.dash_m, gap_m=self.gap_m, hood_row_px=hood_row_px,
+                                          lens_from_road=self.lens_from_road)
 
 
 def sample_frames(source: str | os.PathLike, seconds: float | None = None, max_frames: int = 50,
@@ -601,6 +606,13 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
             f"({'; '.join(geo.assumptions)}); give {' or '.join(fixes)}, or pass "
             "--accept-low-confidence to use it anyway")
     return geo
+
+
+def geometry_calibration(calibration: Calibration | None, geo: RoadGeometry) -> Calibration | None:
+    """Return the calibration to run with ``geo``: the one given, else the lens the estimate
+    measured from the road's lines (``RoadGeometry.lens``; its points are for frames undistorted
+    with it), else None."""
+    return calibration if calibration is not None else geo.lens
 
 
 def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
@@ -791,6 +803,7 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     if auto_geometry is not None:
         # before the cluster: a failed estimate stops the run before any worker starts
         geo = estimate_road_geometry(in_path, calibration, auto_geometry, start_s)
+        calibration = geometry_calibration(calibration, geo)
         if on_geometry is not None:
             on_geometry(geo)
     fps = io.video_info(in_path).fps if geo is not None else None
@@ -1162,7 +1175,9 @@ def _settings(benchmark: str, root: Path, config: PipelineConfig, calibration_fi
               auto_geometry: GeometryOptions | None) -> dict:
     return {"format": PREDICT_FORMAT, "benchmark": benchmark, "dataset_root": str(root.resolve()),
             "calibration": calibration_file, "config": to_dict(config),
-            "auto_geometry": to_dict(auto_geometry) if auto_geometry is not None else None}
+            # predict estimates no lens (``_sequence_geometry``): the option is not a setting of its runs
+            "auto_geometry": ({k: v for k, v in to_dict(auto_geometry).items() if k != "lens_from_road"}
+                              if auto_geometry is not None else None)}
 
 
 def _check_settings(out: Path, settings: dict) -> bool:
@@ -1190,7 +1205,8 @@ def _sequence_geometry(work: Sequence[FrameWork], root: Path, calibration: Calib
             frames.append(io.read_image(w.image))
         except InputError:
             continue
-    return checked_geometry(frames, root / work[0].sequence, calibration, options)
+    # one calibration serves every sequence's frames: no lens is estimated per sequence
+    return checked_geometry(frames, root / work[0].sequence, calibration, replace(options, lens_from_road=False))
 
 
 def _assemble_tusimple(work: Sequence[FrameWork], out: Path, inputs: Sequence[Path]) -> Path:

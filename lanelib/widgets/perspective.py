@@ -257,7 +257,9 @@ class PerspectiveTuner(Tuner):
         opts = replace(self.geometry_options, **options)
         label, path = self.image, self.images[self.image]
         calibration = self._calibration_for(label)
-        trial = replace(opts, accept_low_confidence=True)  # a low confidence is judged below
+        # a low confidence is judged below; the tuner's frames go through its own calibration
+        # (or none), so no lens is estimated from the road for points it could not undistort by
+        trial = replace(opts, accept_low_confidence=True, lens_from_road=False)
         if self.is_video:
             start = 0.0 if start_s is None else float(start_s)
             geo = runs.estimate_road_geometry(path, calibration, trial, start_s)
