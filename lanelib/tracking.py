@@ -241,7 +241,6 @@ class LaneTracker:
         h = pipeline.size[1]
         self._bottom = float(h - 1)
         self._rows = np.linspace(0.0, h - 1.0, self.checks.check_rows)
-        self._frame_mask = None  # this frame's whole-view mask, made on demand (``update``)
         self._xm = pipeline.perspective.xm_per_px
         self._ym = pipeline.perspective.ym_per_px
         self.reset()
@@ -389,8 +388,7 @@ class LaneTracker:
             return det_images["fallback binary"]
 
         ran: list[str] = []  # the fallback searches this frame needed (``retries``)
-        self._frame_mask = mask
-        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top))
+        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top, mask))
         first = search
         looked = [search]  # every search this frame ran: did any see a line at all (step 5)?
 
@@ -402,7 +400,7 @@ class LaneTracker:
                 return
             looked.append(retry)
             checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry),
-                                           retry.top_px))
+                                           retry.top_px, mask))
             if sum(c is not None for c in checked[1:3]) > sum(c is not None for c in best[1:3]):
                 best = checked
                 if note:
@@ -431,7 +429,6 @@ class LaneTracker:
                 bird = det_images["birdseye"] = pipe.birdseye(raw)
             better(pipe.edge_search(bird, edgeless), "asphalt edge")
         self.retries = tuple(ran)
-        self._frame_mask = None  # the frame's images are not kept past it
         search, left, right, why, failed = best
         images = det_images if keep_images else {}
         if keep_images and search is not first and "fallback binary" in images:
@@ -492,12 +489,14 @@ class LaneTracker:
         """
         return self._check(left, right, track, band_px)[:3]
 
-    def _check(self, left: LineFit, right: LineFit, track, band_px, top_px: int = 0
+    def _check(self, left: LineFit, right: LineFit, track, band_px, top_px: int = 0, mask=None
                ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
         """Return ``check``'s answer and whether a check rejected a found line.
 
         The track checks and the pair's compare the lines over the look-ahead's rows, from
-        ``top_px`` down (``lanes.lookahead_top_px``).
+        ``top_px`` down (``lanes.lookahead_top_px``). ``mask``: the frame's whole view under the
+        fallback masks' rule, made when first called (``update``), for the grade pair check;
+        None skips that check.
         """
         cfg = self.config
         rows = self._rows if not top_px else np.linspace(float(top_px), self._bottom, len(self._rows))
@@ -558,7 +557,7 @@ class LaneTracker:
                                          width_reference_px=self._width_reference(track, rows))
             graded_check = self.config.grade_pair_check and track is not None
             if graded_check and problem.startswith("lines not parallel"):
-                graded = self._graded_reference(kept["left"], kept["right"], rows, top_px)
+                graded = self._graded_reference(kept["left"], kept["right"], rows, top_px, mask)
                 if graded is not None and not lanes.pair_problem(
                         kept["left"], kept["right"], self.pipeline.size[1], self._xm, self._ym,
                         self.checks, top_px, width_reference_px=graded):
@@ -673,15 +672,15 @@ class LaneTracker:
         return fit is not None and fit.gap_px * self._ym <= self.config.max_gap_m
 
     def _graded_reference(self, left: LineFit, right: LineFit, rows: np.ndarray,
-                          top_px: int) -> np.ndarray | None:
+                          top_px: int, mask) -> np.ndarray | None:
         """Return the lane's width (px) on ``rows`` as the road ahead's grade makes it in the flat
         view (``TrackerConfig.grade_pair_check``): the pair's width at the car times the view's
         scale across the road read from a double line's stripes along either line
         (``_stripe_spread``, a straight line in the distance from the bottom row: a grade that
-        changes at the car), or None when no stripes tell it (or no mask was made for this
-        frame). Costs a threshold of the whole view (shared with the fallback searches) and a
-        pass over its pixels near the line, on frames whose pair failed against the track only."""
-        mask = self._frame_mask
+        changes at the car), or None when no stripes tell it (or no ``mask``, the frame's
+        whole-view mask made on demand by ``update``). Costs a threshold of the whole view (shared
+        with the fallback searches) and a pass over its pixels near the line, on frames whose pair
+        failed against the track only."""
         if mask is None:
             return None
         for fit in (left, right):
