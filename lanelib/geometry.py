@@ -122,7 +122,7 @@ points that disagree between frames), road not straight.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace as _replace
+from dataclasses import dataclass, field, replace
 from typing import Iterable
 
 import cv2
@@ -530,14 +530,18 @@ def _follow_up(start, up: np.ndarray) -> list[int]:
     return sorted(seen)
 
 
+def _along_across(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return (unit direction pointing down, along, across) of points ``q`` about their centroid:
+    the line's straight fit (SVD) and each point's coordinates along it and across it."""
+    _, _, vt = np.linalg.svd(q, full_matrices=False)
+    d = vt[0] if vt[0, 1] >= 0 else -vt[0]
+    return d, q @ d, q @ np.array([-d[1], d[0]])
+
+
 def _fit_line(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """Return (centroid, unit direction pointing down, bow px) of points along one line."""
     c = np.array([x.mean(), y.mean()])
-    pts = np.column_stack([x, y]) - c
-    _, _, vt = np.linalg.svd(pts, full_matrices=False)
-    d = vt[0] if vt[0, 1] >= 0 else -vt[0]
-    along = pts @ d
-    across = pts @ np.array([-d[1], d[0]])
+    d, along, across = _along_across(np.column_stack([x, y]) - c)
     span = along.max() - along.min()
     bow = 0.0
     if span > 0 and len(along) >= 5:
@@ -792,9 +796,8 @@ class LensEstimate:
     needed to measure it). ``kappa`` is lam times the squared half-diagonal R (dimensionless: the
     relative shift of a point R from the centre). ``bend_px`` is the lines' mean bow (px,
     weighted by their points) through no model and ``residual_bend_px`` through this one;
-    ``frames``, ``lines`` how many gave it; ``frame_kappas`` each frame's own kappa and
-    ``frame_z`` how many of their own standard errors each lies from ``kappa``; ``kappa_se`` its
-    standard error (from the points' scatter about each line's parabola).
+    ``frames``, ``lines`` how many gave it; ``frame_kappas`` each frame's own kappa; ``kappa_se``
+    kappa's standard error (from the points' scatter about each line's parabola).
     ``applied`` says whether it is clearly non-zero and well determined (``reason`` why not).
     """
 
@@ -806,7 +809,6 @@ class LensEstimate:
     frames: int
     lines: int
     frame_kappas: tuple[float, ...]
-    frame_z: tuple[float, ...]
     applied: bool
     reason: str
 
@@ -862,11 +864,7 @@ def _signed_bows(points: np.ndarray, line_id: np.ndarray, n_lines: int) -> tuple
         p = points[(line_id == i) & ok]
         if len(p) < 10:
             continue
-        c = p.mean(0)
-        q = p - c
-        _, _, vt = np.linalg.svd(q, full_matrices=False)
-        d = vt[0] if vt[0, 1] >= 0 else -vt[0]
-        along, across = q @ d, q @ np.array([-d[1], d[0]])
+        _, along, across = _along_across(p - p.mean(0))
         span = max(float(np.ptp(along)), 1e-9)
         coef = np.polyfit(along / span, across, 2)
         bows[i] = coef[0] * 0.25
@@ -914,8 +912,7 @@ def estimate_lens(lines_by_frame: list[list[np.ndarray]], size_px: tuple[int, in
     b0, rms0 = bows(0.0)
     weight = cnt / (11.25 * np.maximum(rms0, 0.1) ** 2)     # 1 / var(bow) of a parabola's fit
     grid = np.arange(LENS_KAPPA_RANGE[0], LENS_KAPPA_RANGE[1] + 1e-9, LENS_KAPPA_STEP)
-    chi = np.array([weight * np.nan_to_num(bows(k)[0], nan=0.0) ** 2 for k in grid])   # (grid, lines)
-    chi[:, ~np.isfinite(weight)] = 0.0
+    chi = np.array([weight * bows(k)[0] ** 2 for k in grid])   # (grid, lines)
     step = float(grid[1] - grid[0])
 
     def best(total: np.ndarray) -> tuple[float, float]:
@@ -930,11 +927,9 @@ def estimate_lens(lines_by_frame: list[list[np.ndarray]], size_px: tuple[int, in
 
     kappa, se = best(chi.sum(1))
     frames = np.unique(fid)
-    per_frame = [best(chi[:, fid == f].sum(1)) for f in frames]
-    frame_kappas = tuple(k for k, _ in per_frame)
-    frame_z = tuple(abs(k - kappa) / e for k, e in per_frame)
+    frame_kappas = tuple(best(chi[:, fid == f].sum(1))[0] for f in frames)
     bend = float(np.sqrt(np.average(b0 ** 2, weights=weight)))
-    rest = float(np.sqrt(np.average(np.nan_to_num(bows(kappa)[0]) ** 2, weights=weight)))
+    rest = float(np.sqrt(np.average(bows(kappa)[0] ** 2, weights=weight)))
     fk = np.array(frame_kappas)
     spread = float(np.median(np.abs(fk - kappa)))
     same = float(np.mean(np.sign(fk) == np.sign(kappa)))
@@ -951,8 +946,9 @@ def estimate_lens(lines_by_frame: list[list[np.ndarray]], size_px: tuple[int, in
                   f"deviation {spread:.3f}): the bends are the road's, not the lens's")
     else:
         reason = ""
-    return LensEstimate(kappa / r2, kappa, se, bend, rest, len(frames), n_lines, frame_kappas, frame_z,
+    return LensEstimate(kappa / r2, kappa, se, bend, rest, len(frames), n_lines, frame_kappas,
                         not reason, reason)
+
 
 def detect_hood(frames: list[np.ndarray]) -> np.ndarray | None:
     """Return the hood's top row in every column (float; h where there is none) from 3+ frames of
@@ -1500,7 +1496,7 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
         if canvas is not None and canvas.focal_source == "dash period and lane width":
             again = estimate_geometry(frames, cal, canvas.focal_px, **common)
             # the dash period is measured: not the focal length's 0.9 of the confidence
-            geo = _replace(again, focal_source="dash period and lane width",
+            geo = replace(again, focal_source="dash period and lane width",
                            confidence=round(min(1.0, again.confidence / 0.9), 4),
                            scale_source=f"dash period of the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % "
                                         f"larger each side ({canvas.scale_source[len('dash period '):].strip('()')}; "
@@ -1517,7 +1513,7 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
             again = estimate_geometry(frames, cal, raw.focal_px, **common)
             # the raw frames' dashes are measured through the lens (4 % short on the synthetic
             # 90 deg camera with k1 = -0.25): a scale not to be trusted
-            geo = _replace(again, focal_source="dash period of the raw frames and lane width",
+            geo = replace(again, focal_source="dash period of the raw frames and lane width",
                            confidence=round(again.confidence * RAW_DASH_CONFIDENCE, 4),
                            scale_source=f"dash period of the raw frames (focal {raw.focal_px:.0f} px) and lane "
                                         "width: the undistorted frames show too few dashes")
@@ -1530,7 +1526,7 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
             f"{found.frames} frames (r_d = r_u (1 + lam r_u^2), lam {found.lam:.3g} px^-2: "
             f"{100 * found.kappa:+.1f} % at the half-diagonal; k1 {lens.dist_coeffs[0]:+.3f} at focal {f:.0f} px), "
             f"their bow {found.bend_px:.2f} px -> {found.residual_bend_px:.2f} px; the frames are undistorted with it")
-    return _replace(geo, lens=lens, assumptions=(note,) + ((raw_note,) if raw_note else ()) + tuple(
+    return replace(geo, lens=lens, assumptions=(note,) + ((raw_note,) if raw_note else ()) + tuple(
         a for a in geo.assumptions if not a.startswith("the lens was estimated")))
 
 
