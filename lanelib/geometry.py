@@ -1191,11 +1191,41 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
                              "estimate the geometry from frames of one camera")
     if lane_width_m <= 0 or look_ahead_m <= 0 or dash_m <= 0 or gap_m <= 0:
         raise InputError("estimate_geometry: lane_width_m, look_ahead_m, dash_m and gap_m must be positive")
-    assumptions: list[str] = []
-    finder = RoadLineFinder((w, h), lens)
-    calibration = finder.calibration
+    seen = _look(frames, lens, hood_row_px)
+    notes: tuple[str, ...] = ()
+    if seen.calibration is None and lens_from_road:
+        found = estimate_lens([list(a.line_points) for a in seen.analyses if a.vp.ok], (w, h))
+        if found is not None and found.applied:
+            return _with_estimated_lens(found, frames, seen, focal_px, lane_width_m, look_ahead_m, dash_m, gap_m,
+                                        hood_row_px, estimate_roll)
+        notes = ("lens not given and taken as distortion-free: " + (
+            "no lines long enough to measure it" if found is None else
+            f"the lines cannot measure it ({found.reason}; kappa {found.kappa:+.3f})"),)
+    return _solve(_analyse_road(seen, estimate_roll, notes), focal_px, lane_width_m, look_ahead_m, dash_m, gap_m)
 
-    # hood (from at most HOOD_MAX_FRAMES frames, evenly spread)
+
+# The estimate in three steps, so that the runs of ``_with_estimated_lens`` (the same frames with
+# other focal lengths) analyse each set of frames once: ``_look`` (the image work of every
+# frame: its mask, lines and vanishing point, and the hood), ``_analyse_road`` (what the frames
+# tell together: the frames used, the vanishing point, the roll, the ego lane, the dashes' runs
+# of paint) and ``_solve`` (what takes a focal length: the scale, the points, the confidence).
+
+@dataclass(frozen=True)
+class _Look:
+    """Every frame's analysis and the hood (``_look``)."""
+
+    size: tuple[int, int]
+    calibration: Calibration | None
+    analyses: tuple[_FrameAnalysis, ...]
+    hood: np.ndarray | None
+    hood_source: str
+
+
+def _look(frames: list[np.ndarray], lens: Lens | Calibration | None, hood_row_px: float | None) -> _Look:
+    """Return the analysis of every frame (undistorted with ``lens``) and the hood: given as
+    ``hood_row_px``, else detected from at most HOOD_MAX_FRAMES frames, evenly spread."""
+    h, w = frames[0].shape[:2]
+    finder = RoadLineFinder((w, h), lens)
     if hood_row_px is not None:
         hood = np.full(w, float(hood_row_px))
         hood_source = "given"
@@ -1206,15 +1236,46 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         if hood is None or np.min(hood[int(0.1 * w):int(0.9 * w)]) >= h - 1:
             hood_source = "not detected"
     finder = RoadLineFinder((w, h), lens, hood)
-    analyses = [finder.analyse(f) for f in frames]
-    if calibration is None and lens_from_road:
-        found = estimate_lens([list(a.line_points) for a in analyses if a.vp.ok], (w, h))
-        if found is not None and found.applied:
-            return _with_estimated_lens(found, frames, focal_px, lane_width_m, look_ahead_m, dash_m, gap_m,
-                                        hood_row_px, estimate_roll)
-        assumptions.append("lens not given and taken as distortion-free: " + (
-            "no lines long enough to measure it" if found is None else
-            f"the lines cannot measure it ({found.reason}; kappa {found.kappa:+.3f})"))
+    return _Look((w, h), finder.calibration, tuple(finder.analyse(f) for f in frames), hood, hood_source)
+
+
+@dataclass(frozen=True)
+class _Road:
+    """What a set of frames tells by itself (``_analyse_road``), for ``_solve``."""
+
+    look: _Look
+    used: tuple[int, ...]
+    rejected: tuple[tuple[int, str], ...]
+    vp: np.ndarray
+    vps: np.ndarray              # the used frames' own vanishing points
+    scatter_y: float
+    roll: float
+    roll_source: str
+    basis: _Basis
+    horizon_slope: float
+    horizon_row: float
+    ego: dict[int, tuple[int, int, float]]
+    r_k: float
+    pp_uv: np.ndarray            # the principal point about the vanishing point (u, v)
+    hood: np.ndarray
+    hood_row: float
+    hood_source: str
+    dashes: _DashRuns | None
+    assumptions: tuple[str, ...]
+
+
+def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ()) -> _Road:
+    """Return what the frames of ``look`` tell together (``_Road``), their assumptions after ``notes``.
+
+    Raises
+    ------
+    GeometryError
+        If no frame gives a consistent vanishing point or shows the ego lane.
+    """
+    w, h = look.size
+    analyses, calibration = look.analyses, look.calibration
+    hood, hood_source = look.hood, look.hood_source
+    assumptions = list(notes)
 
     # frames with a vanishing point on a straight road, consistent with the others
     rejected: list[tuple[int, str]] = []
@@ -1225,7 +1286,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         else:
             rejected.append((i, a.vp.reason))
     if not cand:
-        raise GeometryError(_no_frame_message(rejected, len(frames)))
+        raise GeometryError(_no_frame_message(rejected, len(analyses)))
     pts = np.array([analyses[i].vp.point_px for i in cand])
     tol_y, tol_x = max(3.0, 0.01 * h), VP_X_TOLERANCE * w
     med = np.median(pts, axis=0)
@@ -1243,7 +1304,7 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         else:
             used.append(i)
     if not used:
-        raise GeometryError(_no_frame_message(rejected, len(frames)))
+        raise GeometryError(_no_frame_message(rejected, len(analyses)))
     rejected.sort()
     weights = np.array([analyses[i].vp.inlier_segments for i in used], np.float64)
     vps = np.array([analyses[i].vp.point_px for i in used])
@@ -1292,36 +1353,17 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
                             "down below the vanishing point; give frames where the car drives between two "
                             "lane lines (is the video rotated?)")
     r_k = float(np.median([e[2] for e in ego.values()]))
-    ego_both = len(ego)
 
-    # focal length and principal point
+    # the principal point
     if calibration is not None and calibration.estimated:
         assumptions.append(f"the lens was estimated ({calibration.estimated}): its focal length is not used")
     if calibration is not None and not calibration.estimated:
         K = calibration.camera_matrix
-        fx, fy, pp = float(K[0, 0]), float(K[1, 1]), np.array([K[0, 2], K[1, 2]], np.float64)
-        focal_source = "calibration"
+        pp = np.array([K[0, 2], K[1, 2]], np.float64)
     else:
-        fx = fy = None
         pp = np.array([w / 2, h / 2])
-        focal_source = "unknown"
-    if focal_px is not None:
-        fy = float(focal_px) if fx is None else fy * float(focal_px) / fx
-        fx = float(focal_px)
-        focal_source = "given"
     if calibration is None or calibration.estimated:
         assumptions.append("principal point at the image centre")
-    pp_u, pp_v = basis.to_uv(pp)
-
-    def angles(f_x: float, f_y: float) -> tuple[float, float]:
-        """Return (pitch, yaw) in radians for focal lengths f_x, f_y."""
-        theta = math.atan2(pp_v, f_y)
-        psi = math.atan(pp_u * math.cos(theta) / f_x)
-        return theta, psi
-
-    def c_from_focal(f_x: float, f_y: float) -> float:
-        theta, psi = angles(f_x, f_y)
-        return f_x * lane_width_m / (r_k * math.cos(theta) * math.cos(psi) ** 2)
 
     # hood row and the bottom of the road
     if hood_source == "not detected":
@@ -1335,13 +1377,56 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
         lo, hi = int(0.1 * w), int(0.9 * w)
         hood_row = float(np.min(hood[lo:hi]))
 
+    return _Road(look, tuple(used), tuple(rejected), vp, vps, scatter_y, roll, roll_source, basis, slope, horizon_row, ego,
+                 r_k, basis.to_uv(pp), hood, hood_row, hood_source,
+                 _dash_runs_of(analyses, used, ego, hood, roll, (w, h)), tuple(assumptions))
+
+
+def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_m: float, dash_m: float,
+           gap_m: float) -> RoadGeometry:
+    """Return the geometry of ``road`` with these focal length (None: from the calibration, else
+    the dashes, else assumed), lane width, look-ahead and dashes (``estimate_geometry``).
+
+    Raises
+    ------
+    GeometryError
+        If no road is seen above the hood, or the look-ahead is nearer than the road seen.
+    """
+    w, h = road.look.size
+    calibration, analyses = road.look.calibration, road.look.analyses
+    used, ego, roll, basis, r_k, hood = road.used, road.ego, road.roll, road.basis, road.r_k, road.hood
+    assumptions = list(road.assumptions)
+    # the focal length
+    if calibration is not None and not calibration.estimated:
+        K = calibration.camera_matrix
+        fx, fy = float(K[0, 0]), float(K[1, 1])
+        focal_source = "calibration"
+    else:
+        fx = fy = None
+        focal_source = "unknown"
+    if focal_px is not None:
+        fy = float(focal_px) if fx is None else fy * float(focal_px) / fx
+        fx = float(focal_px)
+        focal_source = "given"
+    pp_u, pp_v = road.pp_uv
+
+    def angles(f_x: float, f_y: float) -> tuple[float, float]:
+        """Return (pitch, yaw) in radians for focal lengths f_x, f_y."""
+        theta = math.atan2(pp_v, f_y)
+        psi = math.atan(pp_u * math.cos(theta) / f_x)
+        return theta, psi
+
+    def c_from_focal(f_x: float, f_y: float) -> float:
+        theta, psi = angles(f_x, f_y)
+        return f_x * lane_width_m / (r_k * math.cos(theta) * math.cos(psi) ** 2)
+
     # dash period -> C
     c_focal = c_from_focal(fx, fy) if fx is not None else None
     if c_focal is not None:
         c_range = (c_focal / DASH_FOCAL_RANGE, c_focal * DASH_FOCAL_RANGE)
     else:
         c_range = tuple(f * w * lane_width_m / r_k for f in FOCAL_RANGE_W)
-    c_dash, dash_fit = _dash_scale(analyses, used, ego, hood, roll, dash_m, gap_m, (w, h), c_range)
+    c_dash, dash_fit = _dash_scale(road.dashes, dash_m, gap_m, c_range)
     scale_conf = 1.0
     if c_dash is not None:
         f_dash = c_dash * r_k / lane_width_m
@@ -1441,44 +1526,47 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
     conf = min(1.0, n_used / MIN_GOOD_FRAMES)
     # how well the frames pin the vanishing point: the standard error of their mean row (a car
     # that pitches over bumps scatters each frame's point by a few px; many frames still pin it)
-    std_err_y = scatter_y / math.sqrt(n_used) if n_used > 1 else float("nan")
+    std_err_y = road.scatter_y / math.sqrt(n_used) if n_used > 1 else float("nan")
     if n_used > 1 and std_err_y > 1.0:
         conf *= math.exp(-((std_err_y - 1.0) / 3.0) ** 2)
     conf *= scale_conf
-    conf *= min(1.0, ego_both / MIN_GOOD_FRAMES)
-    if hood_source.startswith("not detected"):
+    conf *= min(1.0, len(ego) / MIN_GOOD_FRAMES)
+    if road.hood_source.startswith("not detected"):
         conf *= 0.9
     if implausible:
         conf *= IMPLAUSIBLE_CONFIDENCE
     conf *= parallel_conf
     return RoadGeometry(
-        size_px=(w, h), vanishing_point_px=(float(vp[0]), float(vp[1])), horizon_row_px=horizon_row,
-        horizon_slope=slope, roll_deg=roll, roll_source=roll_source, pitch_deg=pitch, yaw_deg=yaw,
+        size_px=(w, h), vanishing_point_px=(float(road.vp[0]), float(road.vp[1])),
+        horizon_row_px=road.horizon_row,
+        horizon_slope=road.horizon_slope, roll_deg=roll, roll_source=road.roll_source, pitch_deg=pitch, yaw_deg=yaw,
         camera_height_m=height, focal_px=fx, focal_source=focal_source if fx is not None else "unknown",
-        hood_row_px=hood_row, hood_source=hood_source, src_px=src, dst_px=dst,
+        hood_row_px=road.hood_row, hood_source=road.hood_source, src_px=src, dst_px=dst,
         lane_width_m=float(lane_width_m), look_ahead_m=float(look_ahead_m), near_m=float(near_m),
         visible_length_m=float(visible), xm_per_px=xm, ym_per_px=ym, scale_source=scale_source,
         inverse_depth_scale_px_m=float(C), lane_width_ratio=r_k, dash_fit=float(dash_fit),
         confidence=float(round(conf, 4)),
-        assumptions=tuple(assumptions), frames_used=tuple(used), frames_rejected=tuple(rejected),
-        frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, vps)))
+        assumptions=tuple(assumptions), frames_used=used, frames_rejected=road.rejected,
+        frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, road.vps)))
 
 
-def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px, lane_width_m, look_ahead_m,
-                         dash_m, gap_m, hood_row_px, estimate_roll) -> RoadGeometry:
+def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], raw_look: _Look, focal_px, lane_width_m,
+                         look_ahead_m, dash_m, gap_m, hood_row_px, estimate_roll) -> RoadGeometry:
     """Return the geometry of ``frames`` undistorted with the lens ``found`` from their lines.
 
     Undistorting with the frame's own camera matrix pushes the periphery out of the frame, and
     with it the near dashes, the longest: so the dash period is also measured in the raw frames
     (where the far dashes, near the centre, are barely distorted), and the focal length it gives
     is the one used when the undistorted frames show too few dashes to give one themselves.
+    Each set of frames (undistorted, on the canvas, raw: ``raw_look``, the frames' analysis
+    without a lens) is analysed once and solved with each focal length.
     """
     h, w = frames[0].shape[:2]
     fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
-    common = dict(lane_width_m=lane_width_m, look_ahead_m=look_ahead_m, dash_m=dash_m, gap_m=gap_m,
-                  hood_row_px=hood_row_px, estimate_roll=estimate_roll, lens_from_road=False)
+    scale = dict(lane_width_m=lane_width_m, look_ahead_m=look_ahead_m, dash_m=dash_m, gap_m=gap_m)
     cal = found.calibration((w, h), fa)
-    geo = estimate_geometry(frames, cal, focal_px, **common)
+    road = _analyse_road(_look(frames, cal, hood_row_px), estimate_roll)
+    geo = _solve(road, focal_px, **scale)
     raw_note = ""
     if focal_px is None and not geo.scale_source.startswith("dash period"):
         # the dashes on a larger canvas: the frames undistorted with what they push out kept
@@ -1490,11 +1578,11 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
             grid[np.hypot(xx - cw / 2, yy - ch / 2) > 1 / math.sqrt(-3 * found.lam)] = -1
         wide = [cv2.remap(f, grid, None, cv2.INTER_LINEAR) for f in frames]
         try:
-            canvas = estimate_geometry(wide, None, None, **(common | {"hood_row_px": None}))
+            canvas = _solve(_analyse_road(_look(wide, None, None), estimate_roll), None, **scale)
         except GeometryError:
             canvas = None
         if canvas is not None and canvas.focal_source == "dash period and lane width":
-            again = estimate_geometry(frames, cal, canvas.focal_px, **common)
+            again = _solve(road, canvas.focal_px, **scale)
             # the dash period is measured: not the focal length's 0.9 of the confidence
             geo = replace(again, focal_source="dash period and lane width",
                            confidence=round(min(1.0, again.confidence / 0.9), 4),
@@ -1506,11 +1594,11 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
                         f"(focal length {canvas.focal_px:.0f} px)")
     if focal_px is None and not geo.scale_source.startswith("dash period"):
         try:
-            raw = estimate_geometry(frames, None, None, **common)
+            raw = _solve(_analyse_road(raw_look, estimate_roll), None, **scale)
         except GeometryError:
             raw = None
         if raw is not None and raw.focal_source == "dash period and lane width":
-            again = estimate_geometry(frames, cal, raw.focal_px, **common)
+            again = _solve(road, raw.focal_px, **scale)
             # the raw frames' dashes are measured through the lens (4 % short on the synthetic
             # 90 deg camera with k1 = -0.25): a scale not to be trusted
             geo = replace(again, focal_source="dash period of the raw frames and lane width",
@@ -1528,7 +1616,6 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], focal_px
             f"their bow {found.bend_px:.2f} px -> {found.residual_bend_px:.2f} px; the frames are undistorted with it")
     return replace(geo, lens=lens, assumptions=(note,) + ((raw_note,) if raw_note else ()) + tuple(
         a for a in geo.assumptions if not a.startswith("the lens was estimated")))
-
 
 def _no_frame_message(rejected: list[tuple[int, str]], n: int) -> str:
     """Return the error of a run where no frame gave a consistent vanishing point."""
@@ -1590,12 +1677,10 @@ def _bottom_v(basis: _Basis, ks: tuple[float, float], hood: np.ndarray, margin: 
     return None
 
 
-def _dash_runs(on: np.ndarray, q0: float, dq: float, max_len_q: float,
-               v_resolved: float) -> tuple[np.ndarray, np.ndarray]:
-    """Return the (centres, lengths) in q of the dashes in an on/off signal sampled at
-    q0 + dq * i (0 at both ends): runs of paint, joined across gaps under 3 px, at least 2 px
-    long, wholly inside the signal, no longer than ``max_len_q``, and at least ``v_resolved`` px
-    below the horizon (nearer it the dashes blur together)."""
+def _dash_runs(on: np.ndarray, q0: float, dq: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the (centres, lengths) in q of the runs of paint in an on/off signal sampled at
+    q0 + dq * i (0 at both ends), joined across gaps under 3 px, at least 2 px long and wholly
+    inside the signal (``_dash_scale`` keeps those that may be dashes)."""
     edges = np.diff(on.astype(np.int8))
     starts, ends = np.flatnonzero(edges == 1) + 1, np.flatnonzero(edges == -1) + 1   # [start, end)
     if len(starts) == 0:
@@ -1610,7 +1695,7 @@ def _dash_runs(on: np.ndarray, q0: float, dq: float, max_len_q: float,
     inner[-1] &= ends[-1] < len(on) - 1
     length_px = (qe - qs) / (qs * qe)
     centre = (qs + qe) / 2
-    keep = inner & (length_px >= 2.0) & (qe - qs <= max_len_q) & (1.0 / centre >= v_resolved)
+    keep = inner & (length_px >= 2.0)
     return centre[keep], (qe - qs)[keep]
 
 
@@ -1675,29 +1760,23 @@ def _dash_fit_curve(pairs: np.ndarray, nu: np.ndarray) -> np.ndarray:
     return np.cos(2 * np.pi * np.multiply.outer(nu, d)) @ (weight / weight.sum())
 
 
-def _dash_scale(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np.ndarray, roll: float,
-                dash_m: float, gap_m: float, size: tuple[int, int],
-                c_range: tuple[float, float]) -> tuple[float | None, float]:
-    """Return (C from the dash period, how well the dashes fit it), or (None, fit) without a
-    clear dash period; C is searched within ``c_range``.
+@dataclass(frozen=True)
+class _DashRuns:
+    """The runs of paint along the lane lines whose dashes may measure the dash period
+    (``_dash_runs_of``): per line its (frame, line) and its runs' centres and lengths in q = 1/v
+    (``_dash_runs``); ``span`` the stretch of q the lines were sampled over."""
 
-    The lane lines of the frames that show the ego lane (``_dash_lines``) are sampled along
-    their length at even steps of q = 1/v (v: px below the frame's horizon), where s = C q + s0
-    makes a dash pattern periodic; the runs of paint that end inside the sampled stretch are its
-    dashes (``_dash_runs``). Their lengths give a + b q^2 (``_dash_length_model``): a first
-    C = dash_m / a, and b, what blur adds to a run. A run is a dash when its length less b q^2
-    is within DASH_LENGTH_WINDOW of a: far away a raised marker in a gap or a fleck blurs to
-    half a dash's length in q, and a marker beside a dash merges with it; either would put a
-    "dash" half a period off. For a period P in q, the fit is the weighted mean over all pairs
-    of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair lies a whole number of
-    periods apart (``_dash_fit_curve``); the period is the best fit within a factor
-    DASH_LENGTH_RANGE below and DASH_LENGTH_UP above what the lengths say (which rules out the
-    harmonic at twice C), used from a fit of DASH_MIN_FIT and only when it holds without any one
-    frame (or, from one frame, any one line): each such sub-sample's best period within
-    DASH_CONSISTENCY of it and fitting it from DASH_MIN_FIT; C = (dash_m + gap_m) / P.
-    """
+    span: float
+    runs: tuple[tuple[tuple[int, int], np.ndarray, np.ndarray], ...]
+
+
+def _dash_runs_of(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np.ndarray, roll: float,
+                  size: tuple[int, int]) -> _DashRuns | None:
+    """Return the runs of paint along the lane lines of the frames that show the ego lane
+    (``_dash_lines``), sampled along their length at even steps of q = 1/v (v: px below the
+    frame's horizon) above the hood (``_dash_runs``), or None when no line reaches far enough
+    below the horizon; ``_dash_scale`` finds the dash period in them."""
     w, h = size
-    period_m = dash_m + gap_m
     v_min = max(6.0, DASH_V_MIN_FRACTION * h)
     signals_meta = []
     v_max = 0.0
@@ -1711,7 +1790,7 @@ def _dash_scale(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np
         v_max = max(v_max, v_line)
         signals_meta.append((i, j, fb, c, d, v_line))
     if not signals_meta:
-        return None, 0.0
+        return None
     q_lo, q_hi = 1.0 / v_max, 1.0 / v_min
     dq = 0.5 / v_max ** 2
     n = int((q_hi - q_lo) / dq) + 1
@@ -1720,13 +1799,6 @@ def _dash_scale(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np
         dq = (q_hi - q_lo) / (n - 1)
     q = q_lo + dq * np.arange(n)
     v = 1.0 / q
-    span = q_hi - q_lo
-    lo = max(DASH_MIN_PERIODS / span, c_range[0] / period_m)
-    hi = c_range[1] / period_m
-    if hi <= lo:
-        return None, 0.0
-    # nearer the horizon than this, a gap spans under 3 px for the smallest C searched
-    v_resolved = math.sqrt(3.0 * c_range[0] / gap_m)
     kernel = np.ones((1, 5), np.uint8)
     dilated = {}
     runs = []
@@ -1747,7 +1819,44 @@ def _dash_scale(analyses, used, ego: dict[int, tuple[int, int, float]], hood: np
         stretch = slice(idx[0], idx[-1] + 1)
         on = np.zeros(idx[-1] - idx[0] + 3, np.int8)
         on[1:-1] = (m[np.clip(yi[stretch], 0, h - 1), np.clip(xi[stretch], 0, w - 1)] > 0) & inside[stretch]
-        runs.append(((i, j),) + _dash_runs(on, q[idx[0]] - dq, dq, 0.6 / lo, v_resolved))
+        runs.append(((i, j),) + _dash_runs(on, q[idx[0]] - dq, dq))
+    return _DashRuns(q_hi - q_lo, tuple(runs))
+
+
+def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
+                c_range: tuple[float, float]) -> tuple[float | None, float]:
+    """Return (C from the dash period, how well the dashes fit it), or (None, fit) without a
+    clear dash period; C is searched within ``c_range``.
+
+    ``dashes`` are the runs of paint along the lane lines (``_dash_runs_of``), sampled at even
+    steps of q = 1/v, where s = C q + s0 makes a dash pattern periodic; those no longer than a
+    dash of the shortest period searched and far enough below the horizon for a gap to show
+    (3 px at the smallest C searched) may be dashes. Their lengths give a + b q^2 (``_dash_length_model``): a first
+    C = dash_m / a, and b, what blur adds to a run. A run is a dash when its length less b q^2
+    is within DASH_LENGTH_WINDOW of a: far away a raised marker in a gap or a fleck blurs to
+    half a dash's length in q, and a marker beside a dash merges with it; either would put a
+    "dash" half a period off. For a period P in q, the fit is the weighted mean over all pairs
+    of dashes of one line of cos(2 pi (q_j - q_k) / P): 1 when every pair lies a whole number of
+    periods apart (``_dash_fit_curve``); the period is the best fit within a factor
+    DASH_LENGTH_RANGE below and DASH_LENGTH_UP above what the lengths say (which rules out the
+    harmonic at twice C), used from a fit of DASH_MIN_FIT and only when it holds without any one
+    frame (or, from one frame, any one line): each such sub-sample's best period within
+    DASH_CONSISTENCY of it and fitting it from DASH_MIN_FIT; C = (dash_m + gap_m) / P.
+    """
+    if dashes is None:
+        return None, 0.0
+    period_m = dash_m + gap_m
+    span = dashes.span
+    lo = max(DASH_MIN_PERIODS / span, c_range[0] / period_m)
+    hi = c_range[1] / period_m
+    if hi <= lo:
+        return None, 0.0
+    # nearer the horizon than this, a gap spans under 3 px for the smallest C searched
+    v_resolved = math.sqrt(3.0 * c_range[0] / gap_m)
+    runs = []
+    for key, centre, length in dashes.runs:
+        keep = (length <= 0.6 / lo) & (1.0 / centre >= v_resolved)
+        runs.append((key, centre[keep], length[keep]))
     if not runs:
         return None, 0.0
     model = _dash_length_model(np.concatenate([r[1] for r in runs]), np.concatenate([r[2] for r in runs]))
