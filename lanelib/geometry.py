@@ -95,7 +95,7 @@ How each quantity is found (all in the undistorted image: frames are undistorted
 - **Confidence** (0-1): the product of min(1, frames used / 5), how well the frames pin the
   vanishing point (1 up to 1 px of standard error of their mean row, falling off beyond: a car
   pitching over bumps scatters single frames by a few px, and many frames still pin it), min(1, frames showing the
-  ego lane / 5), the source of the scale (dashes 1, focal length 0.9, dashes and focal length
+  ego lane / 5), the source of the scale (dashes 1, focal length 0.9 (FOCAL_CONFIDENCE), dashes and focal length
   disagreeing by more than 8 % 0.75, and then the focal length is used, assumed focal length 0.4), 0.9 when the hood was not
   found, and 0.4 when the focal length and the lane width put the camera at an implausible
   height (``CAMERA_HEIGHT_RANGE_M``, 0.7-4 m: the lines were paired wrongly; the assumptions
@@ -194,6 +194,7 @@ CAMERA_HEIGHT_RANGE_M = (0.7, 4.0)
 # its top third (frames' median) before the view is taken as wrong: a lens not given, a road not flat
 LANE_PARALLEL_TOLERANCE = 0.025
 IMPLAUSIBLE_CONFIDENCE = 0.4   # the confidence is multiplied by this then (below LOW_CONFIDENCE)
+FOCAL_CONFIDENCE = 0.9         # ... by this when the scale along the road is a focal length's, not dashes'
 
 Point = tuple[float, float]
 
@@ -1383,9 +1384,12 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
 
 
 def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_m: float, dash_m: float,
-           gap_m: float) -> RoadGeometry:
+           gap_m: float, focal_confidence: float = FOCAL_CONFIDENCE) -> RoadGeometry:
     """Return the geometry of ``road`` with these focal length (None: from the calibration, else
     the dashes, else assumed), lane width, look-ahead and dashes (``estimate_geometry``).
+    ``focal_confidence`` multiplies the confidence when the scale along the road is the focal
+    length's (no dash period in these frames): FOCAL_CONFIDENCE for a calibration's or a given
+    one, 1 for one that other frames' dash period measured.
 
     Raises
     ------
@@ -1456,7 +1460,7 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
             focal_source = "dash period and lane width"
     elif c_focal is not None:
         C, scale_source = c_focal, "focal length and lane width"
-        scale_conf = 0.9
+        scale_conf = focal_confidence
     else:
         fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
         C = c_from_focal(fa, fa)
@@ -1582,10 +1586,9 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], raw_look
         except GeometryError:
             canvas = None
         if canvas is not None and canvas.focal_source == "dash period and lane width":
-            again = _solve(road, canvas.focal_px, **scale)
-            # the dash period is measured: not the focal length's 0.9 of the confidence
+            # the focal length is the canvas's dash period's, measured: no FOCAL_CONFIDENCE
+            again = _solve(road, canvas.focal_px, **scale, focal_confidence=1.0)
             geo = replace(again, focal_source="dash period and lane width",
-                           confidence=round(min(1.0, again.confidence / 0.9), 4),
                            scale_source=f"dash period of the undistorted frames on a canvas {100 * LENS_CANVAS_PAD:g} % "
                                         f"larger each side ({canvas.scale_source[len('dash period '):].strip('()')}; "
                                         f"focal {canvas.focal_px:.0f} px)")
