@@ -628,6 +628,8 @@ class GeometryWatch:
     off the horizon (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of
     the height) it estimates the geometry from those frames and returns it (None otherwise). A
     failed or low-confidence new estimate keeps the old geometry. ``notes`` says what happened.
+    A watch pickles without its ``finder`` (its undistortion maps and hood mask, megabytes),
+    which the copy builds again on first use: a Dask segment ships it back to the driver.
     """
 
     def __init__(self, geo: RoadGeometry, calibration: Calibration | None, options: GeometryOptions,
@@ -636,11 +638,23 @@ class GeometryWatch:
         self.calibration = calibration
         self.options = options
         self.every = max(1, round(options.check_every_s * fps))
-        self.finder = geometry.RoadLineFinder(geo.size_px, lens=calibration, hood_top_px=geo.hood_row_px)
+        self._finder: geometry.RoadLineFinder | None = None  # built on first use (``finder``)
         self.tolerance_px = max(geometry.DRIFT_PX, 0.01 * geo.size_px[1])
         self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
         self.shifts: list[float] = []
         self.notes: list[str] = []
+
+    @property
+    def finder(self) -> geometry.RoadLineFinder:
+        """The frames' vanishing-point finder, built on first use: for the geometry's frame size
+        and hood row (a new estimate keeps both: the hood is the car's) and the calibration."""
+        if self._finder is None:
+            self._finder = geometry.RoadLineFinder(self.geometry.size_px, lens=self.calibration,
+                                                   hood_top_px=self.geometry.hood_row_px)
+        return self._finder
+
+    def __getstate__(self) -> dict:
+        return self.__dict__ | {"_finder": None}
 
     def state_key(self) -> bytes:
         """Return a fingerprint of what the next checks depend on: the geometry in use and the

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import csv
 import json
+import pickle
 from dataclasses import replace
 from pathlib import Path
 
@@ -173,6 +174,29 @@ def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     assert len(watch.notes) == 1 and "below the horizon in 5 checks in a row" in watch.notes[0]
     assert "geometry estimated again" in watch.notes[0]
     assert watch.check(moved[5], 20, 0.8) is None  # the new horizon is where the frames say
+
+
+
+def test_the_watch_pickles_without_its_maps_and_goes_on_the_same(estimate):
+    """A Dask segment ships the watch back to the driver: it pickles without its finder (the
+    undistortion maps and the hood mask, megabytes), which the copy builds again on first use,
+    and the copy checks the next frames as the original does, a new estimate included."""
+    cal, geo = estimate
+    frames = runs.sample_frames(CLIP, 6.0, 25)
+    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
+    watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04), fps=25.0)
+    assert watch.check(straight[0], 0, 0.0) is None  # the finder is built
+    assert len(pickle.dumps(watch)) < 20_000 < 100 * 20_000 < len(pickle.dumps(watch.finder))
+    moved = [_shifted(f, 12.0) for f in straight]
+    for i, f in enumerate(moved[:2]):  # two checks off the horizon: two frames held
+        assert watch.check(f, 10 + i, (10 + i) / 25) is None
+    copy = pickle.loads(pickle.dumps(watch))
+    assert copy._finder is None and copy.state_key() == watch.state_key()
+    for i, f in enumerate(moved[2:], start=12):  # the 5th check off the horizon estimates again
+        got = [w.check(f, i, i / 25) for w in (watch, copy)]
+        assert [g is None for g in got] == [i != 14] * 2
+        assert got[0] is None or got[0].to_dict() == got[1].to_dict()
+    assert len(copy.notes) == 1 and copy.notes == watch.notes and copy.state_key() == watch.state_key()
 
 
 @pytest.mark.parametrize("name, frames", [("solidWhiteRight", 221), ("solidYellowLeft", 681)])
