@@ -502,9 +502,6 @@ class GeometryOptions:
         for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
         too little confidence for a new estimate to be used).
     accept_low_confidence : use an estimate below ``geometry.LOW_CONFIDENCE`` (refused otherwise).
-    lens_from_road : with no calibration, let the estimate measure the lens from the lane lines'
-        bend (``geometry.estimate_lens``); the run then undistorts with it
-        (``geometry_calibration``).
     """
 
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
@@ -517,7 +514,6 @@ class GeometryOptions:
     check_every_s: float = 0.5
     drift_checks: int = 5
     accept_low_confidence: bool = False
-    lens_from_road: bool = True
 
     def __post_init__(self):
         if not (self.seconds > 0 and self.max_frames >= 1 and self.check_every_s > 0
@@ -526,12 +522,17 @@ class GeometryOptions:
                               "max_frames and drift_checks 1 or more")
 
     def estimate(self, frames: Sequence[np.ndarray], calibration: Calibration | None,
-                 hood_row_px: float | None = None) -> RoadGeometry:
-        """Return ``geometry.estimate_geometry`` of ``frames`` with these options."""
+                 hood_row_px: float | None = None, lens_from_road: bool = True) -> RoadGeometry:
+        """Return ``geometry.estimate_geometry`` of ``frames`` with these options.
+
+        ``lens_from_road``: with no calibration, let the estimate measure the lens from the lane
+        lines' bend (``geometry.estimate_lens``); a run then undistorts with it
+        (``geometry_calibration``). Off for callers that cannot undistort with it.
+        """
         return geometry.estimate_geometry(frames, calibration, focal_px=self.focal_px,
                                           lane_width_m=self.lane_width_m, look_ahead_m=self.look_ahead_m,
                                           dash_m=self.dash_m, gap_m=self.gap_m, hood_row_px=hood_row_px,
-                                          lens_from_road=self.lens_from_road)
+                                          lens_from_road=lens_from_road)
 
 
 def sample_frames(source: str | os.PathLike, seconds: float | None = None, max_frames: int = 50,
@@ -566,8 +567,9 @@ def sample_frames(source: str | os.PathLike, seconds: float | None = None, max_f
 
 def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration | None = None,
                            options: GeometryOptions = GeometryOptions(),
-                           start_s: float | None = None) -> RoadGeometry:
-    """Return the road geometry estimated from a video's first ``options.seconds`` or a folder.
+                           start_s: float | None = None, lens_from_road: bool = True) -> RoadGeometry:
+    """Return the road geometry estimated from a video's first ``options.seconds`` or a folder
+    (``lens_from_road``: as for ``GeometryOptions.estimate``).
 
     Raises
     ------
@@ -578,12 +580,14 @@ def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration |
         confidence result is never used silently.
     """
     frames = sample_frames(source, options.seconds, options.max_frames, start_s)
-    return checked_geometry(frames, source, calibration, options)
+    return checked_geometry(frames, source, calibration, options, lens_from_road)
 
 
 def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
-                     calibration: Calibration | None, options: GeometryOptions) -> RoadGeometry:
-    """Return the road geometry of ``frames`` (taken from ``source``, a video or a folder).
+                     calibration: Calibration | None, options: GeometryOptions,
+                     lens_from_road: bool = True) -> RoadGeometry:
+    """Return the road geometry of ``frames`` (taken from ``source``, a video or a folder;
+    ``lens_from_road``: as for ``GeometryOptions.estimate``).
 
     Raises
     ------
@@ -593,7 +597,7 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
         ``source`` and the fix.
     """
     try:
-        geo = options.estimate(frames, calibration)
+        geo = options.estimate(frames, calibration, lens_from_road=lens_from_road)
     except GeometryError as e:
         raise GeometryError(naming_the_file(str(e), Path(source))) from None
     if geo.low_confidence and not options.accept_low_confidence:
@@ -1189,9 +1193,7 @@ def _settings(benchmark: str, root: Path, config: PipelineConfig, calibration_fi
               auto_geometry: GeometryOptions | None) -> dict:
     return {"format": PREDICT_FORMAT, "benchmark": benchmark, "dataset_root": str(root.resolve()),
             "calibration": calibration_file, "config": to_dict(config),
-            # predict estimates no lens (``_sequence_geometry``): the option is not a setting of its runs
-            "auto_geometry": ({k: v for k, v in to_dict(auto_geometry).items() if k != "lens_from_road"}
-                              if auto_geometry is not None else None)}
+            "auto_geometry": to_dict(auto_geometry) if auto_geometry is not None else None}
 
 
 def _check_settings(out: Path, settings: dict) -> bool:
@@ -1220,7 +1222,7 @@ def _sequence_geometry(work: Sequence[FrameWork], root: Path, calibration: Calib
         except InputError:
             continue
     # one calibration serves every sequence's frames: no lens is estimated per sequence
-    return checked_geometry(frames, root / work[0].sequence, calibration, replace(options, lens_from_road=False))
+    return checked_geometry(frames, root / work[0].sequence, calibration, options, lens_from_road=False)
 
 
 def _assemble_tusimple(work: Sequence[FrameWork], out: Path, inputs: Sequence[Path]) -> Path:

@@ -259,17 +259,17 @@ class PerspectiveTuner(Tuner):
         calibration = self._calibration_for(label)
         # a low confidence is judged below; the tuner's frames go through its own calibration
         # (or none), so no lens is estimated from the road for points it could not undistort by
-        trial = replace(opts, accept_low_confidence=True, lens_from_road=False)
+        trial = replace(opts, accept_low_confidence=True)
         if self.is_video:
             start = 0.0 if start_s is None else float(start_s)
-            geo = runs.estimate_road_geometry(path, calibration, trial, start_s)
+            geo = runs.estimate_road_geometry(path, calibration, trial, start_s, lens_from_road=False)
             source = f"the clip {label}, {opts.seconds:g} s from {start:g} s"
         else:
             if start_s is not None:
                 raise InputError(f"{label}: start_s is for a video; an image is estimated from "
                                  "this frame alone")
             try:
-                geo = trial.estimate([self._raw], calibration)
+                geo = trial.estimate([self._raw], calibration, lens_from_road=False)
             except GeometryError as e:
                 raise GeometryError(f"{label}: {e}") from None
             source = f"this frame alone ({label})"
