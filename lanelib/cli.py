@@ -22,7 +22,7 @@ from .camera import Calibration, calibrate, parse_pattern
 from .config import PipelineConfig, load_config_or_preset, override, save_parts
 from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
-from .io import VIDEO_SUFFIXES, check_not_input, list_images, write_json
+from .io import VIDEO_SUFFIXES, check_not_input, check_output, list_images, write_json
 from .pipeline import LanePipeline
 from .synth import datasets as synth_datasets
 
@@ -321,16 +321,16 @@ def _add_geometry(sub) -> None:
 def _run_geometry(args) -> int:
     calibration = Calibration.load(args.calibration) if args.calibration else None
     inputs = [args.input] + ([args.calibration] if args.calibration else [])
-    check_not_input(args.output, inputs)
-    if args.json:
-        check_not_input(args.json, inputs + [args.output])
+    # every output, before any work: writable, over no input and over no other output
+    lens_out = None if calibration is not None else args.lens_out or args.output.with_suffix(".lens.json")
+    outputs = [f for f in (args.output, args.json, lens_out) if f is not None]
+    for i, f in enumerate(outputs):
+        check_output(f, inputs, outputs[:i])
     base = load_config_or_preset(args.config) if args.config else PipelineConfig()
     geo = runs.estimate_road_geometry(args.input, calibration, _geometry_options(args))
     _print_geometry(geo)
     save_parts(runs.with_geometry(base, geo), args.output, ("perspective",))
     if geo.lens is not None:
-        lens_out = args.lens_out or args.output.with_suffix(".lens.json")
-        check_not_input(lens_out, inputs + [args.output])
         geo.lens.save(lens_out)
         print(f"perspective written to {args.output}, the estimated lens to {lens_out} (use them together: "
               f"--config {args.output} --calibration {lens_out})")

@@ -273,6 +273,26 @@ def check_not_input(target: str | os.PathLike, inputs: Iterable[str | os.PathLik
             raise InputError(f"{target}: output would overwrite an input; choose another output path")
 
 
+
+def check_output(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] = (),
+                 others: Iterable[str | os.PathLike] = ()) -> None:
+    """Raise InputError if ``target`` could not be written by ``atomic_path``: it is one of
+    ``inputs`` (``check_not_input``) or of the command's ``others`` outputs, a folder, or its
+    nearest existing parent folder is no writable folder. A command checks its outputs with it
+    before any work."""
+    t = Path(target)
+    check_not_input(t, inputs)
+    if any(Path(o).resolve() == t.resolve() for o in others):
+        raise InputError(f"{t}: is another output of this command too; give each output its own path")
+    if t.is_dir():
+        raise InputError(f"{t}: is a folder; give a file path for this output")
+    parent = t.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        why = "not a folder" if not parent.is_dir() else "not writable"
+        raise InputError(f"{t}: cannot be written ({parent} is {why}); choose a writable output path")
+
 def _temp_affixes(target: Path) -> tuple[str, str]:
     """Return the (prefix, suffix) of ``atomic_path``'s temporary files for ``target``."""
     return f".{target.stem}.", f".part{target.suffix}"

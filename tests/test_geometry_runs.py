@@ -91,6 +91,29 @@ def test_geometry_cli_merges_into_a_tuned_config(calibration_file, tmp_path, cap
     assert merged.perspective != base.perspective and merged.perspective.car_x_px is not None
 
 
+def test_geometry_cli_checks_every_output_before_any_work(tmp_path, capsys):
+    """-o, --json and --lens-out (default: OUT.lens.json) are checked before the frames are read:
+    over an input, over another output, a folder or under a file, the run stops at once (exit
+    2) naming the path, and writes nothing."""
+    out, afile = tmp_path / "g.json", tmp_path / "afile"
+    afile.write_text("")
+    cases = [
+        (["--lens-out", str(CLIP)], f"{CLIP}: output would overwrite an input"),
+        (["--lens-out", str(out)], f"{out}: is another output of this command too"),
+        (["--json", str(tmp_path / "g.lens.json")], "g.lens.json: is another output of this command too"),
+        (["--lens-out", str(afile / "lens.json")], f"afile/lens.json: cannot be written ({afile} is not a folder)"),
+        (["--lens-out", str(tmp_path)], f"{tmp_path}: is a folder"),
+        (["--json", str(afile / "g.fig.json")], "g.fig.json: cannot be written"),
+    ]
+    for extra, message in cases:
+        assert main(["geometry", str(CLIP), "-o", str(out)] + extra) == 2, extra
+        err = capsys.readouterr().err
+        assert message in err, (extra, err)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+    assert main(["geometry", str(CLIP), "-o", str(afile / "g.json")]) == 2
+    assert "g.json: cannot be written" in capsys.readouterr().err
+
+
 def test_video_auto_geometry_tracks_the_lane(calibration_file, tmp_path, capsys):
     out = tmp_path / "out.mp4"
     code = main(["video", str(CLIP), "-o", str(out), "--calibration", str(calibration_file),
