@@ -610,3 +610,93 @@ def test_a_lane_that_spreads_unlike_its_double_stripes_stays_refused(pipe, strip
     fresh = LaneTracker(pipe).update(_pitched_frame(pipe, 1.3, True))
     assert not fresh.found and "lines not parallel" in fresh.reason
 
+
+
+def _paint_returns_frame(pipe: LanePipeline, right_dx: float | None, near_row: int = H - 1) -> np.ndarray:
+    """Return a frame with the full left line and the right line ``right_dx`` px outside
+    ``RIGHT_X`` from the view's top row down to ``near_row`` only (its paint nearer the car
+    missing), or no right line (``right_dx`` None)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    cv2.line(bird, (round(LEFT_X), 0), (round(LEFT_X), H - 1), (235, 235, 235), 24)
+    if right_dx is not None:
+        x = round(RIGHT_X + right_dx)
+        cv2.line(bird, (x, 0), (x, near_row), (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def _after_missing_paint(pipe: LanePipeline, config: TrackerConfig, right_dx: float,
+                         frames: int = 12) -> list:
+    """Track a 3.7 m lane for 3 frames, lose the right line's paint for 8 frames, then show it
+    ``right_dx`` px outside its old place (the lane widened while its paint was missing), its
+    paint coming back from the view's top row towards the car by 60 rows (2 m of road) a
+    frame. Return the results of those last ``frames`` frames."""
+    tracker = LaneTracker(pipe, config)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    for _ in range(8):
+        r = tracker.update(_paint_returns_frame(pipe, None))
+        assert "right line inferred" in r.reason
+    return [tracker.update(_paint_returns_frame(pipe, right_dx, min(H - 1, 100 + 60 * k)))
+            for k in range(frames)]
+
+
+def test_a_line_inferred_for_long_is_reacquired_where_its_paint_returns(pipe):
+    """Known answer: the right line's paint returns 0.6 m (104 px) outside where the inference
+    puts it, beyond the 60 px band around the track and the 0.5 m jump limit. Looked for in a
+    band that widened with the frames it was inferred (``reacquire_after_frames``), it is found;
+    while it is seen only more than ``max_gap_m`` ahead it is joined to the inference near the
+    car, and that pair is not parallel, so it stays inferred; from the frame its paint comes
+    within 12 m of the car it is seen, and 4 frames later the smoothed line lies within 3 px
+    of it at the car and at the top row, the lane 4.3 m wide. Without the re-acquisition it is
+    never found again (the lane reads 3.7 m)."""
+    dx = 0.6 / XM
+    results = _after_missing_paint(pipe, TrackerConfig(), dx)
+    sources = [r.sources[1] for r in results]
+    first = sources.index("seen")
+    assert sources[:first] == ["inferred"] * first and set(sources[first:]) == {"seen"}
+    gap_m = (H - 1 - (100 + 60 * first)) * pipe.perspective.ym_per_px
+    assert gap_m <= TrackerConfig().max_gap_m < gap_m + 60 * pipe.perspective.ym_per_px
+    last = results[-1]
+    assert first + 4 < len(results) and last.reason == ""
+    assert bottom_x(last, "right") == pytest.approx(RIGHT_X + dx, abs=3)
+    assert float(np.polyval(last.right.coeffs_px, 0.0)) == pytest.approx(RIGHT_X + dx, abs=3)
+    assert last.lane_width_m == pytest.approx(4.3, abs=0.03)
+    off = _after_missing_paint(pipe, TrackerConfig(reacquire_after_frames=0), dx)
+    assert all(r.sources[1] == "inferred" for r in off)
+    assert bottom_x(off[-1], "right") == pytest.approx(RIGHT_X, abs=3)
+
+
+def test_a_line_too_far_from_the_inference_for_a_lane_stays_refused(pipe):
+    """The right paint returns 1.0 m outside the inference: inside the re-acquisition band
+    (1.2 m), but the lane it would make is 4.7 m wide (limit 4.5 m): refused every frame, the
+    line stays inferred where it was. A confident wrong line is worse than an inferred one."""
+    results = _after_missing_paint(pipe, TrackerConfig(), 1.0 / XM)
+    assert all(r.found and r.sources[1] == "inferred" for r in results)
+    assert all(bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3) for r in results)
+
+
+def test_the_reacquisition_band_widens_with_the_inferred_run(pipe):
+    """No wider search before ``reacquire_after_frames`` inferred frames; then the band's half
+    width starts at twice ``prior_margin_px`` and grows by it each frame, up to
+    ``reacquire_band_m``; the jump limit against the inferred line is the band's."""
+    tracker = LaneTracker(pipe)
+    for _ in range(3):
+        tracker.update(frame(pipe))
+    margin = pipe.config.search.prior_margin_px
+    halves = []
+    for _ in range(6):
+        tracker.update(_paint_returns_frame(pipe, None))
+        halves.append(tracker._reacquire_half_px(1))
+    cap = TrackerConfig().reacquire_band_m / XM
+    assert halves == pytest.approx([0, 0, 2 * margin, 3 * margin, cap, cap])
+    assert tracker._reacquire_half_px(0) == 0
+    assert tracker._jump_limit_m(1) == pytest.approx(TrackerConfig().reacquire_band_m)
+    assert tracker._jump_limit_m(0) == TrackerConfig().max_jump_m
+    tracker.update(frame(pipe))
+    assert tracker._reacquire_half_px(1) == 0
+
+
+@pytest.mark.parametrize("kwargs", [dict(reacquire_after_frames=-1), dict(reacquire_band_m=0.0)])
+def test_reacquisition_needs_a_count_and_a_band(kwargs):
+    with pytest.raises(ConfigError, match="reacquire_after_frames"):
+        TrackerConfig(**kwargs)
