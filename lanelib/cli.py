@@ -319,6 +319,9 @@ def _add_geometry(sub) -> None:
 
 
 def _run_geometry(args) -> int:
+    if args.lens_out is not None and args.calibration is not None:
+        raise InputError(f"--lens-out {args.lens_out}: with --calibration the lens is the calibration's "
+                         "and none is estimated from the road; drop --lens-out (or --calibration)")
     calibration = Calibration.load(args.calibration) if args.calibration else None
     inputs = [args.input] + ([args.calibration] if args.calibration else [])
     # every output, before any work: writable, over no input and over no other output

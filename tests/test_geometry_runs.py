@@ -112,6 +112,11 @@ def test_geometry_cli_checks_every_output_before_any_work(tmp_path, capsys):
         assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
     assert main(["geometry", str(CLIP), "-o", str(afile / "g.json")]) == 2
     assert "g.json: cannot be written" in capsys.readouterr().err
+    # a lens is estimated only without a calibration: --lens-out with one is refused, not ignored
+    assert main(["geometry", str(CLIP), "-o", str(out), "--calibration", str(afile),
+                 "--lens-out", str(tmp_path / "l.json")]) == 2
+    assert "with --calibration the lens is the calibration's" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
 
 
 def test_video_auto_geometry_tracks_the_lane(calibration_file, tmp_path, capsys):
