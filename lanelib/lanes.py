@@ -198,13 +198,15 @@ class LineFit:
 
     ``scatter_px`` is the RMS horizontal distance (px) of the line's pixels from the fit (0 for a
     line not fitted to pixels, e.g. a tracked one). ``stripe_scatter_px`` is their RMS distance
-    from the nearer of two parallel stripes fitted to them (``two_stripes``), measured where the
-    pixels scatter like a double line (``fit_line``: ``scatter_px`` above a quarter of
-    ``SearchConfig.double_line_px``) and split into two stripes of at least a fifth of them each;
-    None where not measured (one stripe: the texture rule reads ``scatter_px``). ``gap_px`` is how far (rows) the line's pixels
-    stop short of the view's bottom row, the car's end: from the bottom row to the row that all
-    but ``NEAR_SHARE`` of its pixels lie above (0 for a line that reaches the car, or was not
-    fitted to pixels). A few stray pixels near the car do not count as reaching it.
+    from the nearer of two parallel stripes fitted to them (``two_stripes``), measured by the
+    search (``sliding_windows``, ``search_around``) where the pixels scatter like a double line
+    (``scatter_px`` above a quarter of ``SearchConfig.double_line_px``) but are not narrowed to
+    its inner stripe, and split into two stripes of at least a fifth of them each; None where
+    not measured (one stripe: the texture rule reads ``scatter_px``). ``gap_px`` is how far
+    (rows) the line's pixels stop short of the view's bottom row, the car's end: from the bottom
+    row to the row that all but ``NEAR_SHARE`` of its pixels lie above (0 for a line that
+    reaches the car, or was not fitted to pixels). A few stray pixels near the car do not count
+    as reaching it.
     """
 
     coeffs_px: tuple[float, float, float] | None
@@ -406,8 +408,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
-    right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
+    right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -432,10 +434,10 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
             continue
         near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
         picked[side] = (ys[near], xs[near])
-    new_left, picked["left"] = _fit_side(
+    new_left, picked["left"] = fit_side(
         picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
         else "no lane pixels near the previous left fit")
-    new_right, picked["right"] = _fit_side(
+    new_right, picked["right"] = fit_side(
         picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
         else "no lane pixels near the previous right fit")
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
@@ -502,7 +504,7 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
 
 
 def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
-                 height_px: int) -> tuple[np.ndarray, np.ndarray]:
+                 height_px: int, stripes: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Return the pixels (ys, xs) of a line's inner stripe when they form a double line, else all.
 
     A double line (two stripes ``spacing_px`` apart, centre to centre) is one lane boundary,
@@ -528,6 +530,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     spacing_px : centre-to-centre distance of the stripes (``SearchConfig.double_line_px``;
         0: off).
     height_px : height of the view (scales the first fit).
+    stripes : ``two_stripes(ys, xs, 2, height_px)`` when already fitted (None: fitted here).
     """
     n = len(ys)
     if spacing_px <= 0 or n < 20:
@@ -538,7 +541,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     degree = 2 if span >= 0.3 * height_px else 1
     if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
         return ys, xs  # close to one fit (a single stripe): no second stripe to look for
-    coeffs, spacing, upper, _ = two_stripes(ys, xs, 2, height_px)
+    coeffs, spacing, upper, _ = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
     counts = (int((~upper).sum()), int(upper.sum()))
     apart = float(np.median(spacing))
     if min(counts) < 0.2 * n or not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
@@ -603,16 +606,25 @@ def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: 
     return np.array(out_y), np.array(out_s)
 
 
-def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
+def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
               missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
     stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
-    quarter of ``double_line_px``), so a single line costs no second fit."""
+    quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
+    lines here (``side``: "left" or "right", the side of the lane they bound). A line that scatters
+    so but is not narrowed to a stripe keeps its pixels' spread about two stripes
+    (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
+    at least a fifth of them."""
     fit = fit_line(*pixels, height_px, config, missing=missing)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        inner = inner_stripe(*pixels, side, config.double_line_px, height_px)
+        stripes = two_stripes(*pixels, 2, height_px)
+        inner = inner_stripe(*pixels, side, config.double_line_px, height_px, stripes)
         if len(inner[0]) < len(pixels[0]):
             return fit_line(*inner, height_px, config, missing=missing), inner
+        n = len(pixels[0])
+        right = int(stripes[2].sum())
+        if min(right, n - right) >= 0.2 * n:
+            fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
     return fit, pixels
 
 
@@ -688,13 +700,7 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
             span = float(ys.max() - ys.min())
             a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
-    scatter = math.sqrt(rss / n)
-    stripes = None
-    if config.double_line_px and scatter > config.double_line_px / 4:
-        _, _, upper, within = two_stripes(ys, xs, 2, height_px)
-        if min(int(upper.sum()), n - int(upper.sum())) >= 0.2 * n:
-            stripes = math.sqrt(within / n)
-    return LineFit((a, b, c), n, span, scatter_px=scatter, gap_px=gap, stripe_scatter_px=stripes)
+    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap)
 
 
 def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
@@ -717,28 +723,41 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
     t = (y - m) / scale
     x0 = float(xs.mean())
     x = xs.astype(np.float64) - x0
-    cols = [np.ones_like(t), t] + ([t * t] if degree == 2 else [])
+    k = degree + 1  # terms of the centre curve: 1, t (, t**2)
     a, b, c, rss = _least_squares(ys, xs, degree, scale)
-    upper = xs > np.polyval((a, b, c), y)
     one = ((a, b, c), np.zeros_like(t), np.zeros(len(t), bool), rss)  # one stripe
+    # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
+    # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
+    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
+    t2 = t * t
+    powers = np.stack([np.ones_like(t), t, t2, t2 * t, t2 * t2])
+    q = powers.sum(axis=1)
+    xt = powers[:2] * x
+    xsum = np.array([float(x.sum()), float(xt[1].sum()), float((x * t2).sum())])
+    per_pixel = np.concatenate([powers[:k + 1], xt])
+    upper = xs > np.polyval((a, b, c), y)
     for i in range(iterations):
         if upper.all() or not upper.any():
             return one
-        s = np.where(upper, 0.5, -0.5)
-        design = cols + [s, s * t]
-        # normal equations by numpy reductions, as in ``_least_squares`` (no BLAS threads)
-        gram = np.array([[float((u * v).sum()) for v in design] for u in design])
+        right = np.einsum("ij,j->i", per_pixel, upper.astype(np.float64))
+        st = right[:k + 1] - 0.5 * q[:k + 1]  # sums of s * t**j
+        gram = np.zeros((k + 2, k + 2))
+        for r in range(k):
+            gram[r, :k] = q[r:r + k]
+            gram[r, k:] = gram[k:, r] = st[r:r + 2]
+        gram[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
+        rhs = np.concatenate([xsum[:k], right[k + 1:] - 0.5 * xsum[:2]])
         try:
-            p = np.linalg.solve(gram, np.array([float((u * x).sum()) for u in design]))
+            p = np.linalg.solve(gram, rhs)
         except np.linalg.LinAlgError:
             return one
-        centre = sum(pi * ci for pi, ci in zip(p[:-2], cols))
+        centre = np.einsum("i,ij->j", p[:k], powers[:k])
         moved = (x > centre) != upper
         if i == iterations - 1 or not moved.any():
             break
         upper = x > centre
-    spacing = p[-2] + p[-1] * t
-    residual = x - centre - s * spacing
+    spacing = p[k] + p[k + 1] * t
+    residual = x - centre - np.where(upper, 0.5, -0.5) * spacing
     p2 = p[2] if degree == 2 else 0.0
     coeffs = (float(p2 / scale ** 2), float(p[1] / scale - 2 * p2 * m / scale ** 2),
               float(x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2))
