@@ -136,7 +136,8 @@ class LaneChecks:
     tracker's band-only search can run them too.
 
     Each line alone: it may not fill its search band (``max_band_fill``: a bright verge) nor
-    spread across it (``max_band_scatter``: texture). The pair: width on the bottom row, parallel
+    spread across it (``max_band_scatter``: texture, not a line nor the two stripes of a double
+    line). The pair: width on the bottom row, parallel
     lines, consistent curvatures. Images without a lane (noise, blurred noise, stripes in any
     direction, a chessboard, flat or black frames) fail these rules for what they are: texture
     spreads over its band, and the lines of a stripe or blob pattern are rarely a lane's width
@@ -161,7 +162,14 @@ class LaneChecks:
         texture (noise, gravel, stripes crossing the band), whatever line it happens to fit; a
         painted line is a thin stroke close to its fit. On the Udacity project video and the
         synthetic sets real lines reach 0.58 (99.9 % below 0.54, median 0.2-0.3), in sliding
-        windows and in the narrower prior band alike (the band cuts the clutter with it).
+        windows and in the narrower prior band alike (the band cuts the clutter with it). A
+        double line (two stripes side by side) scatters more from one fit through both, up to
+        1.1 where the view's edge cuts its band (country.mp4's hairpins); it is texture only if
+        its pixels also spread as two stripes (``LineFit.stripe_scatter_px``): their RMS distance
+        from the nearer stripe, as a share of an even spread over half the band, is over the
+        same limit. Texture split in two keeps its even spread over each half (1); two narrow
+        stripes keep about their width / sqrt(12) (0.4-0.6 on the synthetic country clips
+        where the rule decides, in bands of 60-180 px).
     check_rows : rows (evenly spaced, top to bottom) on which widths and shapes are compared.
     """
 
@@ -189,10 +197,16 @@ class LineFit:
     """One fitted line: pixel coefficients (a, b, c) of x = f(y), or not found with a reason.
 
     ``scatter_px`` is the RMS horizontal distance (px) of the line's pixels from the fit (0 for a
-    line not fitted to pixels, e.g. a tracked one). ``gap_px`` is how far (rows) the line's pixels
-    stop short of the view's bottom row, the car's end: from the bottom row to the row that all
-    but ``NEAR_SHARE`` of its pixels lie above (0 for a line that reaches the car, or was not
-    fitted to pixels). A few stray pixels near the car do not count as reaching it.
+    line not fitted to pixels, e.g. a tracked one). ``stripe_scatter_px`` is their RMS distance
+    from the nearer of two parallel stripes fitted to them (``two_stripes``), measured by the
+    search (``sliding_windows``, ``search_around``) where the pixels scatter like a double line
+    (``scatter_px`` above a quarter of ``SearchConfig.double_line_px``) but are not narrowed to
+    its inner stripe, and split into two stripes of at least a fifth of them each; None where
+    not measured (one stripe: the texture rule reads ``scatter_px``). ``gap_px`` is how far
+    (rows) the line's pixels stop short of the view's bottom row, the car's end: from the bottom
+    row to the row that all but ``NEAR_SHARE`` of its pixels lie above (0 for a line that
+    reaches the car, or was not fitted to pixels). A few stray pixels near the car do not count
+    as reaching it.
     """
 
     coeffs_px: tuple[float, float, float] | None
@@ -201,6 +215,7 @@ class LineFit:
     reason: str = ""
     scatter_px: float = 0.0
     gap_px: float = 0.0
+    stripe_scatter_px: float | None = None
 
     @property
     def found(self) -> bool:
@@ -393,8 +408,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left, picked["left"] = _fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
-    right, picked["right"] = _fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
+    right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -419,10 +434,10 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
             continue
         near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
         picked[side] = (ys[near], xs[near])
-    new_left, picked["left"] = _fit_side(
+    new_left, picked["left"] = fit_side(
         picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
         else "no lane pixels near the previous left fit")
-    new_right, picked["right"] = _fit_side(
+    new_right, picked["right"] = fit_side(
         picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
         else "no lane pixels near the previous right fit")
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
@@ -489,20 +504,24 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
 
 
 def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
-                 height_px: int) -> tuple[np.ndarray, np.ndarray]:
+                 height_px: int, stripes: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Return the pixels (ys, xs) of a line's inner stripe when they form a double line, else all.
 
     A double line (two stripes ``spacing_px`` apart, centre to centre) is one lane boundary,
     marked at its inner stripe, the one nearer the lane: right of the fit for the ``"left"``
     line, left of it for the ``"right"`` one. A fit through both runs between the stripes, and
-    their pixels fill and scatter over the search band like a bright patch. The pixels' x
-    residuals from a first fit are split into two groups (two-means from +-spacing/2); they are
-    a double line when each group holds at least a fifth of the pixels, both lie side by side
-    (each of eight bands of rows that holds pixels of one holds pixels of the other, but for a
-    quarter of them), the groups' centres lie 0.6-1.5 x ``spacing_px`` apart, each is a
-    narrow stripe (RMS spread under a quarter of the spacing), and the gap between them is clear
-    (under 5 % of the pixels within an eighth of the spacing of its middle). A single line, a
-    dashed one or texture is returned unchanged.
+    their pixels fill and scatter over the search band like a bright patch. The pixels are
+    fitted as two parallel stripes (``two_stripes``: one curve, the stripes either side of it,
+    each pixel on the nearer); they are a double line when each stripe holds at least a fifth
+    of the pixels, both lie side by side (each of eight bands of rows that holds pixels of one
+    holds pixels of the other, but for a quarter of them), the stripes lie 0.6-1.5 x
+    ``spacing_px`` apart (their median spacing), each is narrow (its pixels' RMS distance from
+    it under a quarter of that spacing: the view's scale and the stripes' width scale alike),
+    and the gap between them is clear (under 5 % of the pixels within an eighth of the spacing
+    of its middle). A single line, a dashed one or texture is returned unchanged. The stripes
+    are fitted with a shared curve rather than split at the residuals of one fit: on a tight
+    bend a short line's one fit misses the curve, the residuals of the two stripes run into
+    each other and the gap looks filled (country.mp4's hairpins).
 
     Parameters
     ----------
@@ -511,6 +530,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     spacing_px : centre-to-centre distance of the stripes (``SearchConfig.double_line_px``;
         0: off).
     height_px : height of the view (scales the first fit).
+    stripes : ``two_stripes(ys, xs, 2, height_px)`` when already fitted (None: fitted here).
     """
     n = len(ys)
     if spacing_px <= 0 or n < 20:
@@ -519,22 +539,18 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     if span <= 0:
         return ys, xs
     degree = 2 if span >= 0.3 * height_px else 1
-    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
-    if rss < n * (spacing_px / 4) ** 2:
+    if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
         return ys, xs  # close to one fit (a single stripe): no second stripe to look for
-    r = xs - np.polyval((a, b, c), ys.astype(np.float64))
-    lo, hi = -spacing_px / 2, spacing_px / 2
-    for _ in range(6):  # two-means on the residuals
-        upper = r > (lo + hi) / 2
-        if upper.all() or not upper.any():
-            return ys, xs
-        lo, hi = float(r[~upper].mean()), float(r[upper].mean())
+    coeffs, spacing, upper, _ = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
     counts = (int((~upper).sum()), int(upper.sum()))
-    if min(counts) < 0.2 * n or not 0.6 * spacing_px <= hi - lo <= 1.5 * spacing_px:
+    apart = float(np.median(spacing))
+    if min(counts) < 0.2 * n or not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
         return ys, xs
-    if max(float(r[~upper].std()), float(r[upper].std())) > spacing_px / 4:
+    r = xs - np.polyval(coeffs, ys.astype(np.float64))  # from the centre curve
+    off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
+    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g in (~upper, upper)) > apart / 4:
         return ys, xs
-    if np.count_nonzero(np.abs(r - (lo + hi) / 2) < spacing_px / 8) > 0.05 * n:
+    if np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) > 0.05 * n:
         return ys, xs  # no clear gap between them: one line the first fit misses, not two
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
@@ -590,16 +606,25 @@ def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: 
     return np.array(out_y), np.array(out_s)
 
 
-def _fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
+def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
               missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
     stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
-    quarter of ``double_line_px``), so a single line costs no second fit."""
+    quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
+    lines here (``side``: "left" or "right", the side of the lane they bound). A line that scatters
+    so but is not narrowed to a stripe keeps its pixels' spread about two stripes
+    (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
+    at least a fifth of them."""
     fit = fit_line(*pixels, height_px, config, missing=missing)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        inner = inner_stripe(*pixels, side, config.double_line_px, height_px)
+        stripes = two_stripes(*pixels, 2, height_px)
+        inner = inner_stripe(*pixels, side, config.double_line_px, height_px, stripes)
         if len(inner[0]) < len(pixels[0]):
             return fit_line(*inner, height_px, config, missing=missing), inner
+        n = len(pixels[0])
+        right = int(stripes[2].sum())
+        if min(right, n - right) >= 0.2 * n:
+            fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
     return fit, pixels
 
 
@@ -676,6 +701,67 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
             a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
     return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap)
+
+
+def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
+                iterations: int = 8) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, float]:
+    """Return a line's pixels fitted as two parallel stripes: the centre curve's (a, b, c), the
+    stripes' spacing (px) on each pixel's row, which pixels lie on the right-hand stripe (larger
+    x), and the residual sum of squares (px**2) of the pixels about their stripe.
+
+    One curve x = f(y) (of ``degree``) with the two stripes at +-d(y)/2 across it, d linear in y
+    (the flat view spreads or narrows the road ahead where it pitches, the spacing with it:
+    ``stripe_spacing_px``), fitted by least squares alternating with the pixels' assignment to
+    the nearer stripe (two-means sharing one curve), from the split at the one-curve fit. Its
+    residual is the pixels' spread within their stripes: a double line's two narrow stripes
+    leave little of it (their width / sqrt(12)), where one curve through both runs in the gap;
+    pixels spread evenly over a band keep half their RMS spread (each half of the band).
+    """
+    scale = float(height_px)
+    y = ys.astype(np.float64)
+    m = float(y.mean())
+    t = (y - m) / scale
+    x0 = float(xs.mean())
+    x = xs.astype(np.float64) - x0
+    k = degree + 1  # terms of the centre curve: 1, t (, t**2)
+    a, b, c, rss = _least_squares(ys, xs, degree, scale)
+    one = ((a, b, c), np.zeros_like(t), np.zeros(len(t), bool), rss)  # one stripe
+    # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
+    # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
+    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
+    t2 = t * t
+    powers = np.stack([np.ones_like(t), t, t2, t2 * t, t2 * t2])
+    q = powers.sum(axis=1)
+    xt = powers[:2] * x
+    xsum = np.array([float(x.sum()), float(xt[1].sum()), float((x * t2).sum())])
+    per_pixel = np.concatenate([powers[:k + 1], xt])
+    upper = xs > np.polyval((a, b, c), y)
+    for i in range(iterations):
+        if upper.all() or not upper.any():
+            return one
+        right = np.einsum("ij,j->i", per_pixel, upper.astype(np.float64))
+        st = right[:k + 1] - 0.5 * q[:k + 1]  # sums of s * t**j
+        gram = np.zeros((k + 2, k + 2))
+        for r in range(k):
+            gram[r, :k] = q[r:r + k]
+            gram[r, k:] = gram[k:, r] = st[r:r + 2]
+        gram[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
+        rhs = np.concatenate([xsum[:k], right[k + 1:] - 0.5 * xsum[:2]])
+        try:
+            p = np.linalg.solve(gram, rhs)
+        except np.linalg.LinAlgError:
+            return one
+        centre = np.einsum("i,ij->j", p[:k], powers[:k])
+        moved = (x > centre) != upper
+        if i == iterations - 1 or not moved.any():
+            break
+        upper = x > centre
+    spacing = p[k] + p[k + 1] * t
+    residual = x - centre - np.where(upper, 0.5, -0.5) * spacing
+    p2 = p[2] if degree == 2 else 0.0
+    coeffs = (float(p2 / scale ** 2), float(p[1] / scale - 2 * p2 * m / scale ** 2),
+              float(x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2))
+    return coeffs, spacing, upper, float((residual * residual).sum())
 
 
 def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
@@ -785,7 +871,11 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
 
     A line filling its band is a bright patch (``max_band_fill``); a line whose pixels spread
     evenly across the band is texture (``max_band_scatter``): both rules compare the pixels with
-    the band they were searched in, so they hold for any view scale and search margin.
+    the band they were searched in, so they hold for any view scale and search margin. A line
+    that scatters over the limit from its one fit is still a line when its pixels form two
+    narrow stripes (a double line the search did not narrow to its inner stripe): their spread
+    about the two stripes (``LineFit.stripe_scatter_px``) within the limit of an even spread
+    over half the band.
     """
     if not fit.found or band_px <= 0:
         return ""
@@ -793,12 +883,19 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
     if fill > checks.max_band_fill:
         return (f"{side} line is a bright patch, not a line (fills {fill:.0%} of its search band, "
                 f"limit {checks.max_band_fill:.0%})")
-    scatter = fit.scatter_px / (band_px / math.sqrt(12.0))
-    if scatter > checks.max_band_scatter:
-        metres = f"{fit.scatter_px * xm_per_px:.2f} m, " if xm_per_px else ""
-        return (f"{side} line is texture, not a line (its pixels scatter {metres}{scatter:.0%} of "
-                f"an even spread over its search band, limit {checks.max_band_scatter:.0%})")
-    return ""
+    even = band_px / math.sqrt(12.0)
+    scatter = fit.scatter_px / even
+    if scatter <= checks.max_band_scatter:
+        return ""
+    # two stripes (a double line) each in its half of the band: spread like texture even so?
+    stripes = (fit.scatter_px if fit.stripe_scatter_px is None else fit.stripe_scatter_px) / (even / 2)
+    if stripes <= checks.max_band_scatter:
+        return ""
+    metres = f"{fit.scatter_px * xm_per_px:.2f} m, " if xm_per_px else ""
+    two = ("" if fit.stripe_scatter_px is None else
+           f"; as two stripes {stripes:.0%} of an even spread over half the band")
+    return (f"{side} line is texture, not a line (its pixels scatter {metres}{scatter:.0%} of "
+            f"an even spread over its search band, limit {checks.max_band_scatter:.0%}{two})")
 
 
 def gap_problem(fit: LineFit, ym_per_px: float, max_gap_m: float, side: str = "left") -> str:

@@ -371,7 +371,8 @@ class LanePipeline:
         if top > search.top_px:
             ys, xs = search.right_pixels if side == "left" else search.left_pixels
             near = ys >= top
-            refit = lanes.fit_line(ys[near], xs[near], self.size[1], self.config.search)
+            refit, _ = lanes.fit_side((ys[near], xs[near]), "left" if side == "right" else "right",
+                                      self.size[1], self.config.search, "no lane pixels")
             if not refit.found:
                 return None
             fits["left" if side == "right" else "right"] = refit

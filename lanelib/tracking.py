@@ -32,7 +32,8 @@ debug composite work on it unchanged. Per frame:
    (``lanes.LaneChecks``, ``PipelineConfig.checks``), by the same functions ``LanePipeline.detect``
    uses. Each line alone (``lanes.line_problem``): its pixels may not fill more than
    ``max_band_fill`` of the band they were searched in (a bright verge is not a line), nor spread
-   across it like texture (``max_band_scatter``). Each line against the track (this module's
+   across it like texture (``max_band_scatter``; a double line's two narrow stripes are not
+   texture, ``LineFit.stripe_scatter_px``). Each line against the track (this module's
    own checks, ``TrackerConfig``): its position at the car may not move more than ``max_jump_m``
    (from a line inferred long enough to be re-acquired, step 1: the re-acquisition band's half
    width) and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair

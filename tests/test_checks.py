@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -121,6 +122,85 @@ def test_texture_spreads_over_its_band():
     check = check_mask(mask)
     assert check.left.startswith("left line is texture, not a line (its pixels scatter ")
     assert number_after(check.left, "m, ") > 75 and check.right == ""
+
+
+BEND = (4e-4, -0.55, 420.0)  # a bend's centre curve in the bird's-eye view (px), inside the view
+
+
+def double_line(spacing_px: float, width_px: int, rows=slice(None)) -> np.ndarray:
+    """Return a bird's-eye mask with two stripes ``width_px`` wide, ``spacing_px`` apart centre to
+    centre, either side of the curve ``BEND`` (on ``rows`` only)."""
+    m = np.zeros((H, W), np.uint8)
+    ys = np.arange(H)
+    for side in (-0.5, 0.5):
+        pts = np.column_stack([np.polyval(BEND, ys) + side * spacing_px, ys]).round().astype(np.int32)
+        cv2.polylines(m, [pts.reshape(-1, 1, 2)], False, 255, width_px)
+    out = np.zeros_like(m)
+    out[rows] = m[rows]
+    return out
+
+
+def band_pixels(mask: np.ndarray, half_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return (ys, xs) of the mask's pixels within ``half_px`` of the curve ``BEND``."""
+    ys, xs = lanes.lane_pixels(mask)
+    near = np.abs(xs - np.polyval(BEND, ys)) < half_px
+    return ys[near], xs[near]
+
+
+def as_two_stripes(ys: np.ndarray, xs: np.ndarray) -> LineFit:
+    """Return ``fit_line`` of the pixels with their spread about two stripes (``two_stripes``), as
+    the search records it for a line it does not narrow to an inner stripe."""
+    within = lanes.two_stripes(ys, xs, 2, H)[3]
+    return replace(lanes.fit_line(ys, xs, H), stripe_scatter_px=math.sqrt(within / len(ys)))
+
+
+@pytest.mark.parametrize("spacing_m", [0.12, 0.22, 0.3])
+def test_a_double_line_is_not_texture_but_noise_in_its_band_is(spacing_m):
+    """A double yellow line, two stripes 0.12-0.3 m apart centre to centre (each half as wide, at
+    most 0.12 m), on a bend, in a band 80 px wide (a prior band the view's edge cuts on a
+    hairpin, as on country.mp4): one fit runs between the stripes, and from 0.22 m on its
+    pixels scatter from it over 70 % of an even spread over the band, like texture. As two
+    stripes they hold tight (``LineFit.stripe_scatter_px``: about 30-60 % of an even spread over
+    half the band), so the line passes; pixels spread evenly over the same band stay texture,
+    also as two stripes (about 100 % of half the band)."""
+    spacing = spacing_m / XM
+    width = int(round(min(spacing_m / 2, 0.12) / XM))
+    band = 80.0
+    even = band / math.sqrt(12.0)
+    fit = as_two_stripes(*band_pixels(double_line(spacing, width), band / 2))
+    if spacing_m >= 0.22:
+        assert fit.scatter_px / even > LaneChecks().max_band_scatter
+        one = replace(fit, stripe_scatter_px=None)  # one fit only: texture
+        assert lanes.line_problem(one, band, LaneChecks(), XM, "left").startswith("left line is texture")
+    assert fit.stripe_scatter_px / (even / 2) < 0.6
+    assert lanes.line_problem(fit, band, LaneChecks(), XM, "left") == ""
+    rng = np.random.default_rng(4)
+    noise = np.where(rng.random((H, W)) < 0.3, 255, 0).astype(np.uint8)
+    gravel = as_two_stripes(*band_pixels(noise, band / 2))
+    problem = lanes.line_problem(gravel, band, LaneChecks(), XM, "left")
+    assert problem.startswith("left line is texture, not a line (its pixels scatter ")
+    assert number_after(problem, "as two stripes ") > 90
+
+
+@pytest.mark.parametrize("spacing_m", [0.12, 0.22, 0.3])
+def test_a_double_line_in_a_prior_band_is_a_line_at_its_inner_stripe(spacing_m):
+    """Searched around the previous fit (between the stripes) in a band 80 px wide, the double
+    line passes the line checks; stripes 0.6-1.5 x ``double_line_px`` apart (0.22 and 0.3 m) are
+    fitted to the inner stripe, as the truth marks a double centre line; at 0.12 m, under that
+    range, the fit runs between them and the line still passes as two stripes (the search
+    records their spread, ``LineFit.stripe_scatter_px``)."""
+    spacing = spacing_m / XM
+    width = int(round(min(spacing_m / 2, 0.12) / XM))
+    mask = double_line(spacing, width)
+    prior = LineFit(BEND)
+    s = lanes.search_around(mask, prior, LineFit(None), SearchConfig(prior_margin_px=40))
+    band = lanes.search_bands_px(s, (W, H), SearchConfig(prior_margin_px=40))[0]
+    assert band == 80.0
+    assert lanes.line_problem(s.left, band, LaneChecks(), XM, "left") == ""
+    inner = np.polyval(BEND, H - 1) + spacing / 2
+    expected = inner if spacing_m >= 0.22 else np.polyval(BEND, H - 1)
+    assert s.left.x_at(H - 1) == pytest.approx(expected, abs=3)
+    assert (s.left.stripe_scatter_px is None) == (spacing_m >= 0.22)
 
 
 @pytest.mark.parametrize("share, problem", [(0.6, False), (0.8, True)])

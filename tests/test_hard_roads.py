@@ -46,15 +46,17 @@ def test_a_double_yellow_centre_line_is_read_at_its_inner_stripe():
     """country.mp4, its first 100 frames each detected on its own: the ego lane's left line is the
     inner stripe of a double yellow line (0.22 m centre to centre), as the truth marks it. Fitted
     to its inner stripe (``SearchConfig.double_line_px``) the left line scores about 30 % of its
-    points and 14 % of the lines found are false; fitted between the stripes, about 25 % and 18 %.
-    (Per frame, not tracked: the tracker's choices on this clip's hairpins blur the comparison.)"""
+    points and 15 % of the lines found are false (14 % before the stripes were fitted with a
+    shared curve, ``lanes.two_stripes``: more frames are taken, one more line is false); fitted
+    between the stripes, about 25 % and 18 %. (Per frame, not tracked: the tracker's choices on
+    this clip's hairpins blur the comparison.)"""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     fixed = evaluate_video(COUNTRY, pipe, use_tracker=False, max_frames=100)
     off = LanePipeline(override(PipelineConfig(), ["search.double_line_px=0"]),
                        calibration_from_truth(COUNTRY))
     before = evaluate_video(COUNTRY, off, use_tracker=False, max_frames=100)
     assert np.nanmean(fixed.line_accuracy[:, 0]) >= 0.28 > 0.26 >= np.nanmean(before.line_accuracy[:, 0])
-    assert fixed.summary()["fp_rate"] <= 0.15 < 0.17 <= before.summary()["fp_rate"]
+    assert fixed.summary()["fp_rate"] <= 0.16 < 0.17 <= before.summary()["fp_rate"]
 
 
 def test_lines_seen_only_beyond_an_overpass_shade_are_not_extrapolated_to_the_car():

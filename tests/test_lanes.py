@@ -334,6 +334,30 @@ def test_a_double_line_is_fitted_to_its_inner_stripe():
     assert lanes.fit_line(ys[keep], xs[keep], H).x_at(H - 1) == pytest.approx(979.0, abs=3)
 
 
+@pytest.mark.parametrize("spacing_m", [0.22, 0.3])
+def test_a_double_line_on_a_hairpin_is_split_at_its_stripes(spacing_m):
+    """A double line (stripes 0.12 m wide, 0.22 or 0.3 m apart centre to centre) on a 25 m
+    hairpin, seen only on the view's lowest 160 rows and heading 0.2 rad off the view's axis (as
+    a country road's centre line leaves the view on a hairpin): one straight fit through its
+    pixels misses the bend, and split at that fit's residuals the stripes run into each other.
+    Fitted as two stripes sharing one curve (``two_stripes``), the inner one is kept whole."""
+    a = 1 / (2 * 25.0 * XM_DEFAULT / YM_DEFAULT ** 2)  # 25 m radius
+    b = -1.2 - 2 * a * (H - 1)  # slope -1.2 px/px on the bottom row
+    bend = (a, b, 300.0 - a * (H - 1) ** 2 - b * (H - 1))
+    spacing, width = spacing_m / XM_DEFAULT, int(round(0.12 / XM_DEFAULT))
+    m = np.zeros((H, W), np.uint8)
+    for y in range(560, H):
+        for side in (-0.5, 0.5):
+            lo = int(round(np.polyval(bend, y) + side * spacing - width / 2))
+            m[y, lo:lo + width] = 255
+    ys, xs = lanes.lane_pixels(m)
+    iy, ix = lanes.inner_stripe(ys, xs, "left", 38.0, H)
+    assert len(iy) == len(ys) // 2 and (ix > np.polyval(bend, iy)).all()
+    coeffs, spaced, upper, rss = lanes.two_stripes(ys, xs, 2, H)
+    assert np.median(spaced) == pytest.approx(spacing, abs=1.5)
+    assert math.sqrt(rss / len(ys)) == pytest.approx(width / math.sqrt(12), abs=0.5)
+
+
 @pytest.mark.parametrize("gap_px", [0.0, 90.0])
 def test_one_line_or_stripes_too_far_apart_are_left_whole(gap_px):
     """A single line (no second stripe), and two lines 90 px (0.52 m) apart, over 1.5x the 38 px
