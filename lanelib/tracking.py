@@ -21,7 +21,8 @@ debug composite work on it unchanged. Per frame:
    and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair
    (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
    lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
-   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``).
+   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``;
+   both limits scaled to the look-ahead's share of the view).
    With a track the pair's width is compared row by row with the tracked width
    (``width_reference_px``: a grade widens or narrows the flat view's lane ahead, and the track
    follows it). A line is not checked for bending away from a tracked line that was inferred,
