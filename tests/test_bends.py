@@ -208,9 +208,9 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # country's hairpin: from straight to a 35 m left bend in 15 m of road, a 3.4 m lane whose
     # right line is dashed, 0.48 m per frame (12 m/s at 25 fps). The lines' fitted curvatures in
     # the 9.4 m look-ahead differ by more than the highway's 0.004 1/m while the bend tightens
-    # (both lines within 0.1 m of the truth); refused, the right line was inferred for 8 frames
-    # and the windows' fits left the lines by 0.34 m. The allowance grows as the look-ahead
-    # shortens (``lanes.pair_problem``).
+    # (both lines within 0.1 m of the truth): refused by it, the pair of the sliding windows
+    # (0.27-0.34 m off the lines) was taken instead in 3 frames and the right line inferred in
+    # 8 more. The allowance grows as the look-ahead shortens (``lanes.pair_problem``).
     start, ramp, step = 20.0, 15.0, 0.48
     tracker = LaneTracker(pipe)
     worst = 0.0
@@ -221,7 +221,8 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
         assert r.found
         if s0 < start - BOTTOM_M:  # the bend has not reached the view's bottom row yet
             continue
-        assert "curvatures differ" not in r.reason, (i, r.reason)
+        if s0 + BOTTOM_M < start + ramp:  # tightening on the view's bottom row
+            assert "curvatures differ" not in r.reason, (i, r.reason)
         for fit, (_, ahead, lateral) in zip((r.left, r.right), lines):
             y = H - 1 - (ahead - BOTTOM_M) / YM
             x = W / 2 + lateral / XM
