@@ -39,13 +39,15 @@ debug composite work on it unchanged. Per frame:
    width) and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair
    (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
    lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
-   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``).
+   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``;
+   both limits scaled to the look-ahead's share of the view).
    With a track the pair's width is compared row by row with the tracked width
    (``width_reference_px``: a grade widens or narrows the flat view's lane ahead, and the track
-   follows it). A line is not checked for bending away from a tracked line that was inferred,
-   not seen; and when both lines bend away from the track alike and pass the pair's checks on
-   their own, the road changed faster than the smoothed track and both are kept
-   (``_pair_outvotes_track``). A pair refused as not parallel against the track is kept when
+   follows it), unless the newest accepted frame inferred a line: that width ahead is only
+   carried over from older frames (``_width_reference``). A line is not checked for bending
+   away from a tracked line that was inferred, not seen; and when both lines bend away from
+   the track alike and pass the pair's checks on their own, the road changed faster than the
+   smoothed track and both are kept (``_pair_outvotes_track``). A pair refused as not parallel against the track is kept when
    it is parallel on the road ahead's grade: its width changes along the view as the seen
    double line's two stripes' spacing does (``grade_pair_check``). A line whose pixels stop
    more than ``max_gap_m`` short of the view's bottom row (``lanes.LineFit.gap_px``: its paint
@@ -808,8 +810,18 @@ class LaneTracker:
 
     def _width_reference(self, track, rows: np.ndarray) -> np.ndarray | None:
         """Return the tracked lane's width (px) on ``rows``, the reference the pair's width is
-        compared with (``lanes.pair_problem``), or None without a track."""
-        if track is None:
+        compared with (``lanes.pair_problem``), or None without a track or when the newest
+        accepted frame inferred a line.
+
+        An inferred line's width ahead is not a measurement: it is the tracked width carried
+        over from the last frame that saw both lines (step 3), so on a bend that tightens it is
+        as old as that frame. Against it a pair seen now was refused as not parallel although
+        both lines lay on the lane (``country``'s 35 m hairpin, frames 97-98: 0.67-0.69 m
+        against the track, both lines within 0.14 m of the truth), and the track went on inferring the
+        line from a stale width. Such a pair is checked as a pair on its own, as without a
+        track, just as a seen line is not checked for bending away from an inferred one.
+        """
+        if track is None or self._track_inferred(0) or self._track_inferred(1):
             return None
         return np.polyval(track[1], rows) - np.polyval(track[0], rows)
 
