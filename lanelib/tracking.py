@@ -95,6 +95,21 @@ debug composite work on it unchanged. Per frame:
    toward ``hold_frames``: up to ``blind_hold_frames`` such frames are held beside them (logged
    and drawn as held all the same), since nothing contradicts the track there; a frame whose
    lines were seen and refused counts. The confidence falls with both.
+   **Restart from one line.** Without a track one line alone starts none (a confident wrong
+   lane is worse than none), except soon after a reset: in the ``restart_frames`` frames after
+   the reset of a track that saw both lines at the car, a line that passes every line check,
+   reaches the car (``max_gap_m``) and lies within ``restart_distance_m`` there of the lost
+   track's line on its side (seen, not inferred, in its newest accepted frame), and that agrees
+   with such a line of the previous frame (within ``max_jump_m`` at the car and ``max_bend_m``
+   in shape: a lone line's shape has no pair to check it), restarts the lane. The other line is
+   inferred as in step 3 at the width seen at the car before the loss (``seen_width_m``,
+   remembered through the reset), parallel to the seen line or widened ahead as its double
+   stripes (the lost track's shape ahead is as old as the loss); ``sources`` say "inferred" for
+   it. When both lines lie where the lost track's were but fail the pair's checks, neither
+   restarts. A track so restarted that is lost before it sees both lines at the car is not
+   restarted again (restarts do not chain). On ``country`` the right line's paint is missing
+   for some 40 frames beyond the S-bend after the crest while the double left line shows; the
+   lane held there was reset, and 33 frames reported no lane.
 6. **History of bases** (``base_history_frames``, off by default). The lines' x on the bottom
    row in the last accepted frames is kept, and survives a reset. When the windows start from
    the histogram (no track) and a base's peak stands out less than ``min_base_peak``
@@ -201,6 +216,13 @@ class TrackerConfig:
         0.7-1.3 m outside the line inferred for 40 frames over the crest; a line farther out
         makes a lane outside the width checks' range with the seen line anyway. The same
         figures on ``country`` at 0.9 and 1.5 m (84.2 % points, 27.8 % false lines at 0.5 m).
+    restart_frames : 0 (off), or the frames after a reset in which one line alone may restart
+        the lane where the lost track's line on its side was (step 5). 25 frames (a second at
+        25 fps): within it the car has moved across the lane by little (at 0.5 m/s of lateral
+        speed, half a metre); later the lost track tells nothing about where the lines are.
+    restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
+        its side to restart the lane (step 5). 0.5 m, ``max_jump_m``'s default: a line of the
+        neighbouring lane lies a lane's width (2.5-4.5 m) away.
     """
 
     max_jump_m: float = 0.5
@@ -218,6 +240,8 @@ class TrackerConfig:
     grade_pair_check: bool = True
     reacquire_after_frames: int = 3
     reacquire_band_m: float = 1.2
+    restart_frames: int = 25
+    restart_distance_m: float = 0.5
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -236,6 +260,19 @@ class TrackerConfig:
             raise ConfigError("tracking: max_gap_m must be positive")
         if self.reacquire_after_frames < 0 or self.reacquire_band_m <= 0:
             raise ConfigError("tracking: reacquire_after_frames >= 0 (0: off) and reacquire_band_m > 0")
+        if self.restart_frames < 0 or self.restart_distance_m <= 0:
+            raise ConfigError("tracking: restart_frames >= 0 (0: off) and restart_distance_m > 0")
+
+
+@dataclass(frozen=True)
+class _LostTrack:
+    """What a reset remembers of the track it forgot, for a restart from one line (step 5): the
+    tracked lines' x (px) on the bottom row, whether each was seen (not inferred) in the last
+    accepted frame, and the width seen at the car (``seen_width_m``)."""
+
+    bases: tuple[float, float]
+    seen: tuple[bool, bool]
+    width_m: float
 
 
 @dataclass(frozen=True)
@@ -287,12 +324,17 @@ class LaneTracker:
         """Forget the track and the remembered bases (a new video): the next frame is searched
         with sliding windows from the histogram."""
         self._forget_track()
+        self._lost_track: _LostTrack | None = None  # a new video: no lost track to restart from
+        # (side, pixel coefficients) of the lines that could restart the lane in the previous
+        # frame and in this one, each waiting for the next frame to confirm it (step 5)
+        self._restart_candidates: tuple[list, list] = ([], [])
         self._frame = 0  # the number of the frame being tracked (1 for the first)
         self.retries: tuple[str, ...] = ()
         self._base_history: deque[tuple[float, float]] = deque(maxlen=self.config.base_history_frames)
 
     def _forget_track(self) -> None:
-        """Forget the track (the lane was lost too long); the remembered bases stay."""
+        """Forget the track (the lane was lost too long); the remembered bases stay, and so does
+        ``_lost_track`` (what a restart from one line needs, step 5: set by the reset)."""
         self._history: deque[_Accepted] = deque(maxlen=self.config.smooth_frames)
         self._trend: deque[_Accepted] = deque(maxlen=max(self.config.trend_frames, 1))
         self._lost = 0
@@ -304,6 +346,18 @@ class LaneTracker:
         # (left, right): accepted frames in a row that inferred the line, or saw it only short of
         # the car (the re-acquisition band, step 1)
         self._inferred_run = [0, 0]
+        self._restart_width = float("nan")  # the width (m) a track restarted from one line infers at
+
+    def _remember_lost(self) -> _LostTrack | None:
+        """Return what a restart from one line needs of the track being reset (step 5): its
+        lines' bases, which were seen in the newest accepted frame, and the width seen at the
+        car; None for a track that never saw both lines at the car (one restarted from one line
+        that saw no second line: restarts do not chain)."""
+        lane = self.lane
+        if lane is None or not self._seen_widths:
+            return None
+        newest = self._history[-1].inferred
+        return _LostTrack(self._bases(lane), (not newest[0], not newest[1]), self.seen_width_m)
 
     @property
     def remembered_bases(self) -> tuple[float, float] | None:
@@ -390,8 +444,10 @@ class LaneTracker:
         and the trend, each frame's number counted back from the last frame tracked, the
         remembered bases, the hold's counters, the held confidences, the widths seen at the car
         (``seen_width_m``), which sides' tracked lines are asphalt edges (step 8) and for how many
-        frames each line has been inferred (the re-acquisition band, step 1). A Dask segment's
-        warm-up compares it with the previous segment's (``cluster.settle_joints``).
+        frames each line has been inferred (the re-acquisition band, step 1), and what a restart
+        from one line needs (step 5): the reset track's bases and seen width, the width a
+        restarted track infers at, and the lines the last frame could have restarted from. A
+        Dask segment's warm-up compares it with the previous segment's (``cluster.settle_joints``).
         """
         def accepted(acc: _Accepted) -> tuple:
             return (acc.left.tobytes(), acc.right.tobytes(), acc.left_conf, acc.right_conf,
@@ -399,7 +455,8 @@ class LaneTracker:
 
         state = ([accepted(a) for a in self._history], [accepted(a) for a in self._trend],
                  list(self._base_history), self._lost, self._blind, self._conf, list(self._seen_widths),
-                 self._edge, self._inferred_run)
+                 self._edge, self._inferred_run, self._lost_track, self._restart_width,
+                 [(side, c.tobytes()) for side, c in self._restart_candidates[1]])
         return hashlib.sha256(repr(state).encode()).digest()
 
     # ---- one frame ------------------------------------------------------------------------
@@ -408,6 +465,7 @@ class LaneTracker:
         """Return the tracked lane in the next RAW frame of the video (see the module docstring)."""
         pipe = self.pipeline
         self._frame += 1
+        self._restart_candidates = (self._restart_candidates[1], [])
         track = self.predicted_lane()
         prior = None
         top = 0 if track is None else self.lookahead_top_px(track)
@@ -449,20 +507,20 @@ class LaneTracker:
         if track is not None and (best[1] is None or best[2] is None):
             # the search missed: look again with windows started from the tracked lines
             better(pipe.search(mask(), bases=self._bases(track), top_px=top), "windows from the track")
-        elif track is None and best[1] is None and (bases := self._weak_bases(search)) is not None:
+        elif track is None and self._no_pair(best) and (bases := self._weak_bases(search)) is not None:
             # no track and a weak histogram peak: start that side from the remembered base
             better(pipe.search(mask(), bases=bases), "remembered bases",
                    "windows started from the remembered bases (weak histogram peak)")
         if track is not None and (side := self._reacquire_side(best)) is not None:
             # a line inferred for several frames: look for it further out from its inference
             better(self._reacquire(best[0], mask(), track, side, top), "re-acquire")
-        if track is None and best[1] is None and pipe.has_fallback_masks:
+        if track is None and self._no_pair(best) and pipe.has_fallback_masks:
             # no track and the cheap masks gave no lane: the whole view on the fallback masks
             better(pipe.search(mask()), "fallback masks")
-        if track is None and best[1] is None and pipe.config.search.short_views:
+        if track is None and self._no_pair(best) and pipe.config.search.short_views:
             # no track and the whole view gave no lane: shorter views (a tight bend)
             better(pipe.short_view_search(mask()), "shorter views")
-        if track is None and best[1] is None and pipe.config.search.candidates > 1:
+        if track is None and self._no_pair(best) and pipe.config.search.candidates > 1:
             # no track and the strongest peaks gave no lane: the robust path (other peaks)
             better(pipe.robust_search(mask(), best[0]), "other peaks")
         if pipe.config.edge.enabled and (edgeless := self._edge_candidate(best, track)) is not None:
@@ -479,7 +537,7 @@ class LaneTracker:
         images.pop("fallback binary", None)
         blind = not any(s.left.found or s.right.found for s in looked)
         spread = None  # one line to infer: the view's scale ahead from the other's double stripes
-        if self.config.stripe_spread and track is not None and (left is None) != (right is None):
+        if self.config.stripe_spread and (left is None) != (right is None):  # a track, or a restart
             seen = left if left is not None else right
             spread = self._stripe_spread(mask(), seen.coeffs_px, search.top_px)
         result = self._advance(search, left, right, why, track, images, blind, spread)
@@ -489,13 +547,20 @@ class LaneTracker:
                             "; ".join(why))
         return replace(result, rejected=rejected)
 
+    @staticmethod
+    def _no_pair(best: tuple) -> bool:
+        """Return whether a search without a track kept no pair: no line, or one line alone
+        restarting the lane (step 5), which a fallback search finding a pair outdoes."""
+        return best[1] is None or best[2] is None
+
     def _edge_candidate(self, best: tuple, track) -> LaneSearch | None:
         """Return the search whose missing line the asphalt edge may stand for (step 8), or None.
 
         Without a track: a best search that found one line and nothing on the other side (a line
-        alone cannot start a track). With a track: a frame that kept one line, where the other
-        side's tracked line was the asphalt edge (no paint was tracked there); what the search
-        found on that side failed the checks, so it is dropped for the edge.
+        alone cannot start a track, or only restarts one, step 5). With a track: a frame that
+        kept one line, where the other side's tracked line was the asphalt edge (no paint was
+        tracked there); what the search found on that side failed the checks, so it is dropped
+        for the edge.
         """
         search, left, right = best[:3]
         if track is None:
@@ -680,16 +745,75 @@ class LaneTracker:
                 why.append(problem)
                 failed = True
                 if track is None:
-                    return None, None, why, failed
+                    return self._restart(kept, why, failed)
                 lc, rc = (self._conf_of(kept[s]) for s in ("left", "right"))
                 drop = "right" if lc >= rc else "left"
                 why.append(f"{drop} line dropped (lower confidence)")
                 kept[drop] = None
         if track is None and (kept["left"] is None or kept["right"] is None):
-            if kept["left"] is not None or kept["right"] is not None:
-                why.append("one line alone cannot start a track")
-            return None, None, why, failed
+            return self._restart(kept, why, failed)
         return kept["left"], kept["right"], why, failed
+
+    def _restart(self, kept: dict, why: list[str], failed: bool
+                 ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
+        """Return ``_check``'s answer without a track when not both lines of ``kept`` (each
+        passed the line checks) make a lane: one line alone restarts the lane only soon after a
+        reset, where the lost track's line on its side was (step 5); otherwise none.
+
+        Within ``restart_frames`` frames after a reset of a track that saw both lines at the car
+        (``_LostTrack``), a line that reaches the car (``max_gap_m``) and lies within
+        ``restart_distance_m`` of the lost track's line on its side at the car, that line seen
+        (not inferred) in the track's newest accepted frame, restarts the lane, the other line
+        inferred at the width seen at the car before the loss (``_inferred``). When both lines so
+        lie (the pair failed its checks), neither restarts it: one of them is not a line of the
+        lane, and the tracker does not guess which.
+        """
+        lines = {s: f for s, f in kept.items() if f is not None}
+        if not lines:
+            return None, None, why, failed
+        lost, cfg = self._lost_track, self.config
+        if lost is None or self._lost >= cfg.restart_frames:
+            why.append("one line alone cannot start a track")
+            return None, None, why, failed
+        near = {}
+        for side, fit in lines.items():
+            i = 0 if side == "left" else 1
+            dist = abs(float(np.polyval(fit.coeffs_px, self._bottom)) - lost.bases[i]) * self._xm
+            if lost.seen[i] and self._reach_car(fit) and dist <= cfg.restart_distance_m:
+                near[side] = dist
+        if len(near) != 1:
+            why.append("one line alone cannot start a track" if len(lines) == 1 and not near else
+                       "no single line lies where the lost track's line was" if not near else
+                       "both lines lie where the lost track's lines were but are no lane together")
+            return None, None, why, failed
+        (side, dist), = near.items()
+        fit = lines[side]
+        self._restart_candidates[1].append((side, np.array(fit.coeffs_px, float)))
+        agree = self._confirmed_restart(side, fit)
+        if agree is None:
+            why.append(f"{side} line lies where the lost track's {side} line was ({dist:.2f} m at the "
+                       "car); it restarts the lane if the next frame's agrees with it")
+            return None, None, why, failed
+        why.append(f"{side} line alone restarts the lane: {dist:.2f} m at the car from the lost "
+                   f"track's {side} line (limit {cfg.restart_distance_m} m), {self._lost + 1} "
+                   f"frames after the reset (limit {cfg.restart_frames}), the previous frame's within "
+                   f"{agree}")
+        return (fit if side == "left" else None, fit if side == "right" else None, why, failed)
+
+    def _confirmed_restart(self, side: str, fit: LineFit) -> str | None:
+        """Return how a line that could restart the lane agrees with one the previous frame
+        could have restarted it from on the same side, or None when none agrees: within
+        ``max_jump_m`` at the car and ``max_bend_m`` in shape over the view (the checks of a line
+        against its track, step 2). A single line's fit has no pair to check its shape (on
+        ``country``'s S-bend after the crest the double line's fit turned the wrong way beyond
+        20 m, and the next frame's bent 6 m away from it)."""
+        for previous_side, coeffs in self._restart_candidates[0]:
+            if previous_side != side:
+                continue
+            dx = (np.polyval(fit.coeffs_px, self._rows) - np.polyval(coeffs, self._rows)) * self._xm
+            if abs(dx[-1]) <= self.config.max_jump_m and dx.max() - dx.min() <= self.config.max_bend_m:
+                return f"{abs(dx[-1]):.2f} m at the car and {dx.max() - dx.min():.2f} m in shape"
+        return None
 
     def _inferred(self, seen: np.ndarray, track, side: int, top_px: int,
                   spread: np.ndarray | None = None) -> np.ndarray:
@@ -701,15 +825,22 @@ class LaneTracker:
         not the tracked lane's: the track holds the lines inferred in earlier frames, and a width
         read back from them drifts frame after frame (step 3); the track's width on the other
         rows is scaled by the same factor. With a ``spread`` (``_stripe_spread``) the width is
-        the seen width at the car times it."""
+        the seen width at the car times it. Without a ``track`` (a restart from one line, step 5)
+        the width is the one seen at the car before the reset, on every row unless a ``spread``
+        widens it; a restarted track goes on inferring at it until both lines are seen."""
         rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
-        tracked = lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
-        at_car = self.seen_width_m if self._seen_widths else tracked
+        if track is None:  # a restart from one line (step 5): the width seen before the loss
+            at_car = tracked = self._lost_track.width_m
+        else:
+            tracked = lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
+            at_car = (self.seen_width_m if self._seen_widths else
+                      tracked if np.isnan(self._restart_width) else self._restart_width)
         if spread is not None:
             width = at_car * np.polyval(spread, self._bottom - rows)
-        elif tracked > 0.5 * at_car:  # the track's change of width ahead, at the seen width at the car
+        elif track is not None and tracked > 0.5 * at_car:
+            # the track's change of width ahead, at the seen width at the car
             width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym) * (at_car / tracked)
-        else:  # a track whose width has collapsed: no shape ahead to keep
+        else:  # a restart, or a track whose width has collapsed: no shape ahead to keep
             width = np.full(len(rows), at_car)
         return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
                                           self.pipeline.size[1], top_px))
@@ -870,7 +1001,10 @@ class LaneTracker:
                     coeffs[side] = self._inferred(coeffs[other], track, i, search.top_px, spread)
                     confs[side] = round(0.5 * confs[other], 3)
                     widened = " at the car, widened ahead as its double stripes" if spread is not None else ""
-                    notes.append(f"{side} line inferred from the {other} line and the tracked width{widened}")
+                    width = "the tracked width" if track is not None else "the width seen before the loss"
+                    notes.append(f"{side} line inferred from the {other} line and {width}{widened}")
+            if track is None and (left is None or right is None):  # restarted from one line (step 5)
+                self._restart_width = self._lost_track.width_m
             accepted = _Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
                                  search.top_px, self._frame, (left is None, right is None))
             self._history.append(accepted)
@@ -900,6 +1034,7 @@ class LaneTracker:
                 blinds = f" beside {self._blind} frames with nothing seen" if self._blind else ""
                 notes.append(f"lane lost for more than {self.config.hold_frames} frames{blinds}; "
                              "tracker reset")
+                self._lost_track = self._remember_lost()
                 self._forget_track()
             else:
                 self._lost += 1

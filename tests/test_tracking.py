@@ -700,3 +700,89 @@ def test_the_reacquisition_band_widens_with_the_inferred_run(pipe):
 def test_reacquisition_needs_a_count_and_a_band(kwargs):
     with pytest.raises(ConfigError, match="reacquire_after_frames"):
         TrackerConfig(**kwargs)
+
+
+def _lose_track(pipe: LanePipeline, **kwargs) -> LaneTracker:
+    """Return a tracker that tracked both drawn lines for 3 frames, then held the lane through 3
+    blank frames and reset on the fourth (every blank frame counts toward the hold)."""
+    tracker = LaneTracker(pipe, TrackerConfig(hold_frames=3, blind_hold_frames=0, **kwargs))
+    for _ in range(3):
+        assert tracker.update(frame(pipe)).found
+    blank = frame(pipe, left_x=None, right_x=None)
+    held = [tracker.update(blank) for _ in range(4)]
+    assert [r.method for r in held[:3]] == ["hold"] * 3
+    assert "tracker reset" in held[3].reason and tracker.lane is None
+    assert math.isnan(tracker.seen_width_m)  # the track's, forgotten; the reset remembers it
+    assert tracker._lost_track.width_m == pytest.approx(3.7, abs=0.02)
+    return tracker
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_one_line_restarts_a_lane_lost_recently_with_the_other_inferred(pipe, side):
+    """Known answer: after the reset only one line shows, 0.2 m from where it was tracked (the
+    car drifted); the lane's true other line lies 3.7 m (640 px) beside it. The first frame waits
+    for the next to agree; the second restarts the lane, the other line inferred at the width
+    seen before the loss, within 0.05 m of the truth, and the track goes on from it."""
+    tracker = _lose_track(pipe)
+    shift = 0.2 / XM
+    lone = dict(left_x=LEFT_X + shift, right_x=None) if side == "left" else dict(left_x=None, right_x=RIGHT_X + shift)
+    other = "right" if side == "left" else "left"
+    first = tracker.update(frame(pipe, **lone))
+    assert not first.found and "restarts the lane if the next frame's agrees" in first.reason
+    results = [tracker.update(frame(pipe, **lone)) for _ in range(3)]
+    r = results[0]
+    assert r.found and f"{side} line alone restarts the lane: 0.20 m at the car" in r.reason
+    assert f"{other} line inferred from the {side} line and the width seen before the loss" in r.reason
+    assert r.sources == (("seen", "inferred") if side == "left" else ("inferred", "seen"))
+    for r in results:
+        assert r.found and r.sources[0 if side == "left" else 1] == "seen"
+        assert bottom_x(r, side) == pytest.approx((LEFT_X if side == "left" else RIGHT_X) + shift, abs=3)
+        truth = (RIGHT_X if side == "left" else LEFT_X) + shift
+        assert abs(bottom_x(r, other) - truth) * XM < 0.05
+        assert r.lane_width_m == pytest.approx(3.7, abs=0.05)
+    assert r.method == "prior" and r.right_conf == pytest.approx(0.5 * r.left_conf) if side == "left" else True
+
+
+def test_a_video_that_starts_with_one_line_never_reports_a_lane(pipe):
+    tracker = LaneTracker(pipe)
+    for _ in range(30):
+        r = tracker.update(frame(pipe, right_x=None))
+        assert not r.found and "one line alone cannot start a track" in r.reason
+
+
+@pytest.mark.parametrize("case", ["too far", "too late", "off", "disagree"])
+def test_one_line_does_not_restart_a_lane_lost_long_ago_or_elsewhere(pipe, case):
+    tracker = _lose_track(pipe, restart_frames=0 if case == "off" else 5)
+    lone = frame(pipe, right_x=None, left_x=LEFT_X + (1.0 / XM if case == "too far" else 0.0))
+    blank = frame(pipe, left_x=None, right_x=None)
+    if case == "too late":  # the lone line shows from the 6th frame after the reset on
+        for _ in range(5):
+            tracker.update(blank)
+    if case == "disagree":  # frames whose lines lie 0.6 m apart (max_jump_m 0.5), each 0.3 m from the lost one
+        frames = [frame(pipe, right_x=None, left_x=LEFT_X + s / XM) for s in (0.3, -0.3, 0.3, -0.3)]
+    else:
+        frames = [lone] * 4
+    for f in frames:
+        r = tracker.update(f)
+        assert not r.found
+        assert "one line alone cannot start a track" in r.reason or case == "disagree"
+    assert tracker.lane is None
+
+
+def test_a_restarted_track_that_never_saw_both_lines_is_not_restarted_again(pipe):
+    tracker = _lose_track(pipe)
+    lone = frame(pipe, right_x=None)
+    assert [tracker.update(lone).found for _ in range(2)] == [False, True]
+    blank = frame(pipe, left_x=None, right_x=None)
+    for _ in range(4):
+        r = tracker.update(blank)
+    assert "tracker reset" in r.reason
+    for _ in range(3):
+        r = tracker.update(lone)
+        assert not r.found and "one line alone cannot start a track" in r.reason
+
+
+@pytest.mark.parametrize("kwargs", [dict(restart_frames=-1), dict(restart_distance_m=0.0)])
+def test_a_restart_needs_a_count_and_a_distance(kwargs):
+    with pytest.raises(ConfigError, match="restart_frames"):
+        TrackerConfig(**kwargs)
