@@ -496,7 +496,8 @@ class GeometryOptions:
     seconds : of a video read for the estimate, from its start (or from ``start_s``).
     max_frames : frames of those (or of a folder's images) used, evenly spread.
     check_every_s : through a video, the vanishing point is measured this often
-        (``geometry.RoadLineFinder``, about 15 ms a frame).
+        (``geometry.RoadLineFinder``, about 15 ms a frame); the straight checks refine it
+        along the horizon (``GeometryWatch``).
     drift_checks : this many checks in a row with the vanishing point off the horizon (by more
         than ``geometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
         for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
@@ -624,14 +625,51 @@ def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
     return replace(config, perspective=geo.perspective_config())
 
 
+# The watch refines the vanishing point's place along the horizon (the car's straight-ahead
+# direction: the road's, on average over straight road) from the straight checks' points:
+# at least this many of them, and at least as many as the estimate in use rests on (its
+# ``frames_used``), so that a refinement rests on more straight road than the estimate it corrects
+REFINE_MIN_CHECKS = 2 * geometry.MIN_GOOD_FRAMES
+# ... and only when their median lies farther from the point in use than its standard error plus
+# this share of the width: the straight checks' column spreads 0.2-0.55 % of the width from one
+# check to the next (1.9 and 4.0 px on the 960 px P1 clips, 7.0 px on the 1280 px project video:
+# median |difference| / 0.95); a shift smaller than one check's noise is not worth restarting the
+# tracker for, and it is the hysteresis that keeps the point from going back and forth
+REFINE_TOLERANCE = 0.005
+# the last this many straight checks count (5 minutes of straight road at 2 checks a second): a
+# watch pickles in a few kB however long the video
+REFINE_MAX_CHECKS = 600
+
+
 class GeometryWatch:
-    """Through a video, check the road geometry and estimate it again when the horizon moves.
+    """Through a video, check the road geometry: refine the vanishing point along the horizon as
+    straight road accumulates, and estimate the geometry again when the horizon moves.
 
     ``check(frame, index, time_s)`` measures the frame's vanishing point every
-    ``options.check_every_s``; after ``options.drift_checks`` checks in a row whose point lies
-    off the horizon (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of
-    the height) it estimates the geometry from those frames and returns it (None otherwise). A
-    failed or low-confidence new estimate keeps the old geometry. ``notes`` says what happened.
+    ``options.check_every_s``; frames where the road bends say nothing (``VanishingPoint.ok``).
+    It returns the geometry to use from this frame on when it changed (None otherwise); ``notes``
+    says what happened and why.
+
+    - **Drift.** After ``options.drift_checks`` checks in a row whose point lies off the horizon
+      (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of the height: a
+      crest, a dip, a knocked camera) it estimates the geometry from those frames. A failed or
+      low-confidence new estimate keeps the old geometry. A new estimate starts the refinement
+      afresh.
+    - **Refinement.** The first estimate's point is where the road headed, on average, in the
+      first seconds' straight frames: a gentle curve or the car's wander across its lane puts
+      it a few px aside, which moves the car's column in the bird's-eye view and so the
+      offset read. The points of the straight checks on the horizon (the last
+      ``REFINE_MAX_CHECKS``) are kept; once there are ``REFINE_MIN_CHECKS`` of them and at least
+      as many as the estimate in use rests on, and their median along the horizon lies
+      farther from the point in use than its standard error (1.25 x 1.48 x MAD / sqrt(n))
+      plus ``REFINE_TOLERANCE`` of the width, the point moves to the median
+      (``geometry.refined_geometry``: the horizon, hood, scale and look-ahead are kept). The
+      next move takes twice as many points (and the median off the new point by as much): the
+      checks, half a second apart, follow the car's weave across its lane for seconds, so the
+      standard error of n of them is too small until they span several weaves; doubling the
+      evidence each time keeps the point from going back and forth and leaves at most a few
+      moves in a video (10, 20, 40, ... points).
+
     A watch pickles without its ``finder`` (its undistortion maps and hood mask, megabytes),
     which the copy builds again on first use: a Dask segment ships it back to the driver.
     """
@@ -644,8 +682,11 @@ class GeometryWatch:
         self.every = max(1, round(options.check_every_s * fps))
         self._finder: geometry.RoadLineFinder | None = None  # built on first use (``finder``)
         self.tolerance_px = max(geometry.DRIFT_PX, 0.01 * geo.size_px[1])
+        self.refine_tolerance_px = REFINE_TOLERANCE * geo.size_px[0]
+        self.refine_min = max(REFINE_MIN_CHECKS, len(geo.frames_used))  # points the next refinement takes
         self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
         self.shifts: list[float] = []
+        self.points: deque[tuple[float, float]] = deque(maxlen=REFINE_MAX_CHECKS)
         self.notes: list[str] = []
 
     @property
@@ -661,9 +702,11 @@ class GeometryWatch:
         return self.__dict__ | {"_finder": None}
 
     def state_key(self) -> bytes:
-        """Return a fingerprint of what the next checks depend on: the geometry in use and the
-        horizon shifts of the checks off it in a row (their frames are those checks')."""
-        return hashlib.sha256(pickle.dumps((self.geometry, self.shifts))).digest()
+        """Return a fingerprint of what the next checks depend on: the geometry in use, the
+        horizon shifts of the checks off it in a row (their frames are those checks') and the
+        straight checks' points kept for the refinement."""
+        return hashlib.sha256(pickle.dumps((self.geometry, self.shifts, tuple(self.points),
+                                            self.refine_min))).digest()
 
     def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
         if index % self.every:
@@ -675,7 +718,8 @@ class GeometryWatch:
         if abs(shift) <= self.tolerance_px:
             self.off.clear()
             self.shifts.clear()
-            return None
+            self.points.append((float(vp.point_px[0]), float(vp.point_px[1])))
+            return self._refine(index, time_s)
         self.off.append(frame)
         self.shifts.append(shift)
         if len(self.off) < self.options.drift_checks:
@@ -699,6 +743,38 @@ class GeometryWatch:
                           f"{self.geometry.horizon_row_px:.1f} -> {new.horizon_row_px:.1f} px, "
                           f"{new.ym_per_px:.4f} m/px along (was {self.geometry.ym_per_px:.4f})")
         self.geometry = new
+        self.points.clear()  # points about the old horizon (a knocked camera turned too)
+        self.refine_min = max(REFINE_MIN_CHECKS, len(new.frames_used))
+        return new
+
+    def _refine(self, index: int, time_s: float) -> RoadGeometry | None:
+        """Return the geometry with its vanishing point moved to the straight checks' median
+        along the horizon when they place it off the point in use (class docstring), else None."""
+        n = len(self.points)
+        if n < self.refine_min:
+            return None
+        geo = self.geometry
+        r = math.radians(geo.roll_deg)
+        d = np.asarray(self.points) - np.asarray(geo.vanishing_point_px)
+        along = d[:, 0] * math.cos(r) - d[:, 1] * math.sin(r)
+        median = float(np.median(along))
+        error = 1.2533 * 1.4826 * float(np.median(np.abs(along - median))) / math.sqrt(n)
+        if abs(median) <= error + self.refine_tolerance_px:
+            return None
+        where = (f"frame {index} ({time_s:.2f} s): the {n} straight checks so far place the vanishing point "
+                 f"{abs(median):.1f} px {'right' if median > 0 else 'left'} of the one in use along the horizon "
+                 f"(median; standard error {error:.1f} px, tolerance {self.refine_tolerance_px:.1f} px)")
+        try:
+            new = geometry.refined_geometry(geo, median, f"vanishing point refined by {median:+.1f} px along the "
+                                                         f"horizon from {n} straight checks through the video")
+        except GeometryError as e:
+            self.notes.append(f"{where}; not refined: {e}")
+            return None
+        yaw = ("" if geo.yaw_deg is None else f", yaw {geo.yaw_deg:+.2f} -> {new.yaw_deg:+.2f} deg")
+        (x0, y0), (x1, y1) = geo.vanishing_point_px, new.vanishing_point_px
+        self.notes.append(f"{where}; refined: vanishing point ({x0:.1f}, {y0:.1f}) -> ({x1:.1f}, {y1:.1f}) px{yaw}")
+        self.geometry = new
+        self.refine_min = 2 * n
         return new
 
 
@@ -803,15 +879,18 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     auto_geometry : estimate the bird's-eye points and scale from the clip's first
         ``seconds`` (from ``start_s``) instead of ``config.perspective`` (``estimate_road_geometry``:
         a ``GeometryError`` before anything is written when that fails or is not confident), then
-        keep checking them (``GeometryWatch``); a new estimate restarts the tracker. The run's
-        ``notes`` say when and why.
+        keep checking them (``GeometryWatch``): the vanishing point is refined along the horizon
+        as straight road accumulates, and the geometry estimated again when the horizon moves; a
+        refined or new geometry restarts the tracker. The run's ``notes`` say when and why.
     on_geometry : called with the first estimate, before the run starts (the CLI prints it).
     workers, scheduler : run the clip in segments on Dask workers (``cluster.dask_client``,
         ``run_video_segments``: each segment starts ``cluster.WARMUP_FRAMES`` early to warm the
         tracker up, and runs again from the previous segment's tracker where that was not
         enough, so the frames and the log are those of one process). With ``auto_geometry`` the
         geometry is estimated once here; the geometry watch is part of the state checked at the
-        joints (a drift found in one segment carries over into the next by a re-run).
+        joints (a drift found in one segment carries over into the next by a re-run; the straight
+        checks a refinement rests on do too, so a joint past the first straight check is
+        re-run: such a run takes longer on Dask than in one process).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -842,8 +921,8 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
                        fps: float | None = None) -> tuple[FrameFn, list[str], FrameState]:
     """Return ``process_video``'s ``process`` (a fresh ``LaneTracker`` on the first frame), the
     list its notes go to and its state (the tracker; with ``geo`` also the geometry watch); with
-    ``geo``, the road geometry in use, checked (``GeometryWatch`` at ``fps``) and estimated again
-    when it drifts, which restarts the tracker."""
+    ``geo``, the road geometry in use, checked (``GeometryWatch`` at ``fps``), refined and
+    estimated again when it drifts; a refined or new geometry restarts the tracker."""
     trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
     watch: list[GeometryWatch] = []
     if geo is not None:
