@@ -16,7 +16,9 @@ On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in c
 (``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
 that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up (a segment whose tracker
 did not reach the previous segment's final state in that warm-up runs again from that state:
-``cluster.settle_joints``, ``FrameState``), joined without re-encoding; the ``process``
+``cluster.settle_joints``, ``FrameState``; the evidence a ``GeometryWatch`` keeps for later is
+carried through a segment's record of its checks instead, ``carry_lane_state``), joined
+without re-encoding; the ``process``
 callables are built on the workers by picklable factories (``lane_image_process``,
 ``lane_video_process``, ``hough_image_process``, ``hough_video_process``), so the rows, logs
 and results are those of one process.
@@ -338,6 +340,7 @@ class FrameState:
     key: Callable[[], bytes | None]
     get: Callable[[], object]
     put: Callable[[object], None]
+    core: Callable[[], bytes | None] = lambda: None  # the part the results depend on now (``cluster.Carry``)
 
 
 # a FrameFn, the list its notes go to (what happened on the way: GeometryWatch.notes) and its state
@@ -375,7 +378,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
         process, notes, carried = make()
         if state is not None:
             carried.put(state)
-        rows, found, stopped, entry = [], 0, "", None
+        rows, found, stopped, entry, entry_core = [], 0, "", None, None
         writer = None
         try:
             try:
@@ -386,7 +389,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
                     for n, frame in enumerate(reader):
                         index = first + n
                         if index == start:
-                            entry = carried.key()
+                            entry, entry_core = carried.key(), carried.core()
                         image, row, lane = process(frame, index, index / reader.info.fps)
                         if index >= start:
                             writer.write(image)
@@ -406,7 +409,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
             if writer is not None:
                 writer.abort()
             raise
-        carry = cluster.Carry(entry, carried.key(), carried.get())
+        carry = cluster.Carry(entry, carried.key(), carried.get(), entry_core, carried.core())
         out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes), carry))
     return out
 
@@ -414,7 +417,9 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
 def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, make: FrameFnMaker,
                        client, log_path: str | os.PathLike | None = None, progress: bool = True,
                        desc: str = "frames", threads: int | None = None, start_s: float | None = None,
-                       end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES) -> VideoRun:
+                       end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES,
+                       carry: Callable[[object, object, int], tuple[object, bytes] | None] | None = None
+                       ) -> VideoRun:
     """Return what a run did, as ``run_video``, with the clip split into segments run by the
     workers of a Dask ``client``.
 
@@ -424,7 +429,10 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     and writes the segment's video to a folder of parts beside ``out_path``. Each joint is then
     checked (``cluster.settle_joints``): where the warm-up did not bring the tracker to the state
     the previous segment ended in, the segment is run again from that state, so the frames and
-    the log are those of one process; ``VideoRun.joints`` counts the re-runs. This process joins
+    the log are those of one process; ``VideoRun.joints`` counts the re-runs. ``carry(state
+    before, end state, start)`` (``carry_lane_state``): where the states differ only in evidence
+    kept for later (``FrameState.core``), carry the previous state through the segment instead
+    of running it again (``cluster.settle_joints``). This process joins
     the parts (``io.join_videos``, no re-encoding) and writes the per-frame log, both
     atomically, and removes the parts. One progress bar counts the frames of the segments done
     (re-runs included). A clip that stops decoding keeps the frames before the break, as
@@ -443,13 +451,19 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     spans = cluster.segments(frames, count, warmup)
     segs = [(first, start, stop, end_s is None and stop == frames.stop) for first, start, stop in spans]
     out.parent.mkdir(parents=True, exist_ok=True)
+
+    def carry_on(k: int, before: object, o: SegmentOutcome) -> SegmentOutcome | None:
+        got = None if carry is None else carry(before, o.carry.end_state, segs[k][1])
+        return None if got is None else replace(o, carry=replace(o.carry, end_state=got[0], end_key=got[1]))
+
     parts = Path(tempfile.mkdtemp(prefix=f".{out.stem}.", suffix=".parts", dir=out.parent))
     try:
         with tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
             settled, joints = cluster.map_segments(client, video_segment, segs, bar, lambda o: o.carry,
-                                                   lambda o: bool(o.stopped), in_path=in_path.resolve(),
-                                                   parts=parts.resolve(), make=make, threads=threads)
+                                                   lambda o: bool(o.stopped), rebase=carry_on,
+                                                   in_path=in_path.resolve(), parts=parts.resolve(),
+                                                   make=make, threads=threads)
         outcomes, files = [], []
         for (_, start, _), o in zip(spans, settled):
             outcomes.append(o)
@@ -641,6 +655,10 @@ REFINE_TOLERANCE = 0.005
 REFINE_MAX_CHECKS = 600
 
 
+class _NeedsFrames(Exception):
+    """A watch carried through a record of checks (no frames) reached a new estimate."""
+
+
 class GeometryWatch:
     """Through a video, check the road geometry: refine the vanishing point along the horizon as
     straight road accumulates, and estimate the geometry again when the horizon moves.
@@ -687,6 +705,11 @@ class GeometryWatch:
         self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
         self.shifts: list[float] = []
         self.points: deque[tuple[float, float]] = deque(maxlen=REFINE_MAX_CHECKS)
+        # a record of the straight checks (index, time, point) and the last frame the geometry
+        # changed at: a Dask joint carries the evidence through a segment by them (``carried_through``)
+        self.record: deque[tuple[int, float, float, float]] = deque(maxlen=REFINE_MAX_CHECKS)
+        self.recorded = 0
+        self.changed_at = -1
         self.notes: list[str] = []
 
     @property
@@ -708,22 +731,69 @@ class GeometryWatch:
         return hashlib.sha256(pickle.dumps((self.geometry, self.shifts, tuple(self.points),
                                             self.refine_min))).digest()
 
+    def core_key(self) -> bytes:
+        """Return a fingerprint of what the frames' results depend on until the geometry changes:
+        the geometry in use and the horizon shifts of the checks off it in a row."""
+        return hashlib.sha256(pickle.dumps((self.geometry, self.shifts))).digest()
+
+    def carried_through(self, other: GeometryWatch, start: int) -> GeometryWatch | None:
+        """Return this watch (the state before frame ``start``) carried through the straight
+        checks ``other`` made from ``start`` on, or None when they would have changed the
+        geometry, or called for a new estimate, or ``other`` no longer holds them all.
+
+        A Dask segment starts with a fresh watch; when its geometry and run of checks off the
+        horizon at ``start`` are this watch's (``core_key``) and it changed nothing from there,
+        its frames are those this watch would have given too unless this watch's evidence
+        (the points a refinement rests on) would have changed the geometry on the way.
+        """
+        if other.changed_at >= start:
+            return None
+        checks = [c for c in other.record if c[0] >= start]
+        if other.recorded > len(other.record) and (not other.record or other.record[0][0] >= start):
+            return None  # the record lost some of them
+        copy = pickle.loads(pickle.dumps(self))
+        for index, time_s, x, y in checks:
+            try:
+                if copy._step((x, y), None, index, time_s) is not None:
+                    return None
+            except _NeedsFrames:
+                return None
+        copy.record.extend(checks)
+        copy.recorded += len(checks)
+        copy.off = deque(other.off, maxlen=other.off.maxlen)  # the frames of the same checks
+        copy.notes = []
+        return copy
+
     def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
         if index % self.every:
             return None
         vp = self.finder.vanishing_point(frame)
         if not vp.ok:
             return None  # a bend, a frame without lines: says nothing about the horizon
-        shift = self.geometry.horizon_shift_px(vp.point_px)
+        point = (float(vp.point_px[0]), float(vp.point_px[1]))
+        self.record.append((index, time_s) + point)
+        self.recorded += 1
+        new = self._step(point, frame, index, time_s)
+        if new is not None:
+            self.changed_at = index
+        return new
+
+    def _step(self, point: tuple[float, float], frame: np.ndarray | None, index: int,
+              time_s: float) -> RoadGeometry | None:
+        """Return the new geometry after a straight check's point, or None (``check``); without
+        its ``frame`` (``carried_through``), raise ``_NeedsFrames`` where a new estimate is due."""
+        shift = self.geometry.horizon_shift_px(point)
         if abs(shift) <= self.tolerance_px:
             self.off.clear()
             self.shifts.clear()
-            self.points.append((float(vp.point_px[0]), float(vp.point_px[1])))
+            self.points.append(point)
             return self._refine(index, time_s)
         self.off.append(frame)
         self.shifts.append(shift)
         if len(self.off) < self.options.drift_checks:
             return None
+        if frame is None:
+            raise _NeedsFrames
         where = (f"frame {index} ({time_s:.2f} s): the vanishing point lay "
                  f"{abs(float(np.median(self.shifts))):.1f} px {'below' if np.median(self.shifts) > 0 else 'above'} "
                  f"the horizon in {len(self.off)} checks in a row")
@@ -888,9 +958,10 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         tracker up, and runs again from the previous segment's tracker where that was not
         enough, so the frames and the log are those of one process). With ``auto_geometry`` the
         geometry is estimated once here; the geometry watch is part of the state checked at the
-        joints (a drift found in one segment carries over into the next by a re-run; the straight
-        checks a refinement rests on do too, so a joint past the first straight check is
-        re-run: such a run takes longer on Dask than in one process).
+        joints (a drift found in one segment carries over into the next by a re-run); the
+        straight checks a refinement rests on are carried through the next segment's record of
+        its checks (``carry_lane_state``), which is run again only where they would have
+        refined the geometry in it.
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -909,7 +980,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         if client is not None:
             return run_video_segments(in_path, out_path, make, client, log_path=log_path,
                                       progress=progress, desc=Path(in_path).name, threads=threads,
-                                      start_s=start_s, end_s=end_s)
+                                      start_s=start_s, end_s=end_s,
+                                      carry=carry_lane_state if geo is not None else None)
     process, notes, _ = make()
     run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
@@ -949,9 +1021,12 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
         return image, video_log_row(index, time_s, result), result.found
 
     def key() -> bytes | None:
-        if not trackers:
+        return _lane_state_key(trackers[0] if trackers else None, watch[0] if watch else None)
+
+    def core() -> bytes | None:
+        if not trackers or not watch:
             return None
-        return trackers[0].state_key() + (watch[0].state_key() if watch else b"")
+        return trackers[0].state_key() + watch[0].core_key()
 
     def get() -> object:
         return trackers[0] if trackers else None, current[0], watch[0] if watch else None
@@ -963,7 +1038,26 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
             new.notes = watch[0].notes
             watch[0] = new
 
-    return process, (watch[0].notes if watch else []), FrameState(key, get, put)
+    return process, (watch[0].notes if watch else []), FrameState(key, get, put, core)
+
+
+def _lane_state_key(tracker: LaneTracker | None, watch: GeometryWatch | None) -> bytes | None:
+    """Return the fingerprint of ``lane_video_process``'s state: its tracker's and watch's."""
+    if tracker is None:
+        return None
+    return tracker.state_key() + (watch.state_key() if watch is not None else b"")
+
+
+def carry_lane_state(before: object, state: object, start: int) -> tuple[object, bytes] | None:
+    """Return ``lane_video_process``'s state ``state`` (a segment's end, from a fresh start)
+    with the geometry watch of ``before`` (the previous segment's end) carried through the
+    segment's straight checks from frame ``start`` (``GeometryWatch.carried_through``), and its
+    key; None when that would have changed the geometry (the segment must run again)."""
+    tracker, config, watch = state
+    watch = before[2].carried_through(watch, start) if watch is not None and before[2] is not None else None
+    if watch is None:
+        return None
+    return (tracker, config, watch), _lane_state_key(tracker, watch)
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline

@@ -277,6 +277,40 @@ def test_the_watch_refines_the_point_once_the_evidence_says_so_and_not_back_and_
     assert len(pickle.dumps(watch)) < 20_000
 
 
+def test_a_fresh_watch_is_carried_on_by_the_evidence_of_the_one_before(estimate):
+    """A Dask segment's fresh watch vs one watch through the whole clip: where the points before
+    the segment change nothing in it, the previous watch carried through the segment's record
+    is the one watch's state; where they would have refined the geometry in it, None (the
+    segment runs again)."""
+    cal, geo = estimate
+    need = max(runs.REFINE_MIN_CHECKS, len(geo.frames_used))
+    x0, y0 = geo.vanishing_point_px
+    options = runs.GeometryOptions(check_every_s=0.04)
+    frame = np.zeros((1, 1, 3), np.uint8)
+
+    def run(points, indices, before=None):
+        watch = runs.GeometryWatch(geo, cal, options, fps=25.0) if before is None else before
+        watch._finder = _Points(points)
+        for i in indices:
+            watch.check(frame, i, i / 25)
+        return watch
+
+    for off_px, carried in ((1.0, True), (20.0, False)):
+        # the first `need - 2` points on the estimate's column, then `off_px` right of it
+        points = [(x0, y0)] * (need - 2) + [(x0 + off_px, y0 + 1.0)] * need
+        one = run(points, range(len(points)))
+        start = need - 2
+        first = run(points[:start], range(start))
+        fresh = run(points[start - 3:start], range(start - 3, start))  # warmed up over 3 checks
+        assert fresh.core_key() == first.core_key() and fresh.state_key() != first.state_key()
+        fresh = run(points[start:], range(start, len(points)), fresh)
+        got = first.carried_through(fresh, start)
+        if carried:
+            assert got is not None and got.state_key() == one.state_key() and one.notes == []
+        else:
+            assert got is None and "refined" in one.notes[0]
+
+
 REFINE_CAMERA = Camera.pinhole((960, 540), hfov_deg=40.0, height_m=1.3, pitch_deg=-1.0, yaw_deg=1.5)
 
 
