@@ -650,8 +650,9 @@ REFINE_MIN_CHECKS = 2 * geometry.MIN_GOOD_FRAMES
 # median |difference| / 0.95); a shift smaller than one check's noise is not worth restarting the
 # tracker for, and it is the hysteresis that keeps the point from going back and forth
 REFINE_TOLERANCE = 0.005
-# the last this many straight checks count (5 minutes of straight road at 2 checks a second): a
-# watch pickles in a few kB however long the video
+# the last this many straight checks count (5 minutes of straight road at 2 checks a second), and
+# the record of them a Dask joint reads holds as many: a watch pickles in at most ~35 kB (points
+# 12 kB, record 20 kB) however long the video
 REFINE_MAX_CHECKS = 600
 
 
@@ -839,6 +840,7 @@ class GeometryWatch:
                                                          f"horizon from {n} straight checks through the video")
         except GeometryError as e:
             self.notes.append(f"{where}; not refined: {e}")
+            self.refine_min = 2 * n  # tried again on twice the evidence, not at every check
             return None
         yaw = ("" if geo.yaw_deg is None else f", yaw {geo.yaw_deg:+.2f} -> {new.yaw_deg:+.2f} deg")
         (x0, y0), (x1, y1) = geo.vanishing_point_px, new.vanishing_point_px
