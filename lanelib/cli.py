@@ -78,12 +78,17 @@ def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
     _set_arg(p)
 
 
-def _geometry_args(p: argparse.ArgumentParser, auto: bool) -> None:
-    """Add the options of the road geometry estimate (``auto``: behind ``--auto-geometry``)."""
+def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False) -> None:
+    """Add the options of the road geometry estimate (``auto``: behind ``--auto-geometry``;
+    ``video``: its help says how a video's geometry is checked and refined)."""
     if auto:
+        through = ("; estimated from the first --geometry-seconds, then checked every 0.5 s: the vanishing point "
+                   "is refined along the horizon as straight road accumulates, and the geometry "
+                   "estimated again when the horizon moves (a hill); the run's notes say when"
+                   if video else "")
         p.add_argument("--auto-geometry", action="store_true",
                        help="estimate the bird's-eye points and scale from the frames themselves "
-                            "(see `geometry --help`) instead of the config's perspective; an "
+                            f"(see `geometry --help`) instead of the config's perspective{through}; an "
                             "estimate that fails or is not confident stops the run (exit 2)")
     g = p.add_argument_group("road geometry" + (" (with --auto-geometry)" if auto else ""))
     g.add_argument("--lane-width", type=float, default=runs.GeometryOptions.lane_width_m, metavar="M",
@@ -233,7 +238,7 @@ def _add_video(sub) -> None:
     _range_args(p)
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
     _dask_args(p, "video")
-    _geometry_args(p, auto=True)
+    _geometry_args(p, auto=True, video=True)
     p.set_defaults(func=_run_video)
 
 

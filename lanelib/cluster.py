@@ -212,12 +212,17 @@ class Carry:
     ``entry_key``: the fingerprint of the state just before the segment's first kept frame (after
     its warm-up); ``end_key`` and ``end_state``: the fingerprint and the state itself (picklable,
     e.g. the ``LaneTracker``) after its last frame. Fingerprints are None without a state (a
-    run without a tracker): two Nones are the same state.
+    run without a tracker): two Nones are the same state. ``entry_core`` and ``end_core``: the
+    fingerprints of the part of the state the frames' results depend on now (a video's
+    ``GeometryWatch`` keeps evidence that matters only once it changes the geometry: the core
+    leaves it out); None: no such part (the keys decide alone).
     """
 
     entry_key: bytes | None = None
     end_key: bytes | None = None
     end_state: object = None
+    entry_core: bytes | None = None
+    end_core: bytes | None = None
 
 
 @dataclass(frozen=True)
@@ -227,15 +232,18 @@ class Joints:
 
     joints: int = 0
     rerun: int = 0
+    rebased: int = 0
 
     def __str__(self) -> str:
-        settled = self.joints - self.rerun
+        settled = self.joints - self.rerun - self.rebased
+        rebased = f", {self.rebased} carried on by the evidence alone" if self.rebased else ""
         return (f"{self.joints + 1} segments; {settled} of {self.joints} joint"
-                f"{'' if self.joints == 1 else 's'} settled in the warm-up, {self.rerun} re-run")
+                f"{'' if self.joints == 1 else 's'} settled in the warm-up{rebased}, {self.rerun} re-run")
 
 
 def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Callable[[int, object], T],
-                  ended: Callable[[T], bool] = lambda o: False) -> tuple[list[T], Joints]:
+                  ended: Callable[[T], bool] = lambda o: False,
+                  rebase: Callable[[int, object, T], T | None] | None = None) -> tuple[list[T], Joints]:
     """Return the segments' outcomes with every joint exact, and how many joints needed a re-run.
 
     A segment's warm-up runs over the end of the one before it: when its tracker's state before
@@ -246,23 +254,35 @@ def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Cal
     segment's final state (``end_state``); the segments are checked in order, each against the
     final state of the one before as it now is (a chain of re-runs). A segment for which
     ``ended`` is true (the clip broke off in it) ends the check: the later ones are not used.
+    Where the keys differ but the cores agree (``Carry.entry_core``: the results depend on the
+    same state now; only evidence kept for later differs), ``rebase(k, state, outcome)`` may
+    carry the previous segment's evidence through the segment's own record without running it
+    again: it returns the outcome with its end state (and keys) so carried on, or None when the
+    evidence would have changed the results (then the segment is run again).
     """
     out = list(outcomes)
-    checked = reruns = 0
+    checked = reruns = rebased = 0
     for k in range(1, len(out)):
         if ended(out[k - 1]):
             break
         checked += 1
         before, here = carry(out[k - 1]), carry(out[k])
-        if here.entry_key != before.end_key:
-            out[k] = rerun(k, before.end_state)
-            reruns += 1
-    return out, Joints(checked, reruns)
+        if here.entry_key == before.end_key:
+            continue
+        if rebase is not None and here.entry_core is not None and here.entry_core == before.end_core:
+            carried = rebase(k, before.end_state, out[k])
+            if carried is not None:
+                out[k] = carried
+                rebased += 1
+                continue
+        out[k] = rerun(k, before.end_state)
+        reruns += 1
+    return out, Joints(checked, reruns, rebased)
 
 
 def map_segments(client: distributed.Client, fn: Callable[..., list],
                  spans: Sequence[tuple[int, int, int, bool]], bar: tqdm, carry: Callable[[T], Carry], ended: Callable[[T], bool] = lambda o: False,
-                 **kwargs) -> tuple[list[T], Joints]:
+                 rebase: Callable[[int, object, T], T | None] | None = None, **kwargs) -> tuple[list[T], Joints]:
     """Return the outcome of each segment of a video run by the client's workers, every joint
     exact (``settle_joints``), and how many joints needed a re-run.
 
@@ -270,7 +290,7 @@ def map_segments(client: distributed.Client, fn: Callable[..., list],
     ``to_end``: read on to the clip's end) from frame ``first`` with a fresh tracker, or from
     frame ``start`` on from a tracker ``state``, and returns ``[outcome]``; ``carry(outcome)`` is
     its ``Carry``. The segments go to the workers at once; re-runs, one after another, as single
-    tasks. ``bar`` counts the kept frames done, re-runs included.
+    tasks (``rebase``: as ``settle_joints``). ``bar`` counts the kept frames done, re-runs included.
     """
     done = map_chunks(client, fn, [[span] for span in spans], bar,
                       sizes=[stop - start for _, start, stop, _ in spans], **kwargs)
@@ -282,4 +302,4 @@ def map_segments(client: distributed.Client, fn: Callable[..., list],
         bar.update(stop - start)
         return outcome
 
-    return settle_joints([o for (o,) in done], carry, rerun, ended)
+    return settle_joints([o for (o,) in done], carry, rerun, ended, rebase)

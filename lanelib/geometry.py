@@ -7,7 +7,9 @@ calibration, or measured from the dashes) the camera's pitch, yaw and height. It
 confident it is, what it assumed, and which frames it used and why it left the others out.
 ``RoadGeometry.perspective_config()`` is the ``perspective.PerspectiveConfig`` to run with.
 ``vanishing_point(frame)`` is the cheap per-frame part, for a video to check every few seconds
-whether the vanishing point drifts (a hill, a bump, a camera knocked).
+whether the vanishing point drifts (a hill, a bump, a camera knocked) and, from the straight
+frames through the video, where the road heads on average: ``refined_geometry`` moves the point
+(and the bird's-eye view with it) along the horizon to there (``runs.GeometryWatch``).
 
 How each quantity is found (all in the undistorted image: frames are undistorted first when a
 ``camera.Lens`` or ``camera.Calibration`` is given):
@@ -1203,6 +1205,43 @@ def estimate_geometry(frames: Iterable[np.ndarray], lens: Lens | Calibration | N
             "no lines long enough to measure it" if found is None else
             f"the lines cannot measure it ({found.reason}; kappa {found.kappa:+.3f})"),)
     return _solve(_analyse_road(seen, estimate_roll, notes), focal_px, lane_width_m, look_ahead_m, dash_m, gap_m)
+
+
+def refined_geometry(geo: RoadGeometry, shift_px: float, why: str) -> RoadGeometry:
+    """Return ``geo`` with its vanishing point moved ``shift_px`` along the horizon (positive to
+    the right), as more frames of straight road place it (``runs.GeometryWatch``).
+
+    The road's direction in the image is where the car heads on average: a window of frames on
+    a gentle curve, or while the car drifts across its lane, puts it a few px aside. Moving the
+    point along the horizon keeps the horizon, the roll, the pitch, the camera's height, the
+    hood and the scale (the ego lane's ``lane_width_ratio`` and ``inverse_depth_scale_px_m``
+    hold in the coordinates about the point, ``_solve``); the bird's-eye points keep their
+    place about the point (``_Basis``), so the view keeps its rows, its look-ahead and its
+    metres per pixel, and follows the point sideways. The yaw follows the point (its change in
+    the camera's own line's slope, ``tan(yaw) sin(pitch)``, is left out: under 0.01 px at the
+    view's bottom for a shift of 1 % of the focal length). ``why`` joins the assumptions.
+
+    Raises
+    ------
+    GeometryError
+        If the moved view leaves the frame (a corner beyond its left or right edge).
+    """
+    w, _ = geo.size_px
+    old = _basis(geo.vanishing_point_px, geo.roll_deg)
+    vp = old.to_xy(shift_px, 0.0)
+    new = _basis(vp, geo.roll_deg)
+    uv = old.to_uv(np.asarray(geo.src_px, np.float64))
+    src = new.to_xy(uv[:, 0], uv[:, 1])
+    if src[:, 0].min() < 0 or src[:, 0].max() > w - 1:
+        raise GeometryError(f"the vanishing point moved {shift_px:+.1f} px along the horizon puts the "
+                            "bird's-eye view's corners outside the frame")
+    yaw = geo.yaw_deg
+    if yaw is not None and geo.focal_px:
+        pitch = math.radians(geo.pitch_deg or 0.0)
+        yaw = math.degrees(math.atan(math.tan(math.radians(yaw)) - shift_px * math.cos(pitch) / geo.focal_px))
+    return replace(geo, vanishing_point_px=(float(vp[0]), float(vp[1])), yaw_deg=yaw,
+                   src_px=tuple((float(x), float(y)) for x, y in src),
+                   assumptions=geo.assumptions + (why,))
 
 
 # The estimate in three steps, so that the runs of ``_with_estimated_lens`` (the same frames with

@@ -16,7 +16,9 @@ On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in c
 (``image_chunk``), a video in segments of frames (``run_video_segments``, ``video_segment``)
 that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up (a segment whose tracker
 did not reach the previous segment's final state in that warm-up runs again from that state:
-``cluster.settle_joints``, ``FrameState``), joined without re-encoding; the ``process``
+``cluster.settle_joints``, ``FrameState``; the evidence a ``GeometryWatch`` keeps for later is
+carried through a segment's record of its checks instead, ``carry_lane_state``), joined
+without re-encoding; the ``process``
 callables are built on the workers by picklable factories (``lane_image_process``,
 ``lane_video_process``, ``hough_image_process``, ``hough_video_process``), so the rows, logs
 and results are those of one process.
@@ -338,6 +340,7 @@ class FrameState:
     key: Callable[[], bytes | None]
     get: Callable[[], object]
     put: Callable[[object], None]
+    core: Callable[[], bytes | None] = lambda: None  # the part the results depend on now (``cluster.Carry``)
 
 
 # a FrameFn, the list its notes go to (what happened on the way: GeometryWatch.notes) and its state
@@ -375,7 +378,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
         process, notes, carried = make()
         if state is not None:
             carried.put(state)
-        rows, found, stopped, entry = [], 0, "", None
+        rows, found, stopped, entry, entry_core = [], 0, "", None, None
         writer = None
         try:
             try:
@@ -386,7 +389,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
                     for n, frame in enumerate(reader):
                         index = first + n
                         if index == start:
-                            entry = carried.key()
+                            entry, entry_core = carried.key(), carried.core()
                         image, row, lane = process(frame, index, index / reader.info.fps)
                         if index >= start:
                             writer.write(image)
@@ -406,7 +409,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
             if writer is not None:
                 writer.abort()
             raise
-        carry = cluster.Carry(entry, carried.key(), carried.get())
+        carry = cluster.Carry(entry, carried.key(), carried.get(), entry_core, carried.core())
         out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes), carry))
     return out
 
@@ -414,7 +417,9 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
 def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, make: FrameFnMaker,
                        client, log_path: str | os.PathLike | None = None, progress: bool = True,
                        desc: str = "frames", threads: int | None = None, start_s: float | None = None,
-                       end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES) -> VideoRun:
+                       end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES,
+                       carry: Callable[[object, object, int], tuple[object, bytes] | None] | None = None
+                       ) -> VideoRun:
     """Return what a run did, as ``run_video``, with the clip split into segments run by the
     workers of a Dask ``client``.
 
@@ -424,7 +429,10 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     and writes the segment's video to a folder of parts beside ``out_path``. Each joint is then
     checked (``cluster.settle_joints``): where the warm-up did not bring the tracker to the state
     the previous segment ended in, the segment is run again from that state, so the frames and
-    the log are those of one process; ``VideoRun.joints`` counts the re-runs. This process joins
+    the log are those of one process; ``VideoRun.joints`` counts the re-runs. ``carry(state
+    before, end state, start)`` (``carry_lane_state``): where the states differ only in evidence
+    kept for later (``FrameState.core``), carry the previous state through the segment instead
+    of running it again (``cluster.settle_joints``). This process joins
     the parts (``io.join_videos``, no re-encoding) and writes the per-frame log, both
     atomically, and removes the parts. One progress bar counts the frames of the segments done
     (re-runs included). A clip that stops decoding keeps the frames before the break, as
@@ -443,13 +451,19 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     spans = cluster.segments(frames, count, warmup)
     segs = [(first, start, stop, end_s is None and stop == frames.stop) for first, start, stop in spans]
     out.parent.mkdir(parents=True, exist_ok=True)
+
+    def carry_on(k: int, before: object, o: SegmentOutcome) -> SegmentOutcome | None:
+        got = None if carry is None else carry(before, o.carry.end_state, segs[k][1])
+        return None if got is None else replace(o, carry=replace(o.carry, end_state=got[0], end_key=got[1]))
+
     parts = Path(tempfile.mkdtemp(prefix=f".{out.stem}.", suffix=".parts", dir=out.parent))
     try:
         with tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
             settled, joints = cluster.map_segments(client, video_segment, segs, bar, lambda o: o.carry,
-                                                   lambda o: bool(o.stopped), in_path=in_path.resolve(),
-                                                   parts=parts.resolve(), make=make, threads=threads)
+                                                   lambda o: bool(o.stopped), rebase=carry_on,
+                                                   in_path=in_path.resolve(), parts=parts.resolve(),
+                                                   make=make, threads=threads)
         outcomes, files = [], []
         for (_, start, _), o in zip(spans, settled):
             outcomes.append(o)
@@ -496,7 +510,8 @@ class GeometryOptions:
     seconds : of a video read for the estimate, from its start (or from ``start_s``).
     max_frames : frames of those (or of a folder's images) used, evenly spread.
     check_every_s : through a video, the vanishing point is measured this often
-        (``geometry.RoadLineFinder``, about 15 ms a frame).
+        (``geometry.RoadLineFinder``, about 15 ms a frame); the straight checks refine it
+        along the horizon (``GeometryWatch``).
     drift_checks : this many checks in a row with the vanishing point off the horizon (by more
         than ``geometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
         for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
@@ -624,14 +639,56 @@ def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
     return replace(config, perspective=geo.perspective_config())
 
 
+# The watch refines the vanishing point's place along the horizon (the car's straight-ahead
+# direction: the road's, on average over straight road) from the straight checks' points:
+# at least this many of them, and at least as many as the estimate in use rests on (its
+# ``frames_used``), so that a refinement rests on more straight road than the estimate it corrects
+REFINE_MIN_CHECKS = 2 * geometry.MIN_GOOD_FRAMES
+# ... and only when their median lies farther from the point in use than its standard error plus
+# this share of the width: the straight checks' column spreads 0.2-0.55 % of the width from one
+# check to the next (1.9 and 4.0 px on the 960 px P1 clips, 7.0 px on the 1280 px project video:
+# median |difference| / 0.95); a shift smaller than one check's noise is not worth restarting the
+# tracker for, and it is the hysteresis that keeps the point from going back and forth
+REFINE_TOLERANCE = 0.005
+# the last this many straight checks count (5 minutes of straight road at 2 checks a second), and
+# the record of them a Dask joint reads holds as many: a watch pickles in at most ~35 kB (points
+# 12 kB, record 20 kB) however long the video
+REFINE_MAX_CHECKS = 600
+
+
+class _NeedsFrames(Exception):
+    """A watch carried through a record of checks (no frames) reached a new estimate."""
+
+
 class GeometryWatch:
-    """Through a video, check the road geometry and estimate it again when the horizon moves.
+    """Through a video, check the road geometry: refine the vanishing point along the horizon as
+    straight road accumulates, and estimate the geometry again when the horizon moves.
 
     ``check(frame, index, time_s)`` measures the frame's vanishing point every
-    ``options.check_every_s``; after ``options.drift_checks`` checks in a row whose point lies
-    off the horizon (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of
-    the height) it estimates the geometry from those frames and returns it (None otherwise). A
-    failed or low-confidence new estimate keeps the old geometry. ``notes`` says what happened.
+    ``options.check_every_s``; frames where the road bends say nothing (``VanishingPoint.ok``).
+    It returns the geometry to use from this frame on when it changed (None otherwise); ``notes``
+    says what happened and why.
+
+    - **Drift.** After ``options.drift_checks`` checks in a row whose point lies off the horizon
+      (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of the height: a
+      crest, a dip, a knocked camera) it estimates the geometry from those frames. A failed or
+      low-confidence new estimate keeps the old geometry. A new estimate starts the refinement
+      afresh.
+    - **Refinement.** The first estimate's point is where the road headed, on average, in the
+      first seconds' straight frames: a gentle curve or the car's wander across its lane puts
+      it a few px aside, which moves the car's column in the bird's-eye view and so the
+      offset read. The points of the straight checks on the horizon (the last
+      ``REFINE_MAX_CHECKS``) are kept; once there are ``REFINE_MIN_CHECKS`` of them and at least
+      as many as the estimate in use rests on, and their median along the horizon lies
+      farther from the point in use than its standard error (1.25 x 1.48 x MAD / sqrt(n))
+      plus ``REFINE_TOLERANCE`` of the width, the point moves to the median
+      (``geometry.refined_geometry``: the horizon, hood, scale and look-ahead are kept). The
+      next move takes twice as many points (and the median off the new point by as much): the
+      checks, half a second apart, follow the car's weave across its lane for seconds, so the
+      standard error of n of them is too small until they span several weaves; doubling the
+      evidence each time keeps the point from going back and forth and leaves at most a few
+      moves in a video (10, 20, 40, ... points).
+
     A watch pickles without its ``finder`` (its undistortion maps and hood mask, megabytes),
     which the copy builds again on first use: a Dask segment ships it back to the driver.
     """
@@ -644,8 +701,16 @@ class GeometryWatch:
         self.every = max(1, round(options.check_every_s * fps))
         self._finder: geometry.RoadLineFinder | None = None  # built on first use (``finder``)
         self.tolerance_px = max(geometry.DRIFT_PX, 0.01 * geo.size_px[1])
+        self.refine_tolerance_px = REFINE_TOLERANCE * geo.size_px[0]
+        self.refine_min = max(REFINE_MIN_CHECKS, len(geo.frames_used))  # points the next refinement takes
         self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
         self.shifts: list[float] = []
+        self.points: deque[tuple[float, float]] = deque(maxlen=REFINE_MAX_CHECKS)
+        # a record of the straight checks (index, time, point) and the last frame the geometry
+        # changed at: a Dask joint carries the evidence through a segment by them (``carried_through``)
+        self.record: deque[tuple[int, float, float, float]] = deque(maxlen=REFINE_MAX_CHECKS)
+        self.recorded = 0
+        self.changed_at = -1
         self.notes: list[str] = []
 
     @property
@@ -661,9 +726,44 @@ class GeometryWatch:
         return self.__dict__ | {"_finder": None}
 
     def state_key(self) -> bytes:
-        """Return a fingerprint of what the next checks depend on: the geometry in use and the
-        horizon shifts of the checks off it in a row (their frames are those checks')."""
+        """Return a fingerprint of what the next checks depend on: the geometry in use, the
+        horizon shifts of the checks off it in a row (their frames are those checks') and the
+        straight checks' points kept for the refinement."""
+        return hashlib.sha256(pickle.dumps((self.geometry, self.shifts, tuple(self.points),
+                                            self.refine_min))).digest()
+
+    def core_key(self) -> bytes:
+        """Return a fingerprint of what the frames' results depend on until the geometry changes:
+        the geometry in use and the horizon shifts of the checks off it in a row."""
         return hashlib.sha256(pickle.dumps((self.geometry, self.shifts))).digest()
+
+    def carried_through(self, other: GeometryWatch, start: int) -> GeometryWatch | None:
+        """Return this watch (the state before frame ``start``) carried through the straight
+        checks ``other`` made from ``start`` on, or None when they would have changed the
+        geometry, or called for a new estimate, or ``other`` no longer holds them all.
+
+        A Dask segment starts with a fresh watch; when its geometry and run of checks off the
+        horizon at ``start`` are this watch's (``core_key``) and it changed nothing from there,
+        its frames are those this watch would have given too unless this watch's evidence
+        (the points a refinement rests on) would have changed the geometry on the way.
+        """
+        if other.changed_at >= start:
+            return None
+        checks = [c for c in other.record if c[0] >= start]
+        if other.recorded > len(other.record) and (not other.record or other.record[0][0] >= start):
+            return None  # the record lost some of them
+        copy = pickle.loads(pickle.dumps(self))
+        for index, time_s, x, y in checks:
+            try:
+                if copy._step((x, y), None, index, time_s) is not None:
+                    return None
+            except _NeedsFrames:
+                return None
+        copy.record.extend(checks)
+        copy.recorded += len(checks)
+        copy.off = deque(other.off, maxlen=other.off.maxlen)  # the frames of the same checks
+        copy.notes = []
+        return copy
 
     def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
         if index % self.every:
@@ -671,15 +771,30 @@ class GeometryWatch:
         vp = self.finder.vanishing_point(frame)
         if not vp.ok:
             return None  # a bend, a frame without lines: says nothing about the horizon
-        shift = self.geometry.horizon_shift_px(vp.point_px)
+        point = (float(vp.point_px[0]), float(vp.point_px[1]))
+        self.record.append((index, time_s) + point)
+        self.recorded += 1
+        new = self._step(point, frame, index, time_s)
+        if new is not None:
+            self.changed_at = index
+        return new
+
+    def _step(self, point: tuple[float, float], frame: np.ndarray | None, index: int,
+              time_s: float) -> RoadGeometry | None:
+        """Return the new geometry after a straight check's point, or None (``check``); without
+        its ``frame`` (``carried_through``), raise ``_NeedsFrames`` where a new estimate is due."""
+        shift = self.geometry.horizon_shift_px(point)
         if abs(shift) <= self.tolerance_px:
             self.off.clear()
             self.shifts.clear()
-            return None
+            self.points.append(point)
+            return self._refine(index, time_s)
         self.off.append(frame)
         self.shifts.append(shift)
         if len(self.off) < self.options.drift_checks:
             return None
+        if frame is None:
+            raise _NeedsFrames
         where = (f"frame {index} ({time_s:.2f} s): the vanishing point lay "
                  f"{abs(float(np.median(self.shifts))):.1f} px {'below' if np.median(self.shifts) > 0 else 'above'} "
                  f"the horizon in {len(self.off)} checks in a row")
@@ -699,6 +814,39 @@ class GeometryWatch:
                           f"{self.geometry.horizon_row_px:.1f} -> {new.horizon_row_px:.1f} px, "
                           f"{new.ym_per_px:.4f} m/px along (was {self.geometry.ym_per_px:.4f})")
         self.geometry = new
+        self.points.clear()  # points about the old horizon (a knocked camera turned too)
+        self.refine_min = max(REFINE_MIN_CHECKS, len(new.frames_used))
+        return new
+
+    def _refine(self, index: int, time_s: float) -> RoadGeometry | None:
+        """Return the geometry with its vanishing point moved to the straight checks' median
+        along the horizon when they place it off the point in use (class docstring), else None."""
+        n = len(self.points)
+        if n < self.refine_min:
+            return None
+        geo = self.geometry
+        r = math.radians(geo.roll_deg)
+        d = np.asarray(self.points) - np.asarray(geo.vanishing_point_px)
+        along = d[:, 0] * math.cos(r) - d[:, 1] * math.sin(r)
+        median = float(np.median(along))
+        error = 1.2533 * 1.4826 * float(np.median(np.abs(along - median))) / math.sqrt(n)
+        if abs(median) <= error + self.refine_tolerance_px:
+            return None
+        where = (f"frame {index} ({time_s:.2f} s): the {n} straight checks so far place the vanishing point "
+                 f"{abs(median):.1f} px {'right' if median > 0 else 'left'} of the one in use along the horizon "
+                 f"(median; standard error {error:.1f} px, tolerance {self.refine_tolerance_px:.1f} px)")
+        try:
+            new = geometry.refined_geometry(geo, median, f"vanishing point refined by {median:+.1f} px along the "
+                                                         f"horizon from {n} straight checks through the video")
+        except GeometryError as e:
+            self.notes.append(f"{where}; not refined: {e}")
+            self.refine_min = 2 * n  # tried again on twice the evidence, not at every check
+            return None
+        yaw = ("" if geo.yaw_deg is None else f", yaw {geo.yaw_deg:+.2f} -> {new.yaw_deg:+.2f} deg")
+        (x0, y0), (x1, y1) = geo.vanishing_point_px, new.vanishing_point_px
+        self.notes.append(f"{where}; refined: vanishing point ({x0:.1f}, {y0:.1f}) -> ({x1:.1f}, {y1:.1f}) px{yaw}")
+        self.geometry = new
+        self.refine_min = 2 * n
         return new
 
 
@@ -803,15 +951,19 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     auto_geometry : estimate the bird's-eye points and scale from the clip's first
         ``seconds`` (from ``start_s``) instead of ``config.perspective`` (``estimate_road_geometry``:
         a ``GeometryError`` before anything is written when that fails or is not confident), then
-        keep checking them (``GeometryWatch``); a new estimate restarts the tracker. The run's
-        ``notes`` say when and why.
+        keep checking them (``GeometryWatch``): the vanishing point is refined along the horizon
+        as straight road accumulates, and the geometry estimated again when the horizon moves; a
+        refined or new geometry restarts the tracker. The run's ``notes`` say when and why.
     on_geometry : called with the first estimate, before the run starts (the CLI prints it).
     workers, scheduler : run the clip in segments on Dask workers (``cluster.dask_client``,
         ``run_video_segments``: each segment starts ``cluster.WARMUP_FRAMES`` early to warm the
         tracker up, and runs again from the previous segment's tracker where that was not
         enough, so the frames and the log are those of one process). With ``auto_geometry`` the
         geometry is estimated once here; the geometry watch is part of the state checked at the
-        joints (a drift found in one segment carries over into the next by a re-run).
+        joints (a drift found in one segment carries over into the next by a re-run); the
+        straight checks a refinement rests on are carried through the next segment's record of
+        its checks (``carry_lane_state``), which is run again only where they would have
+        refined the geometry in it.
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -830,7 +982,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         if client is not None:
             return run_video_segments(in_path, out_path, make, client, log_path=log_path,
                                       progress=progress, desc=Path(in_path).name, threads=threads,
-                                      start_s=start_s, end_s=end_s)
+                                      start_s=start_s, end_s=end_s,
+                                      carry=carry_lane_state if geo is not None else None)
     process, notes, _ = make()
     run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
@@ -842,8 +995,8 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
                        fps: float | None = None) -> tuple[FrameFn, list[str], FrameState]:
     """Return ``process_video``'s ``process`` (a fresh ``LaneTracker`` on the first frame), the
     list its notes go to and its state (the tracker; with ``geo`` also the geometry watch); with
-    ``geo``, the road geometry in use, checked (``GeometryWatch`` at ``fps``) and estimated again
-    when it drifts, which restarts the tracker."""
+    ``geo``, the road geometry in use, checked (``GeometryWatch`` at ``fps``), refined and
+    estimated again when it drifts; a refined or new geometry restarts the tracker."""
     trackers: list[LaneTracker] = []  # made on the first frame, for the video's frame size
     watch: list[GeometryWatch] = []
     if geo is not None:
@@ -870,9 +1023,12 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
         return image, video_log_row(index, time_s, result), result.found
 
     def key() -> bytes | None:
-        if not trackers:
+        return _lane_state_key(trackers[0] if trackers else None, watch[0] if watch else None)
+
+    def core() -> bytes | None:
+        if not trackers or not watch:
             return None
-        return trackers[0].state_key() + (watch[0].state_key() if watch else b"")
+        return trackers[0].state_key() + watch[0].core_key()
 
     def get() -> object:
         return trackers[0] if trackers else None, current[0], watch[0] if watch else None
@@ -884,7 +1040,26 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
             new.notes = watch[0].notes
             watch[0] = new
 
-    return process, (watch[0].notes if watch else []), FrameState(key, get, put)
+    return process, (watch[0].notes if watch else []), FrameState(key, get, put, core)
+
+
+def _lane_state_key(tracker: LaneTracker | None, watch: GeometryWatch | None) -> bytes | None:
+    """Return the fingerprint of ``lane_video_process``'s state: its tracker's and watch's."""
+    if tracker is None:
+        return None
+    return tracker.state_key() + (watch.state_key() if watch is not None else b"")
+
+
+def carry_lane_state(before: object, state: object, start: int) -> tuple[object, bytes] | None:
+    """Return ``lane_video_process``'s state ``state`` (a segment's end, from a fresh start)
+    with the geometry watch of ``before`` (the previous segment's end) carried through the
+    segment's straight checks from frame ``start`` (``GeometryWatch.carried_through``), and its
+    key; None when that would have changed the geometry (the segment must run again)."""
+    tracker, config, watch = state
+    watch = before[2].carried_through(watch, start) if watch is not None and before[2] is not None else None
+    if watch is None:
+        return None
+    return (tracker, config, watch), _lane_state_key(tracker, watch)
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline

@@ -161,6 +161,27 @@ def test_settle_joints_reruns_in_a_chain_from_the_state_before():
     assert joints == cluster.Joints(1, 0)
 
 
+def test_settle_joints_carries_evidence_on_where_the_cores_agree():
+    """Keys differ, cores agree: ``rebase`` carries the state on (no re-run) unless it says None."""
+    seg = [cluster.Carry(None, b"a", "A", None, b"core"), cluster.Carry(b"a2", b"b", "B", b"core", b"core"),
+           cluster.Carry(b"x", b"c", "C", b"other", b"core")]
+    reruns = []
+
+    def rerun(k, state):
+        reruns.append(k)
+        return cluster.Carry(None, b"c", state + "'", None, b"core")
+
+    def rebase(k, state, outcome):
+        return replace(outcome, end_state=state + "+" + outcome.end_state, end_key=b"b")
+
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun, rebase=rebase)
+    assert out[1].end_state == "A+B" and reruns == [2] and out[2].end_state == "A+B'"
+    assert joints == cluster.Joints(2, 1, 1) and str(joints) == (
+        "3 segments; 0 of 2 joints settled in the warm-up, 1 carried on by the evidence alone, 1 re-run")
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun, rebase=lambda k, s, o: None)
+    assert joints == cluster.Joints(2, 2, 0)
+
+
 # --------------------------------------------------------------------------- runs
 
 def test_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler, capsys):
@@ -190,6 +211,20 @@ def test_a_joint_that_does_not_settle_in_the_warm_up_is_run_again(tmp_path, coun
     assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
     assert len(frames(tmp_path / "two.mp4")) == 110
     assert sorted(p.name for p in tmp_path.iterdir()) == ["one.csv", "one.mp4", "two.csv", "two.mp4"]
+
+
+def test_video_with_auto_geometry_on_dask_gives_the_log_of_one_process(tmp_path, scheduler, capsys):
+    """videos/project.mp4 with --auto-geometry: the second segment's fresh geometry watch holds
+    other straight checks than the first one's at the joint; the first one's are carried
+    through the second segment's record (no refinement in it), not run again."""
+    clip = REPO / "videos" / "project.mp4"
+    args = ["video", str(clip), "--auto-geometry", "--no-progress"]
+    assert main([*args, "-o", str(tmp_path / "one.mp4"), "--log", str(tmp_path / "one.csv")]) == 0
+    assert main([*args, "-o", str(tmp_path / "two.mp4"), "--log", str(tmp_path / "two.csv"),
+                 "--scheduler", scheduler]) == 0
+    out = capsys.readouterr().out
+    assert "dask: 2 segments; 0 of 1 joint settled in the warm-up, 1 carried on by the evidence alone, 0 re-run" in out
+    assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
 
 
 def test_hough_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler):
