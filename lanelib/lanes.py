@@ -1095,6 +1095,15 @@ class EdgeConfig:
 DARK_V = 80.0  # saturation below this value (V, 0-255) is measured against it: a shadow's tint is not colour
 
 
+def saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the saturation ((max - min) / max of R, G, B, 0-1, the max taken as at least
+    ``DARK_V``: the tint of a shadow or the noise of a dark pixel is not colour) and the value
+    (max of R, G, B, 0-255) of each pixel of an RGB image, float32."""
+    r, g, b = cv2.split(np.ascontiguousarray(rgb))
+    hi = cv2.max(cv2.max(r, g), b).astype(np.float32)
+    return (hi - cv2.min(cv2.min(r, g), b)) / np.maximum(hi, DARK_V), hi
+
+
 def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return the per-pixel features that tell a verge from the road surface in a (shrunk)
     bird's-eye image: saturation ((max - min) / max of R, G, B, 0-1; the max taken as at least
@@ -1102,11 +1111,85 @@ def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     where the camera sees (not black). Both are free of the light's brightness, so a shadow on
     the road, a repaved strip, a tar seam and a concrete barrier (grey and smooth like the road)
     look like road; grass and dirt differ in saturation, gravel in grain."""
-    hi = rgb.max(axis=2).astype(np.float32)
-    sat = (hi - rgb.min(axis=2)) / np.maximum(hi, DARK_V)
+    sat, hi = saturation(rgb)
     mean = cv2.blur(hi, (3, 3))
     var = np.maximum(cv2.blur(hi * hi, (3, 3)) - mean * mean, 0.0)
     return sat, np.sqrt(var) / np.maximum(mean, 8.0), hi > 0
+
+
+ROAD_VIEW_INSET = 0.25      # share of the lane's width left out inside each line (``road_view_top_px``)
+ROAD_VIEW_REFERENCE_M = 1.5  # road (m) above the view's bottom row whose surface is the reference
+ROAD_VIEW_OFF_SHARE = 0.5   # share of a row's interior pixels unlike the road for the row to be off it
+
+
+def road_view_interior(rows_px: np.ndarray, lines, width_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return the first and last-plus-one column (px, int) of the lane interior that
+    ``road_view_top_px`` reads on each row of ``rows_px``: ``ROAD_VIEW_INSET`` of the lane's width
+    inside each of the ``lines`` (pixel coefficients), clipped to a view ``width_px`` wide."""
+    xl, xr = np.polyval(lines[0], rows_px), np.polyval(lines[1], rows_px)
+    inset = ROAD_VIEW_INSET * (xr - xl)
+    return (np.clip(np.round(xl + inset), 0, width_px).astype(int),
+            np.clip(np.round(xr - inset), 0, width_px).astype(int))
+
+
+def road_view_top_px(rows_rgb: np.ndarray, rows_px: np.ndarray, lines, ym_per_px: float,
+                     min_saturation_step: float, run_m: float, width_px: int | None = None,
+                     col0_px: int = 0) -> int:
+    """Return the first row (px) of the look-ahead over the road seen continuously from the car:
+    the row just below the lowest run of ``run_m`` of road whose lane interior does not look like
+    the road near the car; 0 when the whole view does.
+
+    Beyond a crest, or a car or anything else standing on the road ahead, the bird's-eye view's
+    far rows hold what the camera sees there (grass, a barrier, other stretches of the road
+    farther round a bend), and the lines' fits follow it. Each sampled row's lane interior (between
+    the ``lines``, ``ROAD_VIEW_INSET`` of the lane's width inside each: no paint, a few pixels of
+    a track's error) is compared with the road's surface just ahead of the car (the interior of
+    the rows within ``ROAD_VIEW_REFERENCE_M`` of the bottom row): a pixel is unlike the road when
+    its saturation (``verge_features``: a shadow's dark tint is not colour) exceeds the
+    reference's median by ``min_saturation_step`` (``EdgeConfig``'s: grass, dirt, a painted car),
+    and a row is off the road when ``ROAD_VIEW_OFF_SHARE`` of its seen interior pixels are. A
+    shadow, a repaved strip or a tar seam keeps the road's low saturation and never ends the
+    view, however dark. A row whose interior is not in the view (the lines crossing or leaving
+    it) ends the scan (``lookahead_top_px`` handles lines leaving the view).
+
+    Parameters
+    ----------
+    rows_rgb : (n, W, 3) uint8 RGB rows of the bird's-eye view, in the order of ``rows_px``, or
+        of its columns from ``col0_px`` on (at least those of ``road_view_interior``).
+    rows_px : the view's rows sampled, from the bottom up (decreasing y).
+    lines : pixel coefficients (a, b, c) of the tracked left and right lines.
+    ym_per_px : metres of road per view row.
+    min_saturation_step : saturation (0-1) above the road's that is unlike it.
+    run_m : least run (m of road) of rows off the road that ends the view (a shadow's tinted
+        edge, a patch of dirt on one row does not).
+    width_px : the view's width (default: that of ``rows_rgb``); col0_px : the view's column of
+        ``rows_rgb``'s first one.
+    """
+    rows_px = np.asarray(rows_px, np.float64)
+    lo, hi = road_view_interior(rows_px, lines, rows_rgb.shape[1] if width_px is None else width_px)
+    sat, top_v = saturation(rows_rgb)
+    cols = np.arange(col0_px, col0_px + rows_rgb.shape[1])
+    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
+    seen = inside & (top_v > 0)
+    n_seen = seen.sum(axis=1)
+    # the interior must be in the view: wide enough and mostly seen, from the bottom row on
+    valid = (hi - lo >= 4) & (n_seen * 2 >= np.maximum(hi - lo, 1))
+    stop = int(np.argmin(valid)) if not valid.all() else len(rows_px)
+    ref = seen[:stop] & ((rows_px[0] - rows_px[:stop]) <= ROAD_VIEW_REFERENCE_M / ym_per_px)[:, None]
+    if not ref.any():
+        return 0
+    limit = float(np.median(sat[:stop][ref])) + min_saturation_step
+    off = ((sat[:stop] > limit) & seen[:stop]).sum(axis=1) >= ROAD_VIEW_OFF_SHARE * np.maximum(n_seen[:stop], 1)
+    step_m = ym_per_px * abs(rows_px[0] - rows_px[-1]) / max(len(rows_px) - 1, 1)
+    need = max(1, int(np.ceil(run_m / max(step_m, 1e-9))))
+    run, prev = 0, -2
+    for i in np.flatnonzero(off):  # the first run of ``need`` rows off the road, from the bottom
+        run = run + 1 if run and i == prev + 1 else 1
+        prev = i
+        if run >= need:
+            first = i - need + 1
+            return 0 if first == 0 else int(rows_px[first - 1])
+    return 0
 
 
 def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,

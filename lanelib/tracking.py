@@ -28,6 +28,19 @@ debug composite work on it unchanged. Per frame:
    ``lookahead_growth_m`` beyond the rows the track was measured on (``lookahead_top_px``), and
    the checks compare the lines over those rows only. Without a track, a whole view that gives
    no lane is searched again in shorter views (``LanePipeline.short_view_search``).
+   **The road seen from the car.** With a track, when the checks refuse a line, the look-ahead
+   is also cut where the tracked lane's interior stops looking like the road near the car
+   (``road_view_top_px``, ``lanes.road_view_top_px``: more saturated than the road's surface
+   just ahead, over ``road_view_run_m`` of rows): beyond a crest, or a car or anything else
+   standing on the road, the far rows hold grass, a barrier or other stretches of the road
+   farther round a bend, and the lines' fits follow them (on ``country`` a left line curving
+   right over the crest, a right line off at the top: refused as not parallel or bent, the lane
+   was inferred, held and lost). The lane is searched again around the track (or with windows
+   from it) in that shorter view, like a tight bend's, and kept when both its lines pass (one
+   line kept from a shorter view set off longer chains of inferred lines on unbundled country
+   clips). Only then: a frame whose lines pass samples nothing and is never cut short (cut on
+   every frame, the look-ahead of a tight bend whose verge the track's loose interior took in
+   was cut too, and an unbundled country clip fell from 93 to 76 % of points).
 2. **Checks.** The plausibility checks every found lane passes, image or video
    (``lanes.LaneChecks``, ``PipelineConfig.checks``), by the same functions ``LanePipeline.detect``
    uses. Each line alone (``lanes.line_problem``): its pixels may not fill more than
@@ -223,6 +236,12 @@ class TrackerConfig:
     restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
         its side to restart the lane (step 5). 0.5 m, ``max_jump_m``'s default: a line of the
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
+    road_view_run_m : 0 (off), or the least run (m of road) of rows whose lane interior does not
+        look like the road near the car that ends the look-ahead of a frame whose lines were
+        refused (step 1, ``lanes.road_view_top_px``). 1 m: a patch of dirt or a shadow's tinted
+        edge across one or two rows does not; a crest's grass spans many.
+    road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
+        of the 720, 0.26 m apart; only the columns the interior covers are remapped).
     """
 
     max_jump_m: float = 0.5
@@ -242,6 +261,8 @@ class TrackerConfig:
     reacquire_band_m: float = 1.2
     restart_frames: int = 25
     restart_distance_m: float = 0.5
+    road_view_run_m: float = 1.0
+    road_view_step_px: int = 8
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -262,6 +283,8 @@ class TrackerConfig:
             raise ConfigError("tracking: reacquire_after_frames >= 0 (0: off) and reacquire_band_m > 0")
         if self.restart_frames < 0 or self.restart_distance_m <= 0:
             raise ConfigError("tracking: restart_frames >= 0 (0: off) and restart_distance_m > 0")
+        if self.road_view_run_m < 0 or self.road_view_step_px < 1:
+            raise ConfigError("tracking: road_view_run_m >= 0 (0: off) and road_view_step_px >= 1")
 
 
 @dataclass(frozen=True)
@@ -301,7 +324,7 @@ class LaneTracker:
 
     Call ``update`` once per frame, in order; ``reset`` before a new video. After each
     ``update``, ``retries`` names the fallback searches that frame needed, in the order they
-    ran (none when the cheap search passed): "windows from the track", "re-acquire",
+    ran (none when the cheap search passed): "road view", "windows from the track", "re-acquire",
     "remembered bases", "fallback masks", "shorter views", "other peaks", "asphalt edge". Every fallback search reads the whole
     view under ``ThresholdConfig.fallback_rule`` (the cheap search, its rule). ``python -m lanelib bench`` counts them and times them.
     """
@@ -504,6 +527,16 @@ class LaneTracker:
                 if note:
                     best[3].append(note)
 
+        if track is not None and best[4] and self.config.road_view_run_m > 0:
+            # a line refused: is the far view still the road seen from the car (a crest, a car)?
+            cap = self.road_view_top_px(raw, track)
+            if cap > top:
+                before = best
+                better(pipe.search(mask(), prior, bases=self._bases(track), top_px=cap), "road view")
+                if best is not before and (best[1] is None or best[2] is None):
+                    best = before  # only a pair in the shorter view: one line is no better evidence
+                if best is not before:
+                    top = cap
         if track is not None and (best[1] is None or best[2] is None):
             # the search missed: look again with windows started from the tracked lines
             better(pipe.search(mask(), bases=self._bases(track), top_px=top), "windows from the track")
@@ -650,6 +683,26 @@ class LaneTracker:
         grow = int(round(self.config.lookahead_growth_m / self._ym))
         top = lanes.lookahead_top_px(track, self.pipeline.size, self.pipeline.config.search)
         return max(top, measured - grow, 0)
+
+    def road_view_top_px(self, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]) -> int:
+        """Return the first row (px) of the road seen continuously from the car in a RAW frame,
+        between the tracked lines ``track`` (``lanes.road_view_top_px``), 0 for the whole view.
+
+        Only every ``road_view_step_px``-th row of the bird's-eye view, and only the columns the
+        lane's interior covers on them, are remapped (``LanePipeline.birdseye_rows``); the
+        saturation that is unlike the road is ``EdgeConfig.min_saturation_step``, the asphalt
+        edge's road-vs-verge step (one measure of what is not asphalt).
+        """
+        pipe = self.pipeline
+        w, h = pipe.size
+        rows = np.arange(h - 1, -1, -self.config.road_view_step_px)
+        lo, hi = lanes.road_view_interior(rows, track, w)
+        c0, c1 = int(lo.min()), int(max(hi.max(), lo.min() + 1))  # the columns an interior covers
+        if c0 >= w:
+            return 0
+        return lanes.road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, self._ym,
+                                      pipe.config.edge.min_saturation_step, self.config.road_view_run_m,
+                                      w, c0)
 
     def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
               band_px: float | tuple[float, float] | None = None

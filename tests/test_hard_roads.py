@@ -13,10 +13,11 @@ import pytest
 from lanelib import lanes
 from lanelib.config import PipelineConfig, override
 from lanelib.evaluate import _truth_x, calibration_from_truth, evaluate_video
+from lanelib.io import read_frame
 from lanelib.pipeline import LanePipeline
 from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
 from lanelib.synth.sets import SUNNY, country_layout
-from lanelib.synth.truth import lane_truth
+from lanelib.synth.truth import lane_truth, load_video_truth
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
@@ -215,3 +216,49 @@ def test_a_lane_whose_right_side_is_only_the_asphalt_edge_is_found_and_says_so()
     assert abs(result.right.x_at(719.0) - edge_x) * XM <= 0.05
     off = LanePipeline(override(PipelineConfig(), ["edge.enabled=false"]))
     assert not off.detect(raw).found
+
+
+# --------------------------------------------------------------------------- the road seen from the car
+
+def _truth_lines_in_view(pipe: LanePipeline, lane) -> tuple[tuple[np.ndarray, np.ndarray], float]:
+    """Return the truth lines' fits in the bird's-eye view over the rows seen continuously from
+    the car (the run of visible truth rows from the bottom up) and the view's row where that run
+    ends (the farthest of the two lines': the crest, or the view's top)."""
+    h = pipe.size[1]
+    rows = np.asarray(lane.h_samples_px, float)
+    fits, tops = [], []
+    for xs in (lane.left_x_px, lane.right_x_px):
+        x = _truth_x(xs)
+        ok = np.isfinite(x)
+        last = int(np.flatnonzero(ok)[-1])
+        first = last
+        while first > 0 and ok[first - 1]:
+            first -= 1
+        bird = pipe.raw_to_birdseye(np.column_stack([x[first:last + 1], rows[first:last + 1]]))
+        inside = (bird[:, 1] >= 0) & (bird[:, 1] < h)
+        fits.append(np.polyfit(bird[inside, 1], bird[inside, 0], 2))
+        tops.append(float(bird[:, 1].min()))
+    return tuple(fits), max(max(tops), 0.0)
+
+
+@pytest.mark.parametrize("frame", [118, 121])
+def test_the_road_view_ends_at_the_rendered_crest_of_country(frame):
+    """country.mp4 where the road crests a hill while turning (frames 116-160): beyond the crest
+    the view's far rows hold grass and the road farther round the turn. Between the truth lines,
+    the road seen from the car (``LaneTracker.road_view_top_px``) ends within 0.6 m (18 rows)
+    beyond the truth's crest row (the last row where the lines are seen), and not before it."""
+    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    lines, crest = _truth_lines_in_view(pipe, load_video_truth(COUNTRY).frames[frame])
+    top = LaneTracker(pipe).road_view_top_px(read_frame(COUNTRY, frame), lines)
+    assert crest - 18 <= top <= crest
+
+
+def test_the_road_view_keeps_the_whole_view_of_a_shadowed_road():
+    """shadows.mp4 (tree shadows, an overpass's shade): between the truth lines the road is seen
+    to the view's top on every 25th frame; a shadow keeps the road's hue and low saturation."""
+    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(SHADOWS))
+    truth = load_video_truth(SHADOWS)
+    tracker = LaneTracker(pipe)
+    for frame in range(0, len(truth.frames), 25):
+        lines, _ = _truth_lines_in_view(pipe, truth.frames[frame])
+        assert tracker.road_view_top_px(read_frame(SHADOWS, frame), lines) == 0, frame

@@ -421,3 +421,62 @@ def test_stripe_spacing_is_measured_per_band_of_rows():
     single = np.zeros((H, W), np.uint8)
     draw_curve(single, (0.0, 0.0, 400.0), 15)
     assert len(lanes.stripe_spacing_px(single, (0.0, 0.0, 400.0), 38.0)[0]) == 0
+
+
+# --------------------------------------------------------------------------- the road seen from the car
+
+YM_VIEW = 0.03263888888888889  # the default 1280 x 720 view's metres per row
+
+
+def _drawn_view(crest_px: int | None, shadows: bool, seed: int = 3) -> np.ndarray:
+    """A drawn 1280 x 720 bird's-eye view: grey asphalt with grain, a straight lane between x 420
+    and 860, grass (saturated green) above ``crest_px`` (None: road to the top), and with
+    ``shadows`` dark bluish shadow bands across the whole road (a tree's, a bridge's)."""
+    rng = np.random.default_rng(seed)
+    h, w = 720, 1280
+    grey = rng.normal(105, 12, (h, w, 1)).clip(0, 255)
+    view = np.repeat(grey, 3, axis=2) + rng.normal(0, 3, (h, w, 3))
+    if shadows:
+        for y0 in (80, 250, 420, 560):
+            view[y0:y0 + 60] = view[y0:y0 + 60] * 0.3 + np.array([0.0, 3.0, 12.0])
+    if crest_px is not None:
+        grass = np.array([96.0, 120.0, 60.0]) * rng.uniform(0.6, 1.2, (crest_px, w, 1))
+        view[:crest_px] = grass
+    view[:, 412:428] = view[:, 852:868] = 230  # the painted lines
+    return view.clip(0, 255).astype(np.uint8)
+
+
+LANE_LINES = (np.array([0.0, 0.0, 420.0]), np.array([0.0, 0.0, 860.0]))
+
+
+@pytest.mark.parametrize("crest_px", [200, 360, 520])
+@pytest.mark.parametrize("shadows", [False, True])
+def test_the_road_view_ends_at_a_drawn_crest_and_a_shadowed_road_keeps_the_whole_view(crest_px, shadows):
+    """Grass beyond a crest ends the look-ahead on the sampled row just below it (within one
+    sample, 8 rows = 0.26 m, never beyond it), with or without shadows on the road; a shadowed
+    road without a crest keeps the whole view (0): a shadow keeps the road's low saturation."""
+    rows = np.arange(719, -1, -8)
+    for crest in (crest_px, None):
+        view = _drawn_view(crest, shadows)
+        top = lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0)
+        if crest is None:
+            assert top == 0
+        else:
+            assert crest <= top <= crest + 8
+
+
+def test_the_road_view_reads_only_the_lane_interior_and_needs_a_run_of_rows():
+    """Grass beside the lane (outside the lines), a patch of dirt across the lane shorter than
+    ``run_m``, and a view sampled over only some columns (``col0_px``) leave the whole view."""
+    view = _drawn_view(None, True)
+    view[:, :380] = (96, 120, 60)
+    view[:, 900:] = (96, 120, 60)
+    view[300:316] = (140, 110, 60)  # 0.5 m of dirt across the road
+    rows = np.arange(719, -1, -8)
+    assert lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0) == 0
+    assert lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 0.3) == 319  # the row below it
+    lo, hi = lanes.road_view_interior(rows, LANE_LINES, 1280)
+    assert lo.min() == 530 and hi.max() == 750
+    crest = _drawn_view(400, False)
+    part = crest[rows, 500:800]
+    assert lanes.road_view_top_px(part, rows, LANE_LINES, YM_VIEW, 0.15, 1.0, 1280, 500) == 407

@@ -184,3 +184,14 @@ def test_the_robust_path_tries_other_peaks_when_the_strongest_fail_the_checks():
     assert r.found and r.method == "robust"
     assert np.polyval(r.right.coeffs_px, h - 1) == pytest.approx(960, abs=6)
     assert r.lane_width_m == pytest.approx(3.7, abs=0.1)
+
+
+def test_birdseye_rows_are_the_rows_of_the_whole_view():
+    """``birdseye_rows`` remaps only the rows (and columns) asked for, pixel for pixel those of
+    ``birdseye``: the road view of the tracker samples 90 rows of the interior's columns."""
+    pipe = LanePipeline()
+    raw = np.random.default_rng(1).integers(0, 256, (720, 1280, 3), dtype=np.uint8)
+    rows = np.arange(719, -1, -8)
+    whole = pipe.birdseye(raw)
+    assert np.array_equal(pipe.birdseye_rows(raw, rows), whole[rows])
+    assert np.array_equal(pipe.birdseye_rows(raw, rows, (300, 900)), whole[rows, 300:900])
