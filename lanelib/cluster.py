@@ -10,8 +10,11 @@ back; ``map_items`` does both (chunks, map) and returns the items' results in or
 splits a video's frames into ranges for ``runs`` and ``evaluate`` to track on the workers, each
 warmed up over the end of the one before, and ``settle_joints`` makes each joint exact: where
 the warm-up did not bring the tracker to the previous segment's final state (compared by a
-fingerprint, ``LaneTracker.state_key``), the segment runs again from that state
-(``map_segments`` does both, map and joints). The workers read and write the files themselves:
+fingerprint, ``LaneTracker.state_key``), the segment runs again from that state; segments that
+the records of the first round show started from a wrong state (a video's geometry refined in
+an earlier segment) first run again all at once from the state planned for them, so a change
+early in a long video costs one round, not one re-run after another (``map_segments`` does
+both, map and joints). The workers read and write the files themselves:
 with ``--scheduler`` the dataset and the output folder must lie on a filesystem every worker sees at the same path (a shared mount).
 
 ``dask`` and ``distributed`` are imported inside the functions that need them (the documented
@@ -102,16 +105,22 @@ def split(items: Sequence[T], size: int) -> list[list[T]]:
 
 
 def map_chunks(client: distributed.Client, fn: Callable[..., list], chunks: Sequence[Sequence],
-               bar: tqdm, sizes: Sequence[int] | None = None, **kwargs) -> list[list]:
+               bar: tqdm, sizes: Sequence[int] | None = None, states: Sequence[object] | None = None,
+               **kwargs) -> list[list]:
     """Return ``[fn(chunk, **kwargs) for chunk in chunks]``, run by the client's workers.
 
     ``fn`` must be importable by the workers (a module-level function of lanelib) and return one
     result per item; ``bar`` is updated by the chunk's length (or its entry of ``sizes``: e.g.
-    the frames of a video segment) as each chunk comes back. An exception raised by ``fn``
-    cancels the chunks not yet run and is raised here.
+    the frames of a video segment) as each chunk comes back. ``states``: one per chunk, passed
+    as ``fn(chunk, state=state, **kwargs)`` (the states a video's segments run again from). An
+    exception raised by ``fn`` cancels the chunks not yet run and is raised here.
     """
     import distributed  # lazy (module docstring)
-    futures = client.map(fn, chunks, pure=False, **kwargs)
+    if states is None:
+        futures = client.map(fn, chunks, pure=False, **kwargs)
+    else:
+        futures = [client.submit(fn, chunk, state=state, pure=False, **kwargs)
+                   for chunk, state in zip(chunks, states)]
     index = {f.key: i for i, f in enumerate(futures)}
     results: list[list | None] = [None] * len(futures)
     try:
@@ -228,22 +237,37 @@ class Carry:
 @dataclass(frozen=True)
 class Joints:
     """How the joints between a clip's segments were made exact (``settle_joints``): ``joints``
-    checked, ``rerun`` of them run again from the previous segment's state."""
+    checked, ``rerun`` of them run again from the previous segment's state, one after another,
+    ``rebased`` carried on by the evidence alone, and ``restarted`` segments run again first,
+    all at once, from the states the segments' records gave (``plan``)."""
 
     joints: int = 0
     rerun: int = 0
     rebased: int = 0
+    restarted: int = 0
+
+    @property
+    def rounds(self) -> int:
+        """The rounds of re-runs that waited on each other: the restarts (one round, run in
+        parallel), then each re-run of a joint (one at a time)."""
+        return (self.restarted > 0) + self.rerun
 
     def __str__(self) -> str:
         settled = self.joints - self.rerun - self.rebased
         rebased = f", {self.rebased} carried on by the evidence alone" if self.rebased else ""
+        restarted = (f" ({self.restarted} segment{'' if self.restarted == 1 else 's'} first run again at "
+                     "once from the state the records gave)" if self.restarted else "")
         return (f"{self.joints + 1} segments; {settled} of {self.joints} joint"
-                f"{'' if self.joints == 1 else 's'} settled in the warm-up{rebased}, {self.rerun} re-run")
+                f"{'' if self.joints == 1 else 's'} settled in the warm-up{rebased}, {self.rerun} re-run"
+                f"{restarted}")
 
 
 def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Callable[[int, object], T],
                   ended: Callable[[T], bool] = lambda o: False,
-                  rebase: Callable[[int, object, T], T | None] | None = None) -> tuple[list[T], Joints]:
+                  rebase: Callable[[int, object, T], T | None] | None = None,
+                  plan: Callable[[Sequence[T]], dict[int, object]] | None = None,
+                  restart: Callable[[dict[int, object]], dict[int, T]] | None = None
+                  ) -> tuple[list[T], Joints]:
     """Return the segments' outcomes with every joint exact, and how many joints needed a re-run.
 
     A segment's warm-up runs over the end of the one before it: when its tracker's state before
@@ -252,15 +276,30 @@ def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Cal
     one process through the clip. When not (the tracker's memory outlasted the warm-up: a hold,
     a trend over a hairpin), ``rerun(k, state)`` runs segment ``k`` again from the previous
     segment's final state (``end_state``); the segments are checked in order, each against the
-    final state of the one before as it now is (a chain of re-runs). A segment for which
-    ``ended`` is true (the clip broke off in it) ends the check: the later ones are not used.
-    Where the keys differ but the cores agree (``Carry.entry_core``: the results depend on the
-    same state now; only evidence kept for later differs), ``rebase(k, state, outcome)`` may
-    carry the previous segment's evidence through the segment's own record without running it
-    again: it returns the outcome with its end state (and keys) so carried on, or None when the
-    evidence would have changed the results (then the segment is run again).
+    final state of the one before as it now is (a chain of re-runs, one after another). A
+    segment for which ``ended`` is true (the clip broke off in it) ends the check: the later
+    ones are not used. Where the keys differ but the cores agree (``Carry.entry_core``: the
+    results depend on the same state now; only evidence kept for later differs),
+    ``rebase(k, state, outcome)`` may carry the previous segment's evidence through the
+    segment's own record without running it again: it returns the outcome with its end state
+    (and keys) so carried on, or None when the evidence would have changed the results (then
+    the segment is run again).
+
+    Before the checks, ``plan(outcomes)`` may tell, from the segments' records alone, which
+    segments started from a wrong state and the state each should have had at its first
+    (warm-up) frame (a video's geometry refined in an earlier segment: every later one started
+    from the first estimate); ``restart(states)`` runs those again all at once (one round) and
+    returns their outcomes. The checks then go on as above: a plan is a guess the keys verify,
+    and a restarted segment whose warm-up still did not settle is run again from the state
+    before it. ``Joints.rounds`` counts the rounds of re-runs that waited on each other.
     """
     out = list(outcomes)
+    restarted = 0
+    if plan is not None and restart is not None:
+        states = plan(out)
+        for k, outcome in restart(states).items() if states else ():
+            out[k] = outcome
+        restarted = len(states)
     checked = reruns = rebased = 0
     for k in range(1, len(out)):
         if ended(out[k - 1]):
@@ -277,20 +316,23 @@ def settle_joints(outcomes: Sequence[T], carry: Callable[[T], Carry], rerun: Cal
                 continue
         out[k] = rerun(k, before.end_state)
         reruns += 1
-    return out, Joints(checked, reruns, rebased)
+    return out, Joints(checked, reruns, rebased, restarted)
 
 
 def map_segments(client: distributed.Client, fn: Callable[..., list],
                  spans: Sequence[tuple[int, int, int, bool]], bar: tqdm, carry: Callable[[T], Carry], ended: Callable[[T], bool] = lambda o: False,
-                 rebase: Callable[[int, object, T], T | None] | None = None, **kwargs) -> tuple[list[T], Joints]:
+                 rebase: Callable[[int, object, T], T | None] | None = None,
+                 plan: Callable[[Sequence[T]], dict[int, object]] | None = None, **kwargs) -> tuple[list[T], Joints]:
     """Return the outcome of each segment of a video run by the client's workers, every joint
     exact (``settle_joints``), and how many joints needed a re-run.
 
     ``fn([(first, start, stop, to_end)], state=None, **kwargs)`` runs one segment (``segments``;
-    ``to_end``: read on to the clip's end) from frame ``first`` with a fresh tracker, or from
-    frame ``start`` on from a tracker ``state``, and returns ``[outcome]``; ``carry(outcome)`` is
-    its ``Carry``. The segments go to the workers at once; re-runs, one after another, as single
-    tasks (``rebase``: as ``settle_joints``). ``bar`` counts the kept frames done, re-runs included.
+    ``to_end``: read on to the clip's end) from frame ``first`` with a fresh tracker, or with a
+    ``state`` put in before frame ``first``, and returns ``[outcome]``; ``carry(outcome)`` is
+    its ``Carry``. The segments go to the workers at once; then the segments ``plan`` names go
+    again at once, each from its first (warm-up) frame and the state planned for it; re-runs of
+    joints, one after another, as single tasks from frame ``start`` (``rebase``, ``plan``: as
+    ``settle_joints``). ``bar`` counts the kept frames done, re-runs included.
     """
     done = map_chunks(client, fn, [[span] for span in spans], bar,
                       sizes=[stop - start for _, start, stop, _ in spans], **kwargs)
@@ -302,4 +344,12 @@ def map_segments(client: distributed.Client, fn: Callable[..., list],
         bar.update(stop - start)
         return outcome
 
-    return settle_joints([o for (o,) in done], carry, rerun, ended, rebase)
+    def restart(states: dict[int, object]) -> dict[int, T]:
+        ks = sorted(states)
+        sizes = [spans[k][2] - spans[k][1] for k in ks]
+        bar.total += sum(sizes)
+        again = map_chunks(client, fn, [[spans[k]] for k in ks], bar, sizes=sizes,
+                           states=[states[k] for k in ks], **kwargs)
+        return {k: o for k, (o,) in zip(ks, again)}
+
+    return settle_joints([o for (o,) in done], carry, rerun, ended, rebase, plan, restart)

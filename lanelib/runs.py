@@ -17,8 +17,9 @@ On Dask (``workers``/``scheduler``, ``cluster.dask_client``): a folder goes in c
 that each start ``cluster.WARMUP_FRAMES`` early to warm the tracker up (a segment whose tracker
 did not reach the previous segment's final state in that warm-up runs again from that state:
 ``cluster.settle_joints``, ``FrameState``; the evidence a ``GeometryWatch`` keeps for later is
-carried through a segment's record of its checks instead, ``carry_lane_state``), joined
-without re-encoding; the ``process``
+carried through a segment's record of its checks instead, ``carry_lane_state``, and the
+segments that started from the wrong geometry, as the records of the checks show, run again at
+once from the one process's, ``plan_lane_restarts``), joined without re-encoding; the ``process``
 callables are built on the workers by picklable factories (``lane_image_process``,
 ``lane_video_process``, ``hough_image_process``, ``hough_video_process``), so the rows, logs
 and results are those of one process.
@@ -350,7 +351,8 @@ FrameFnMaker = Callable[[], tuple[FrameFn, list[str], FrameState]]
 @dataclass(frozen=True)
 class SegmentOutcome:
     """What ``video_segment`` did with one segment: the log rows of its kept frames, the frames
-    with a lane found, where decoding stopped (empty when it did not) and the run's notes."""
+    with a lane found, where decoding stopped (empty when it did not) and the notes of its kept
+    frames (a warm-up's are the previous segment's)."""
 
     rows: tuple[dict, ...]
     found: int
@@ -369,8 +371,9 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
     are dropped; the frames ``start .. stop - 1`` (to the clip's end when ``to_end``) go to
     ``parts/<start>.mp4`` (written atomically, only when it holds a frame). A clip that stops
     decoding in the segment (or before it) ends the segment there, with ``stopped`` saying why.
-    ``state`` (``FrameState.get`` of another process): the segments go on from it, not from a
-    fresh state (a re-run of a joint that did not settle in the warm-up). Each outcome's
+    ``state`` (``FrameState.get`` of another process, or planned: ``plan_lane_restarts``): the
+    segments go on from it, not from a fresh state (a re-run of a joint that did not settle in
+    the warm-up, from ``start``; a restart from the warm-up with the geometry planned). Each outcome's
     ``carry`` holds the state's fingerprint before frame ``start`` and the state after the last.
     """
     out = []
@@ -378,7 +381,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
         process, notes, carried = make()
         if state is not None:
             carried.put(state)
-        rows, found, stopped, entry, entry_core = [], 0, "", None, None
+        rows, found, stopped, entry, entry_core, noted = [], 0, "", None, None, len(notes)
         writer = None
         try:
             try:
@@ -389,7 +392,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
                     for n, frame in enumerate(reader):
                         index = first + n
                         if index == start:
-                            entry, entry_core = carried.key(), carried.core()
+                            entry, entry_core, noted = carried.key(), carried.core(), len(notes)
                         image, row, lane = process(frame, index, index / reader.info.fps)
                         if index >= start:
                             writer.write(image)
@@ -410,7 +413,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
                 writer.abort()
             raise
         carry = cluster.Carry(entry, carried.key(), carried.get(), entry_core, carried.core())
-        out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes), carry))
+        out.append(SegmentOutcome(tuple(rows), found, stopped, tuple(notes[noted:] if rows else ()), carry))
     return out
 
 
@@ -418,8 +421,9 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
                        client, log_path: str | os.PathLike | None = None, progress: bool = True,
                        desc: str = "frames", threads: int | None = None, start_s: float | None = None,
                        end_s: float | None = None, warmup: int = cluster.WARMUP_FRAMES,
-                       carry: Callable[[object, object, int], tuple[object, bytes] | None] | None = None
-                       ) -> VideoRun:
+                       carry: Callable[[object, object, int], tuple[object, bytes] | None] | None = None,
+                       plan: Callable[[object, Sequence[object], Sequence[tuple[int, int, int, bool]]],
+                                      dict[int, object]] | None = None) -> VideoRun:
     """Return what a run did, as ``run_video``, with the clip split into segments run by the
     workers of a Dask ``client``.
 
@@ -432,7 +436,10 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     the log are those of one process; ``VideoRun.joints`` counts the re-runs. ``carry(state
     before, end state, start)`` (``carry_lane_state``): where the states differ only in evidence
     kept for later (``FrameState.core``), carry the previous state through the segment instead
-    of running it again (``cluster.settle_joints``). This process joins
+    of running it again (``cluster.settle_joints``). ``plan(fresh state, end states, segments)``
+    (``plan_lane_restarts``): before the joints are checked, the segments whose start was wrong
+    as the end states' records tell (``fresh state``: ``make()``'s before any frame), each with
+    the state to run it again from its warm-up; they run again at once (one round). This process joins
     the parts (``io.join_videos``, no re-encoding) and writes the per-frame log, both
     atomically, and removes the parts. One progress bar counts the frames of the segments done
     (re-runs included). A clip that stops decoding keeps the frames before the break, as
@@ -456,12 +463,21 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
         got = None if carry is None else carry(before, o.carry.end_state, segs[k][1])
         return None if got is None else replace(o, carry=replace(o.carry, end_state=got[0], end_key=got[1]))
 
+    def plan_restarts(outcomes: Sequence[SegmentOutcome]) -> dict[int, object]:
+        ends = []
+        for o in outcomes:
+            ends.append(o.carry.end_state)
+            if o.stopped:
+                break
+        return plan(make()[2].get(), ends, segs)
+
     parts = Path(tempfile.mkdtemp(prefix=f".{out.stem}.", suffix=".parts", dir=out.parent))
     try:
         with tqdm(total=len(frames) or None, desc=desc, unit="frame", disable=not progress,
                   dynamic_ncols=True) as bar:
             settled, joints = cluster.map_segments(client, video_segment, segs, bar, lambda o: o.carry,
                                                    lambda o: bool(o.stopped), rebase=carry_on,
+                                                   plan=plan_restarts if plan is not None else None,
                                                    in_path=in_path.resolve(), parts=parts.resolve(),
                                                    make=make, threads=threads)
         outcomes, files = [], []
@@ -752,18 +768,36 @@ class GeometryWatch:
         checks = [c for c in other.record if c[0] >= start]
         if other.recorded > len(other.record) and (not other.record or other.record[0][0] >= start):
             return None  # the record lost some of them
-        copy = pickle.loads(pickle.dumps(self))
-        for index, time_s, x, y in checks:
-            try:
-                if copy._step((x, y), None, index, time_s) is not None:
-                    return None
-            except _NeedsFrames:
-                return None
-        copy.record.extend(checks)
-        copy.recorded += len(checks)
+        got = self.replayed(checks)
+        if got is None or got[1]:
+            return None
+        copy = got[0]
         copy.off = deque(other.off, maxlen=other.off.maxlen)  # the frames of the same checks
         copy.notes = []
         return copy
+
+    def replayed(self, checks: Sequence[tuple[int, float, float, float]]) -> tuple[GeometryWatch, list[int]] | None:
+        """Return a copy of this watch carried through straight checks ``(index, time_s, x, y)``
+        (a ``record``) as ``check`` would have gone through them, and the frames at which it
+        changed the geometry on the way; None where a new estimate was due (it takes frames).
+
+        A check's point does not depend on the geometry in use (``finder``: the frame size, the
+        lens and the hood row, which a refined or new estimate keeps), nor which frames are
+        checked (every ``every``-th): any run's record of a frame's check is every run's. The
+        copy's ``off`` holds None for the frames of checks off the horizon in a row.
+        """
+        copy = pickle.loads(pickle.dumps(self))
+        changed = []
+        for index, time_s, x, y in checks:
+            copy.record.append((index, time_s, x, y))
+            copy.recorded += 1
+            try:
+                if copy._step((x, y), None, index, time_s) is not None:
+                    copy.changed_at = index
+                    changed.append(index)
+            except _NeedsFrames:
+                return None
+        return copy, changed
 
     def check(self, frame: np.ndarray, index: int, time_s: float) -> RoadGeometry | None:
         if index % self.every:
@@ -963,7 +997,10 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
         joints (a drift found in one segment carries over into the next by a re-run); the
         straight checks a refinement rests on are carried through the next segment's record of
         its checks (``carry_lane_state``), which is run again only where they would have
-        refined the geometry in it.
+        refined the geometry in it. The checks' points do not depend on the geometry in use, so
+        the segments' records tell where one process changes the geometry: the segments that
+        started from another geometry than its (every one after a refinement) run again at once
+        from its watch (``plan_lane_restarts``; one round, ``VideoRun.joints.rounds``).
 
     Every output is written atomically by ``run_video``: an error or Ctrl-C leaves nothing under
     ``out_path`` or ``log_path``, except a video that stops decoding half-way: its outputs keep
@@ -983,7 +1020,8 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
             return run_video_segments(in_path, out_path, make, client, log_path=log_path,
                                       progress=progress, desc=Path(in_path).name, threads=threads,
                                       start_s=start_s, end_s=end_s,
-                                      carry=carry_lane_state if geo is not None else None)
+                                      carry=carry_lane_state if geo is not None else None,
+                                      plan=plan_lane_restarts if geo is not None else None)
     process, notes, _ = make()
     run = run_video(in_path, out_path, process, log_path=log_path, progress=progress,
                     desc=Path(in_path).name, threads=threads, start_s=start_s, end_s=end_s)
@@ -1060,6 +1098,53 @@ def carry_lane_state(before: object, state: object, start: int) -> tuple[object,
     if watch is None:
         return None
     return (tracker, config, watch), _lane_state_key(tracker, watch)
+
+
+def plan_lane_restarts(fresh: object, ends: Sequence[object], spans: Sequence[tuple[int, int, int, bool]]
+                       ) -> dict[int, object]:
+    """Return, for each Dask segment that started from the wrong geometry, the state of
+    ``lane_video_process`` to run it again from, from its first (warm-up) frame: a fresh tracker
+    and the geometry watch of one process at that frame (``cluster.settle_joints``' plan).
+
+    ``fresh``: the state every segment started from (the first estimate, a fresh watch);
+    ``ends``: the segments' end states after that start, in order; ``spans``: their
+    ``(first, start, stop, to_end)``. The watch's checks measure the same points whatever the
+    geometry in use (``GeometryWatch.replayed``), so a fresh watch carried through the segments'
+    records frame by frame is the one process's watch: where its geometry at a segment's first
+    frame, or its changes in the segment, differ from the fresh start's (a refinement in an
+    earlier segment, or in this one on evidence from before it), the segment is planned to run
+    again with it. The tracker is restarted by the geometry's change in one process, and warms
+    up with the right geometry here; the joints' keys check the rest (a restarted segment that
+    still did not settle runs again from the state before it). The plan ends (the later
+    segments are left to the joints' checks) where the records cannot tell: a new estimate due
+    (it takes the frames), checks off the horizon pending at a segment's first frame, a record
+    that lost checks, a segment without a watch.
+    """
+    _, config, watch = fresh
+    plan: dict[int, object] = {}
+    if watch is None:
+        return plan
+    first_geometry = watch.geometry
+    for k, end in enumerate(ends):
+        own = end[2]
+        first, _, stop, _ = spans[k]
+        if own is None or own.recorded > len(own.record) or watch.off:
+            break
+        checks = list(own.record)  # the segment's checks from its first frame on
+        if k > 0:
+            got = watch.replayed([c for c in checks if c[0] < stop])
+            if got is None:
+                break
+            if watch.geometry != first_geometry or got[1] or own.changed_at >= 0:
+                start_watch = pickle.loads(pickle.dumps(watch))
+                start_watch.notes = []
+                plan[k] = (None, with_geometry(config, watch.geometry), start_watch)
+        if k + 1 < len(ends):
+            got = watch.replayed([c for c in checks if c[0] < spans[k + 1][0]])
+            if got is None:
+                break
+            watch = got[0]
+    return plan
 
 
 # --------------------------------------------------------------------------- the basic Hough pipeline

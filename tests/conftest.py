@@ -1,15 +1,19 @@
-"""Shared test fixtures: where the Udacity data lives (``lanelib.data``), and the README's tables."""
+"""Shared test fixtures: where the Udacity data lives (``lanelib.data``), the README's tables, and a
+synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``)."""
 from __future__ import annotations
 
+import math
 import re
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
 import imageio_ffmpeg
 import pytest
 
-from lanelib import data
+from lanelib import data, runs
 from lanelib.camera import calibrate
+from lanelib.synth import Camera, CurvatureProfile, GroundGrid, video_sets, write_video
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -89,3 +93,31 @@ def readme_table():
 def camera():
     """The calibration of the bundled (synthetic) camera, from ``camera_cal/`` (once per session)."""
     return calibrate(REPO / "camera_cal")
+
+
+REFINE_CAMERA = Camera.pinhole((960, 540), hfov_deg=40.0, height_m=1.3, pitch_deg=-1.0, yaw_deg=1.5)
+
+
+@pytest.fixture(scope="session")
+def refine_camera() -> Camera:
+    """The camera of ``bend_then_straight``: 960x540, 40 deg across, yawed 1.5 deg."""
+    return REFINE_CAMERA
+
+
+@pytest.fixture(scope="session")
+def refine_options() -> runs.GeometryOptions:
+    """``--auto-geometry`` on ``bend_then_straight``: the first 4 s (12 frames), with the focal
+    length as a calibration gives it (no dashes in 4 s)."""
+    return runs.GeometryOptions(seconds=4.0, max_frames=12, focal_px=480 / math.tan(math.radians(20.0)))
+
+
+@pytest.fixture(scope="session")
+def bend_then_straight(tmp_path_factory) -> Path:
+    """16 s (400 frames) through ``refine_camera``: a gentle left bend (radius 4 km, straight
+    enough to pass as straight) for the first 6 s, then straight road; the car weaves across its
+    lane over one 16 s period (0.6 m), so that in the first 4 s it heads right of the road."""
+    base = video_sets()["project"]
+    profile = CurvatureProfile.from_segments(-1 / 4000, ((150, -1 / 4000), (20, 0.0), (600, 0.0)))
+    clip = replace(base, name="refine", profile=profile, drift=((0.6, 16.0),))
+    return write_video(tmp_path_factory.mktemp("refine") / "clip.mp4", clip, seconds=16.0,
+                       grid=GroundGrid.build(REFINE_CAMERA))

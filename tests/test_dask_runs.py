@@ -22,7 +22,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from lanelib import cluster, evaluate, hough, io
+from lanelib import cluster, evaluate, hough, io, runs
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline, PipelineConfig, pipeline_for
@@ -182,6 +182,32 @@ def test_settle_joints_carries_evidence_on_where_the_cores_agree():
     assert joints == cluster.Joints(2, 2, 0)
 
 
+def test_settle_joints_restarts_the_planned_segments_in_one_round_then_checks_them():
+    """``plan`` names the segments that started from a wrong state (from the records alone):
+    they run again at once, then every joint is checked as usual (one still off: re-run)."""
+    seg = [cluster.Carry(None, b"a", "A"), cluster.Carry(b"x", b"b", "B"), cluster.Carry(b"y", b"c", "C"),
+           cluster.Carry(b"z", b"d", "D")]
+    restarts, reruns = [], []
+
+    def restart(states):
+        restarts.append(dict(states))
+        return {k: cluster.Carry({1: b"a", 2: b"b", 3: b"q"}[k], seg[k].end_key, s) for k, s in states.items()}
+
+    def rerun(k, state):
+        reruns.append(k)
+        return cluster.Carry(None, seg[k].end_key, state + "'")
+
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun, plan=lambda o: {1: "P1", 2: "P2", 3: "P3"},
+                                        restart=restart)
+    assert restarts == [{1: "P1", 2: "P2", 3: "P3"}] and reruns == [3]
+    assert [c.end_state for c in out] == ["A", "P1", "P2", "P2'"]  # from the restarted state before it
+    assert joints == cluster.Joints(3, 1, 0, 3) and joints.rounds == 2
+    assert str(joints) == ("4 segments; 2 of 3 joints settled in the warm-up, 1 re-run "
+                           "(3 segments first run again at once from the state the records gave)")
+    out, joints = cluster.settle_joints(seg, lambda c: c, rerun, plan=lambda o: {}, restart=restart)
+    assert len(restarts) == 1 and joints == cluster.Joints(3, 3) and joints.rounds == 3
+
+
 # --------------------------------------------------------------------------- runs
 
 def test_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler, capsys):
@@ -225,6 +251,28 @@ def test_video_with_auto_geometry_on_dask_gives_the_log_of_one_process(tmp_path,
     out = capsys.readouterr().out
     assert "dask: 2 segments; 0 of 1 joint settled in the warm-up, 1 carried on by the evidence alone, 0 re-run" in out
     assert (tmp_path / "two.csv").read_text() == (tmp_path / "one.csv").read_text()
+
+
+@pytest.mark.slow
+def test_a_refinement_early_in_a_run_restarts_the_later_segments_in_one_round(
+        bend_then_straight, refine_options, tmp_path, scheduler, monkeypatch):
+    """The synthetic clip whose vanishing point is refined at frame 192 (tests/test_geometry_runs.py),
+    in 4 segments of 100 frames: every segment from the one the refinement fires in on started
+    from the first estimate; the records of the checks tell so, and they run again at once from
+    the one process's watch (one round, not one joint after another): the log of one process."""
+    monkeypatch.setattr(cluster, "MIN_SEGMENT_WARMUPS", 2)  # 400 frames on 2 workers: 4 segments
+    logs, done = {}, {}
+    for name, extra in (("one", {}), ("two", {"scheduler": scheduler})):
+        logs[name] = tmp_path / f"{name}.csv"
+        done[name] = runs.process_video(bend_then_straight, tmp_path / f"{name}.mp4", log_path=logs[name],
+                                        progress=False, auto_geometry=refine_options, **extra)
+    one, two = done["one"], done["two"]
+    refined = [int(n.split()[1]) for n in one.notes if "refined:" in n]
+    assert refined and refined[0] < 200, one.notes  # in the second segment (100..199)
+    assert two.notes == one.notes
+    assert logs["two"].read_text() == logs["one"].read_text()
+    assert two.joints.joints == 3 and two.joints.restarted == 3, two.joints
+    assert two.joints.rounds == 1, two.joints
 
 
 def test_hough_video_on_dask_gives_the_log_of_one_process(tmp_path, clip, scheduler):

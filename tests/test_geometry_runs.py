@@ -18,7 +18,7 @@ from lanelib.camera import Calibration, calibrate
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config, save_config
 from lanelib.errors import GeometryError
-from lanelib.synth import Camera, CurvatureProfile, GroundGrid, load_video_truth, video_sets, write_video
+from lanelib.synth import load_video_truth
 
 REPO = Path(__file__).resolve().parents[1]
 CLIP = REPO / "videos" / "project.mp4"
@@ -316,23 +316,9 @@ def test_a_fresh_watch_is_carried_on_by_the_evidence_of_the_one_before(estimate)
             assert got is None and "refined" in one.notes[0]
 
 
-REFINE_CAMERA = Camera.pinhole((960, 540), hfov_deg=40.0, height_m=1.3, pitch_deg=-1.0, yaw_deg=1.5)
-
-
-@pytest.fixture(scope="module")
-def bend_then_straight(tmp_path_factory) -> Path:
-    """16 s through a yawed narrow camera: a gentle left bend (radius 4 km, straight enough to
-    pass as straight) for the first 6 s, then straight road; the car weaves across its lane
-    over one 16 s period (0.6 m), so that in the first 4 s it heads right of the road."""
-    base = video_sets()["project"]
-    profile = CurvatureProfile.from_segments(-1 / 4000, ((150, -1 / 4000), (20, 0.0), (600, 0.0)))
-    clip = replace(base, name="refine", profile=profile, drift=((0.6, 16.0),))
-    return write_video(tmp_path_factory.mktemp("refine") / "clip.mp4", clip, seconds=16.0,
-                       grid=GroundGrid.build(REFINE_CAMERA))
-
-
 @pytest.mark.slow
-def test_the_vanishing_point_is_refined_to_the_straight_ahead_column(bend_then_straight, tmp_path):
+def test_the_vanishing_point_is_refined_to_the_straight_ahead_column(bend_then_straight, refine_camera,
+                                                                     refine_options, tmp_path):
     """Known answer: estimated from the first 4 s alone (the bend, the car heading right of the
     road), the vanishing point lies 12.5 px left of the camera's straight-ahead column; the
     straight checks of the next seconds move it to within 0.9 px of it at 7.7 s (frame 192), and
@@ -340,9 +326,8 @@ def test_the_vanishing_point_is_refined_to_the_straight_ahead_column(bend_then_s
     instead of 0.074 m (0.137 m) (figures at writing)."""
     clip = bend_then_straight
     truth = load_video_truth(clip)
-    true_x = REFINE_CAMERA.vanishing_point_px()[0]
-    f = 480 / math.tan(math.radians(20.0))  # the focal length, as a calibration gives it: no dashes in 4 s
-    options = runs.GeometryOptions(seconds=4.0, max_frames=12, focal_px=f)
+    true_x = refine_camera.vanishing_point_px()[0]
+    options = refine_options
     geo = runs.estimate_road_geometry(clip, None, options)
     assert geo.vanishing_point_px[0] < true_x - 8.0  # the bias to correct
     calibration = runs.geometry_calibration(None, geo)
