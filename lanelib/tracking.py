@@ -509,7 +509,9 @@ class LaneTracker:
             return det_images["fallback binary"]
 
         ran: list[str] = []  # the fallback searches this frame needed (``retries``)
-        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top, mask))
+        seen = self._restart_candidates[1]  # the lines this frame could restart the lane from
+        best = (search, *self._check(search.left, search.right, track, self._band_px(search), top, mask,
+                                     seen))
         first = search
         looked = [search]  # every search this frame ran: did any see a line at all (step 5)?
 
@@ -521,7 +523,7 @@ class LaneTracker:
                 return
             looked.append(retry)
             checked = (retry, *self._check(retry.left, retry.right, track, self._band_px(retry),
-                                           retry.top_px, mask))
+                                           retry.top_px, mask, seen))
             if sum(c is not None for c in checked[1:3]) > sum(c is not None for c in best[1:3]):
                 best = checked
                 if note:
@@ -718,14 +720,16 @@ class LaneTracker:
         """
         return self._check(left, right, track, band_px)[:3]
 
-    def _check(self, left: LineFit, right: LineFit, track, band_px, top_px: int = 0, mask=None
+    def _check(self, left: LineFit, right: LineFit, track, band_px, top_px: int = 0, mask=None,
+               candidates: list | None = None
                ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
         """Return ``check``'s answer and whether a check rejected a found line.
 
         The track checks and the pair's compare the lines over the look-ahead's rows, from
         ``top_px`` down (``lanes.lookahead_top_px``). ``mask``: the frame's whole view under the
         fallback masks' rule, made when first called (``update``), for the grade pair check;
-        None skips that check.
+        None skips that check. ``candidates``: where ``update`` collects the lines this frame
+        could restart the lane from (``_restart``); None (``check``) keeps the tracker as it is.
         """
         cfg = self.config
         rows = self._rows if not top_px else np.linspace(float(top_px), self._bottom, len(self._rows))
@@ -798,16 +802,16 @@ class LaneTracker:
                 why.append(problem)
                 failed = True
                 if track is None:
-                    return self._restart(kept, why, failed)
+                    return self._restart(kept, why, failed, candidates)
                 lc, rc = (self._conf_of(kept[s]) for s in ("left", "right"))
                 drop = "right" if lc >= rc else "left"
                 why.append(f"{drop} line dropped (lower confidence)")
                 kept[drop] = None
         if track is None and (kept["left"] is None or kept["right"] is None):
-            return self._restart(kept, why, failed)
+            return self._restart(kept, why, failed, candidates)
         return kept["left"], kept["right"], why, failed
 
-    def _restart(self, kept: dict, why: list[str], failed: bool
+    def _restart(self, kept: dict, why: list[str], failed: bool, candidates: list | None = None
                  ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:
         """Return ``_check``'s answer without a track when not both lines of ``kept`` (each
         passed the line checks) make a lane: one line alone restarts the lane only soon after a
@@ -841,7 +845,8 @@ class LaneTracker:
             return None, None, why, failed
         (side, dist), = near.items()
         fit = lines[side]
-        self._restart_candidates[1].append((side, np.array(fit.coeffs_px, float)))
+        if candidates is not None:  # the next frame confirms a restart against it
+            candidates.append((side, np.array(fit.coeffs_px, float)))
         agree = self._confirmed_restart(side, fit)
         if agree is None:
             why.append(f"{side} line lies where the lost track's {side} line was ({dist:.2f} m at the "
