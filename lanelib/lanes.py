@@ -1106,9 +1106,9 @@ def saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return the per-pixel features that tell a verge from the road surface in a (shrunk)
-    bird's-eye image: saturation ((max - min) / max of R, G, B, 0-1; the max taken as at least
-    ``DARK_V``, so the bluish tint of a shadow or the noise of a dark pixel is not colour), grain (local std / mean of V over 3 x 3 px) and
-    where the camera sees (not black). Both are free of the light's brightness, so a shadow on
+    bird's-eye image: saturation (``saturation``: the bluish tint of a shadow or the noise of a
+    dark pixel is not colour), grain (local std / mean of V over 3 x 3 px) and where the camera
+    sees (not black). Both are free of the light's brightness, so a shadow on
     the road, a repaved strip, a tar seam and a concrete barrier (grey and smooth like the road)
     look like road; grass and dirt differ in saturation, gravel in grain."""
     sat, hi = saturation(rgb)
@@ -1145,7 +1145,7 @@ def road_view_top_px(rows_rgb: np.ndarray, rows_px: np.ndarray, lines, ym_per_px
     the ``lines``, ``ROAD_VIEW_INSET`` of the lane's width inside each: no paint, a few pixels of
     a track's error) is compared with the road's surface just ahead of the car (the interior of
     the rows within ``ROAD_VIEW_REFERENCE_M`` of the bottom row): a pixel is unlike the road when
-    its saturation (``verge_features``: a shadow's dark tint is not colour) exceeds the
+    its saturation (``saturation``: a shadow's dark tint is not colour) exceeds the
     reference's median by ``min_saturation_step`` (``EdgeConfig``'s: grass, dirt, a painted car),
     and a row is off the road when ``ROAD_VIEW_OFF_SHARE`` of its seen interior pixels are. A
     shadow, a repaved strip or a tar seam keeps the road's low saturation and never ends the
