@@ -50,7 +50,19 @@ class SearchConfig:
     prior_margin_px : half width of the band searched around a previous fit.
     min_line_pixels : fewer pixels than this and the line is "not found".
     min_span_fraction : pixels must span this share of the image height for a 2nd-order fit;
-        below it the line is fitted as a straight line (a = 0).
+        below it the line is fitted as a straight line (a = 0), unless its bend is resolved in a
+        look-ahead (``short_bend_resolution``).
+    short_bend_resolution : 0 (off), or how many times its pixels' RMS scatter about it the
+        2nd-order fit of a line spanning less than ``min_span_fraction`` must bow over its span
+        (``|a| * span**2 / 4``) to be kept, in a search over a look-ahead (``top_px`` > 0: a
+        tracked lane's, ``lookahead_top_px``, or a shorter view). A line on a tight bend leaves the
+        view sideways (on a 35 m hairpin after about 6 m of its 23.5 m), so it spans less than the
+        share on exactly the bends whose curvature matters most: fitted straight, ``country``'s
+        hairpin lines were +15 cm off at the car, -13 cm at 2.9 m and +30-60 cm at 6 m, and the
+        straight track then refused the lines that were seen whole. A dash on a straight road bows
+        by a fraction of a pixel and stays straight. The whole view (no track) keeps the straight
+        fit: there the pair checks read the fit over the view's 23.5 m, three or four times the
+        span of such a line.
     min_found_span_fraction : below this share of the height the line is "not found".
     trim_outliers_pct : 0 (off), or the share (%) of a line's pixels kept for its fit: after a
         first fit, the pixels with the smallest |x residual| (e.g. 95: the nearest 95 %), then a
@@ -97,6 +109,7 @@ class SearchConfig:
     prior_margin_px: int = 60
     min_line_pixels: int = 150
     min_span_fraction: float = 0.3
+    short_bend_resolution: float = 2.0
     min_found_span_fraction: float = 0.08
     trim_outliers_pct: float = 0.0
     window_histogram: bool = False
@@ -121,6 +134,9 @@ class SearchConfig:
                               "between 0 and 1 (none: off)")
         if not 0 < self.min_view_fraction <= 1:
             raise ConfigError(f"search: min_view_fraction {self.min_view_fraction} must lie in (0, 1]")
+        if self.short_bend_resolution < 0:
+            raise ConfigError(f"search: short_bend_resolution {self.short_bend_resolution} must be 0 (off) "
+                              "or more")
 
 
 @dataclass(frozen=True)
@@ -409,8 +425,9 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car")
-    right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car")
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car", top_px)
+    right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car",
+                                      top_px)
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -437,10 +454,10 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
         picked[side] = (ys[near], xs[near])
     new_left, picked["left"] = fit_side(
         picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
-        else "no lane pixels near the previous left fit")
+        else "no lane pixels near the previous left fit", top_px)
     new_right, picked["right"] = fit_side(
         picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
-        else "no lane pixels near the previous right fit")
+        else "no lane pixels near the previous right fit", top_px)
     new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
     return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
 
@@ -482,16 +499,23 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
     """Return the two fits with a short line's curvature taken from the other, longer line.
 
     A line whose pixels span less than ``min_span_fraction`` of the view (one dash, the stub
-    of a line leaving the view on a bend) is fitted straight by ``fit_line``: its curvature is
-    not measured, and a straight line beside a curved one fails the pair's curvature check and
-    runs off the lane ahead. The lines of a lane are parallel, so it takes the second-order
+    of a line leaving the view on a bend) is fitted straight by ``fit_line`` unless its bend is
+    resolved (``SearchConfig.short_bend_resolution``): its curvature is not measured, or measured
+    over a short span, and a straight line beside a curved one fails the pair's curvature check
+    and runs off the lane ahead. The lines of a lane are parallel, so it takes the second-order
     coefficient of the other line when that one spans enough for a second-order fit, and only
-    its slope and position are fitted to its own pixels. Two long or two short lines are left
-    as they are.
+    its slope and position are fitted to its own pixels. Two short lines of which one kept its
+    bend share one second-order coefficient fitted to both lines' pixels (``shared_curvature``):
+    the two stubs of a hairpin's lines each read the bend from 5-6 m of line, with their own
+    pixel noise, and two curvatures read apart make lines that part ahead. Two long lines, or
+    two short straight ones, are left as they are.
     """
     if not (left.found and right.found):
         return left, right
     short = config.min_span_fraction * height_px
+    if (left.span_px < short and right.span_px < short
+            and (left.coeffs_px[0] != 0.0 or right.coeffs_px[0] != 0.0)):
+        return shared_curvature(left, right, left_pixels, right_pixels, height_px)
     if (left.span_px < short) == (right.span_px < short):
         return left, right
     (line, pixels, other) = ((left, left_pixels, right) if left.span_px < short
@@ -502,6 +526,48 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
     _, b, c, rss = _least_squares(ys, xs - a * y * y, 1, float(height_px))
     shared = replace(line, coeffs_px=(a, b, c), scatter_px=math.sqrt(rss / max(len(ys), 1)))
     return (shared, right) if line is left else (left, shared)
+
+
+def shared_curvature(left: LineFit, right: LineFit, left_pixels, right_pixels,
+                     height_px: int) -> tuple[LineFit, LineFit]:
+    """Return the two lines refitted with one second-order coefficient: x = a*y**2 + b_i*y + c_i,
+    by least squares over both lines' pixels (the lines of a lane are parallel; ``parallel_fits``).
+
+    The normal equations of the five unknowns from sums over each line's pixels, with y centred
+    on the mean row of both and divided by ``height_px`` (as ``_least_squares``); each fit's
+    ``scatter_px`` is its own pixels' RMS distance from it. The fits are returned unchanged when
+    the equations are singular.
+    """
+    scale = float(height_px)
+    m = (float(left_pixels[0].astype(np.float64).sum() + right_pixels[0].astype(np.float64).sum())
+         / (len(left_pixels[0]) + len(right_pixels[0])))
+    parts = []
+    for ys, xs in (left_pixels, right_pixels):
+        t = (ys.astype(np.float64) - m) / scale
+        x0 = float(xs.mean())
+        x = xs.astype(np.float64) - x0
+        t2 = t * t
+        st = [float(len(t)), float(t.sum()), float(t2.sum()), float((t2 * t).sum()), float((t2 * t2).sum())]
+        sx = [float(x.sum()), float((x * t).sum()), float((x * t2).sum())]
+        parts.append((st, sx, x0, t, x))
+    (sl, xl, _, _, _), (sr, xr, _, _, _) = parts
+    gram = np.array([[sl[4] + sr[4], sl[3], sl[2], sr[3], sr[2]],
+                     [sl[3], sl[2], sl[1], 0.0, 0.0],
+                     [sl[2], sl[1], sl[0], 0.0, 0.0],
+                     [sr[3], 0.0, 0.0, sr[2], sr[1]],
+                     [sr[2], 0.0, 0.0, sr[1], sr[0]]])
+    rhs = np.array([xl[2] + xr[2], xl[1], xl[0], xr[1], xr[0]])
+    try:
+        p = np.linalg.solve(gram, rhs)  # (A, b_left, c_left, b_right, c_right) in t
+    except np.linalg.LinAlgError:
+        return left, right
+    fits = []
+    for fit, (b, c), (_, _, x0, t, x) in zip((left, right), ((p[1], p[2]), (p[3], p[4])), parts):
+        r = x - (p[0] * t * t + b * t + c)
+        coeffs = (float(p[0] / scale ** 2), float(b / scale - 2 * p[0] * m / scale ** 2),
+                  float(x0 + c - b * m / scale + p[0] * m * m / scale ** 2))
+        fits.append(replace(fit, coeffs_px=coeffs, scatter_px=math.sqrt(float((r * r).mean()))))
+    return fits[0], fits[1]
 
 
 def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
@@ -608,20 +674,20 @@ def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: 
 
 
 def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
-              missing: str) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+              missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
     stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
     quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
     lines here (``side``: "left" or "right", the side of the lane they bound). A line that scatters
     so but is not narrowed to a stripe keeps its pixels' spread about two stripes
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
-    at least a fifth of them."""
-    fit = fit_line(*pixels, height_px, config, missing=missing)
+    at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
+    fit = fit_line(*pixels, height_px, config, missing=missing, top_px=top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
         stripes = two_stripes(*pixels, 2, height_px)
         inner = inner_stripe(*pixels, side, config.double_line_px, height_px, stripes)
         if len(inner[0]) < len(pixels[0]):
-            return fit_line(*inner, height_px, config, missing=missing), inner
+            return fit_line(*inner, height_px, config, missing=missing, top_px=top_px), inner
         n = len(pixels[0])
         right = int(stripes[2].sum())
         if min(right, n - right) >= 0.2 * n:
@@ -680,8 +746,14 @@ def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
 # --------------------------------------------------------------------------- fits
 
 def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig = SearchConfig(),
-             missing: str = "no lane pixels") -> LineFit:
-    """Return the 2nd-order fit x = f(y) of a line's pixels, or a not-found LineFit saying why."""
+             missing: str = "no lane pixels", top_px: int = 0) -> LineFit:
+    """Return the 2nd-order fit x = f(y) of a line's pixels, or a not-found LineFit saying why.
+
+    Pixels spanning less than ``min_span_fraction`` of the height are fitted straight, unless
+    the search read a look-ahead (``top_px`` > 0, its first row) and the 2nd-order fit bows over
+    the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
+    resolved bend: a tight bend's line that leaves the view sideways).
+    """
     n = len(ys)
     if n == 0:
         return LineFit(None, 0, 0.0, missing)
@@ -690,8 +762,13 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
         return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})")
     if span < config.min_found_span_fraction * height_px:
         return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height")
-    degree = 1 if span < config.min_span_fraction * height_px else 2
+    degree = 2
     a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    if span < config.min_span_fraction * height_px and not (
+            top_px > 0 and config.short_bend_resolution > 0
+            and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
+        degree = 1
+        a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     if 0 < config.trim_outliers_pct < 100:
         keep = max(degree + 1, int(round(n * config.trim_outliers_pct / 100)))
         if keep < n:

@@ -49,7 +49,10 @@ debug composite work on it unchanged. Per frame:
    texture, ``LineFit.stripe_scatter_px``). Each line against the track (this module's
    own checks, ``TrackerConfig``): its position at the car may not move more than ``max_jump_m``
    (from a line inferred long enough to be re-acquired, step 1: the re-acquisition band's half
-   width) and its shape may not bend away from the tracked line by more than ``max_bend_m``. The pair
+   width) and its shape may not bend away from the tracked line by more than ``max_bend_m``, over
+   the look-ahead's rows on which both lie in the view (``_bend_rows``: a tight bend's lines
+   leave the view sideways before the shortest look-ahead's top row, and beyond that row the
+   two fits' extrapolations are compared, not anything seen). The pair
    (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
    lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
    the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``;
@@ -759,6 +762,7 @@ class LaneTracker:
                 continue
             if track is not None:
                 dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(track[i], rows)) * self._xm
+                dx = dx[self._bend_rows(fit, track[i], rows)]
                 jump_m = self._jump_limit_m(i)
                 if abs(dx[-1]) > jump_m:
                     why.append(f"{side} line jumped {abs(dx[-1]):.2f} m at the car "
@@ -810,6 +814,24 @@ class LaneTracker:
         if track is None and (kept["left"] is None or kept["right"] is None):
             return self._restart(kept, why, failed, candidates)
         return kept["left"], kept["right"], why, failed
+
+    def _bend_rows(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Return which of the check's ``rows`` a line's bend against its tracked line is read on:
+        those where both lie in the view, and always the bottom row (the car).
+
+        The look-ahead keeps at least ``SearchConfig.min_view_fraction`` of the view (9.4 m), but
+        on a tight bend the lines leave the view sideways sooner (on ``country``'s 35 m hairpin
+        after 6-7 m, on an unbundled asphalt-edge clip's tighter bend after 3-4 m). Above that
+        the fit and the track are extrapolations of 2nd-order fits made from different pixels; a
+        line that bows with the bend (``SearchConfig.short_bend_resolution``) parts from a
+        straighter track there by metres, and was refused as bent although both lay on the
+        line where it was seen, until the hold ran out and the lane was lost.
+        """
+        w = self.pipeline.size[0]
+        x_fit, x_track = np.polyval(fit.coeffs_px, rows), np.polyval(tracked, rows)
+        inside = (x_fit >= 0) & (x_fit < w) & (x_track >= 0) & (x_track < w)
+        inside[-1] = True
+        return inside
 
     def _restart(self, kept: dict, why: list[str], failed: bool, candidates: list | None = None
                  ) -> tuple[LineFit | None, LineFit | None, list[str], bool]:

@@ -169,9 +169,10 @@ def test_a_shorter_look_ahead_allows_its_share_of_the_width_spread():
 
 
 @pytest.mark.parametrize("kwargs", [dict(short_views=(0.0,)), dict(short_views=(1.0,)),
-                                    dict(min_view_fraction=0.0), dict(min_view_fraction=1.5)])
+                                    dict(min_view_fraction=0.0), dict(min_view_fraction=1.5),
+                                    dict(short_bend_resolution=-1.0)])
 def test_search_config_checks_the_look_ahead_shares(kwargs):
-    with pytest.raises(Exception, match="short_views|min_view_fraction"):
+    with pytest.raises(Exception, match="short_views|min_view_fraction|short_bend_resolution"):
         SearchConfig(**kwargs)
 
 
@@ -231,3 +232,42 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # the tracked (smoothed) lines on the look-ahead's rows, from where the bend reaches the
     # view's bottom row until the car is on the 35 m arc
     assert worst < 0.25
+
+
+def test_the_lines_of_a_35m_hairpin_leaving_the_view_keep_their_bend(pipe):
+    # a 35 m right bend, a 3.4 m lane: the inner line leaves the view sideways 6.6 m into it,
+    # less than ``min_span_fraction`` of the view (7 m). Fitted straight in the tracked 9.4 m
+    # look-ahead, the lines were 0.46-0.91 m off in the view (and the straight track refused
+    # the bowed lines as bent); their resolved bend is kept (``short_bend_resolution``), both
+    # short lines share one curvature (``lanes.shared_curvature``) and the bend against the
+    # track is read where both lie in the view (``LaneTracker._bend_rows``): 2-3 cm.
+    raw = pipe.perspective.unwarp(bend_birdseye(35.0, 3.4))
+    tracker = LaneTracker(pipe)
+    for _ in range(8):
+        r = tracker.update(raw)
+    assert r.found and r.sources == ("seen", "seen") and r.search.top_px > 0
+    for fit, lateral in ((r.left, -1.7), (r.right, 1.7)):
+        ys = np.arange(r.search.top_px, H, dtype=np.float64)
+        truth = np.array([true_x_px(35.0, lateral, y) for y in ys])
+        inside = (truth >= 0) & (truth < W)
+        assert np.abs(fit.x_at(ys[inside]) - truth[inside]).max() * XM < 0.06
+    right_in_view_m = (H - 1 - min(y for y in range(H) if true_x_px(35.0, 1.7, y) < W)) * YM
+    assert right_in_view_m < 0.3 * H * YM  # the short line the old rule fitted straight
+
+
+def test_a_line_is_checked_against_its_track_only_where_both_lie_in_the_view(pipe):
+    # a tracked left line leaving the view on the left at row ~470, and this frame's line bowing
+    # 0.3 m more over the rows in the view: above them the two extrapolations part by over 2 m
+    # (refused as bent, limit 0.7 m, before ``_bend_rows``); where both are seen they agree.
+    y = np.arange(H, dtype=np.float64)
+    track_left = np.polyfit(y, 300.0 - 1.2 * (H - 1 - y), 2)
+    extra = 0.3 / XM / 250.0 ** 2  # 0.3 m over the last 250 rows
+    bowed = np.polyfit(y, np.polyval(track_left, y) + extra * (H - 1 - y) ** 2, 2)
+    track = (track_left, track_left + np.array([0.0, 0.0, 3.4 / XM]))
+    assert (np.polyval(bowed, 0.0) - np.polyval(track_left, 0.0)) * XM > 2.0
+    left, _, why = LaneTracker(pipe).check(LineFit(tuple(bowed), 2000, 250.0), LineFit(None), track)
+    assert left is not None, why
+    # the same bow inside the view is refused
+    much = np.polyfit(y, np.polyval(track_left, y) + 4 * extra * (H - 1 - y) ** 2, 2)
+    left, _, why = LaneTracker(pipe).check(LineFit(tuple(much), 2000, 250.0), LineFit(None), track)
+    assert left is None and "bent" in why[0]

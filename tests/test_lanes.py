@@ -480,3 +480,49 @@ def test_the_road_view_reads_only_the_lane_interior_and_needs_a_run_of_rows():
     crest = _drawn_view(400, False)
     part = crest[rows, 500:800]
     assert lanes.road_view_top_px(part, rows, LANE_LINES, YM_VIEW, 0.15, 1.0, 1280, 500) == 407
+
+
+def _arc_pixels(radius_m: float, rows: np.ndarray, x0_px: float = 900.0, thickness_px: int = 20):
+    """Pixels (ys, xs) of a line on a circle of ``radius_m`` (a right bend) on ``rows``, the
+    bottom row at ``x0_px``, ``thickness_px`` wide: the exact circle, not a parabola."""
+    d = (H - 1 - rows) * YM_DEFAULT
+    x = x0_px + (radius_m - np.sqrt(radius_m ** 2 - d ** 2)) / XM_DEFAULT
+    offsets = np.arange(thickness_px) - (thickness_px - 1) / 2
+    ys = np.repeat(rows, thickness_px)
+    xs = np.round((x[:, None] + offsets[None, :]).ravel()).astype(np.int64)
+    return ys.astype(np.int64), xs, x
+
+
+def test_a_short_line_keeps_a_resolved_bend_in_a_look_ahead_and_a_dash_stays_straight():
+    rows = np.arange(520, H)  # 200 rows, 6.5 m: below min_span_fraction (216 rows)
+    ys, xs, x = _arc_pixels(35.0, rows)
+    sc = SearchConfig()
+    bowed = lanes.fit_line(ys, xs, H, sc, top_px=432)
+    assert bowed.coeffs_px[0] > 0
+    assert np.abs(bowed.x_at(rows) - x).max() < 2.0  # px: the arc over its span
+    whole = lanes.fit_line(ys, xs, H, sc)  # the whole view (no look-ahead): straight as before
+    assert whole.coeffs_px[0] == 0.0 and np.abs(whole.x_at(rows) - x).max() > 8.0
+    off = lanes.fit_line(ys, xs, H, SearchConfig(short_bend_resolution=0.0), top_px=432)
+    assert off.coeffs_px[0] == 0.0
+    # a dash on a gentle 1 km bend bows by a fraction of a pixel over its 3 m: straight
+    ys, xs, _ = _arc_pixels(1000.0, np.arange(628, H))
+    assert lanes.fit_line(ys, xs, H, sc, top_px=432).coeffs_px[0] == 0.0
+
+
+def test_two_short_lines_share_one_curvature_fitted_to_both():
+    a = 2.5e-3
+    left_rows, right_rows = np.arange(560, H), np.arange(500, 700)
+    lx = a * left_rows ** 2.0 - 3.0 * left_rows + 1400.0
+    rx = a * right_rows ** 2.0 - 3.3 * right_rows + 2200.0
+    left = LineFit((0.0, 0.1, 10.0), len(left_rows), 159.0)
+    right = LineFit((1e-3, 0.0, 0.0), len(right_rows), 199.0)
+    l2, r2 = lanes.shared_curvature(left, right, (left_rows, lx), (right_rows, rx), H)
+    assert l2.coeffs_px == pytest.approx((a, -3.0, 1400.0), rel=1e-6)
+    assert r2.coeffs_px == pytest.approx((a, -3.3, 2200.0), rel=1e-6)
+    assert l2.scatter_px == pytest.approx(0.0, abs=1e-4) and l2.n_pixels == left.n_pixels
+    # parallel_fits: two short lines of which one bows share the curvature; two straight
+    # short lines are left as they are
+    s2 = lanes.parallel_fits(left, right, (left_rows, lx), (right_rows, rx), H)
+    assert s2[0].coeffs_px[0] == s2[1].coeffs_px[0] == pytest.approx(a)
+    straight = (LineFit((0.0, 0.1, 10.0), 100, 159.0), LineFit((0.0, 0.0, 900.0), 100, 199.0))
+    assert lanes.parallel_fits(*straight, (left_rows, lx), (right_rows, rx), H) == straight
