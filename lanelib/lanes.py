@@ -274,6 +274,15 @@ class LaneSearch:
     top_px: int = 0
     # (left, right): the line is the unpainted asphalt edge (``road_edge``), not paint
     edge: tuple[bool, bool] = (False, False)
+    # (left, right): the line is placed a remembered shoulder inside the asphalt edge (its paint
+    # faded out, ``LaneTracker`` step 8), not seen
+    shoulder: tuple[bool, bool] = (False, False)
+
+
+def line_source(search: LaneSearch, side: int) -> str:
+    """Return where the found line ``side`` (0 left, 1 right) of a search comes from: "edge" (the
+    asphalt edge), "shoulder" (placed a remembered shoulder inside it) or "seen" (paint)."""
+    return "edge" if search.edge[side] else "shoulder" if search.shoulder[side] else "seen"
 
 
 @dataclass(frozen=True)
@@ -1147,6 +1156,13 @@ class EdgeConfig:
     min_points : least rows (of the shrunk grid) with an edge for a line; min_span_fraction :
         least share of the look-ahead's rows they span.
     trim_outliers_pct : share (%) of the edge points kept for the fit (``fit_line``'s trim).
+    trace_margin_m : 0 (off), or how far (m along the row) from the straight line through the
+        last edge points the next row's edge is looked for (``road_edge``'s trace): the edge is
+        followed from the car over the view where it is seen, not searched at a lane's width
+        from the other line, which the flat view changes with distance on a pitched road.
+    trace_gap_m : the trace ends after this much road (m) without an edge point.
+    max_shoulder_m : how far (m) beyond a painted line its asphalt edge is looked for, to
+        measure the shoulder between them (``LaneTracker``, step 8).
     """
 
     enabled: bool = True
@@ -1161,14 +1177,20 @@ class EdgeConfig:
     min_points: int = 30
     min_span_fraction: float = 0.3
     trim_outliers_pct: float = 80.0
+    trace_margin_m: float = 0.0
+    trace_gap_m: float = 2.0
+    max_shoulder_m: float = 1.5
 
     def __post_init__(self):
+        if self.trace_margin_m < 0 or self.trace_gap_m <= 0 or self.max_shoulder_m <= 0:
+            raise ConfigError("edge: need trace_margin_m >= 0 (0: off), trace_gap_m > 0 and max_shoulder_m > 0")
         if self.scale < 1 or self.step_m <= 0 or self.min_points < 3 or self.min_texture_ratio < 0:
             raise ConfigError("edge: need scale >= 1, step_m > 0, min_points >= 3 and min_texture_ratio >= 0")
         if not 0 < self.trim_outliers_pct <= 100:
             raise ConfigError(f"edge: trim_outliers_pct {self.trim_outliers_pct} must lie in (0, 100]")
 
 
+TRACE_START = 4  # edge points the trace starts from and extends by a straight line (``road_edge``)
 DARK_V = 80.0  # saturation below this value (V, 0-255) is measured against it: a shadow's tint is not colour
 
 
@@ -1269,9 +1291,100 @@ def road_view_top_px(rows_rgb: np.ndarray, rows_px: np.ndarray, lines, ym_per_px
     return 0
 
 
+@dataclass(frozen=True)
+class VergeGrid:
+    """The verge features (``verge_features``) of a bird's-eye view shrunk by ``scale`` each way,
+    of its rows from ``row0`` (shrunk rows) down to the bottom: what ``road_edge`` reads, made
+    once for several edges of one frame (``verge_grid``). ``height_px`` is the whole view's."""
+
+    sat: np.ndarray
+    grain: np.ndarray
+    seen: np.ndarray
+    row0: int
+    height_px: int
+    scale: int
+
+
+def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None) -> VergeGrid:
+    """Return the ``VergeGrid`` of a bird's-eye image, or of its rows from ``row0_px`` (a multiple
+    of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height)."""
+    h, w = bird.shape[:2]
+    small = cv2.resize(bird, (w // scale, h // scale), interpolation=cv2.INTER_AREA) if scale > 1 else bird
+    sat, grain, seen = verge_features(small)
+    return VergeGrid(sat, grain, seen, row0_px // scale, h if height_px is None else height_px, scale)
+
+
+def _edge_step(sat_row, grain_row, a: int, b: int, pad: tuple[int, int], win: int, sign: float,
+               road_sat: float, road_grain: float, config: EdgeConfig) -> int | None:
+    """Return the column (shrunk grid) of the road-to-verge step between columns ``a`` and ``b``
+    of one row (``road_edge``'s test: the mean verge score of the ``2 * step_m`` window beyond it
+    less that of the ``step_m`` window inside, largest, with the inside road and the outside
+    verge), or None where there is none."""
+    lo, hi = a - pad[0], b + pad[1]
+    score = np.clip((sat_row[lo:hi] - road_sat) / config.min_saturation_step, 0, 1)
+    if config.min_texture_ratio > 0:
+        score = np.maximum(score, np.clip((grain_row[lo:hi] / road_grain - 1.0)
+                                          / config.min_texture_ratio, 0, 1))
+    if sign < 0:
+        score = score[::-1]
+    c = np.concatenate([[0.0], np.cumsum(score)])
+    idx = np.arange(win, len(score) - 2 * win + 1)
+    if not len(idx):
+        return None
+    inner = (c[idx] - c[idx - win]) / win
+    outer = (c[idx + 2 * win] - c[idx]) / (2 * win)
+    step = outer - inner
+    j = int(np.argmax(step))
+    if step[j] < config.min_step or inner[j] > config.max_inner or outer[j] < config.min_outer:
+        return None
+    # the boundary between the last inner and the first outer column
+    return (lo + int(idx[j])) if sign > 0 else (hi - int(idx[j]))
+
+
+def _edge_steps(sat, grain, seen, rows, a, b, pad: tuple[int, int], win: int, sign: float,
+                road_sat: np.ndarray, road_grain: np.ndarray, config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Return which of ``rows`` (indices into them) have a road-to-verge step between their
+    columns ``a`` and ``b`` and its column (shrunk grid, float): ``_edge_step`` on every row at
+    once (the same sums in the same order, so the same columns)."""
+    lo, hi = a - pad[0], b + pad[1]
+    length = hi - lo
+    keep = b > a
+    if keep.any():
+        offs = np.arange(int(length[keep].max()))
+        inside = offs[None, :] < length[:, None]
+        cols = (lo[:, None] + offs[None, :]) if sign > 0 else (hi[:, None] - 1 - offs[None, :])
+        cols = np.clip(cols, 0, sat.shape[1] - 1)
+        rr = rows[:, None]
+        keep &= np.all(seen[rr, cols] | ~inside, axis=1)
+    if not keep.any():
+        return np.zeros(0, int), np.zeros(0)
+    idx_rows = np.flatnonzero(keep)
+    rr, cols, inside, length = rows[keep][:, None], cols[keep], inside[keep], length[keep]
+    score = np.clip((sat[rr, cols] - road_sat[keep][:, None]) / config.min_saturation_step, 0, 1)
+    if config.min_texture_ratio > 0:
+        score = np.maximum(score, np.clip((grain[rr, cols] / road_grain[keep][:, None] - 1.0)
+                                          / config.min_texture_ratio, 0, 1))
+    score = np.where(inside, score, 0.0)
+    c = np.concatenate([np.zeros((len(score), 1)), np.cumsum(score, axis=1)], axis=1)
+    n = c.shape[1]
+    j = np.arange(win, max(win + 1, n - 2 * win))
+    valid = (j[None, :] <= (length - 2 * win)[:, None])
+    jj = np.clip(j, 0, n - 1 - 2 * win) if n - 1 - 2 * win >= 0 else np.zeros_like(j)
+    inner = (c[:, jj] - c[:, np.maximum(jj - win, 0)]) / win
+    outer = (c[:, np.minimum(jj + 2 * win, n - 1)] - c[:, jj]) / (2 * win)
+    step = np.where(valid, outer - inner, -np.inf)
+    best = np.argmax(step, axis=1)
+    pick = np.arange(len(step))
+    ok = valid.any(axis=1) & (step[pick, best] >= config.min_step) & (inner[pick, best] <= config.max_inner) \
+        & (outer[pick, best] >= config.min_outer)
+    x = np.where(sign > 0, lo[keep] + j[best], hi[keep] - j[best]).astype(float)
+    return idx_rows[ok], x[ok]
+
+
 def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,
               checks: LaneChecks = LaneChecks(), config: EdgeConfig = EdgeConfig(),
-              top_px: int = 0) -> tuple[LineFit, np.ndarray]:
+              top_px: int = 0, guide_px=None, range_m: tuple[float, float] | None = None,
+              bottom_px: int | None = None, grid: VergeGrid | None = None) -> tuple[LineFit, np.ndarray]:
     """Return the fit of the asphalt edge on ``side`` ("left"/"right") of the lane whose other
     line is ``other``, and its edge points ((N, 2) x, y px); a not-found fit says why.
 
@@ -1279,66 +1392,119 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
     score: its saturation above the road surface's (``verge_features``; the road is that row's
     median between ``other`` and the nearest the edge can be) over ``min_saturation_step``, or
     its grain's ratio to the road's, less 1, over ``min_texture_ratio``, whichever is larger
-    (per row: the view blurs with distance, the grain with it). On each row, between ``checks.min_width_m`` and ``max_width_m`` (along the normal) from
-    ``other``, the edge is the column where the mean score of the ``2 * step_m`` window beyond it
-    minus that of the ``step_m`` window inside is largest, kept when the inside is road (``max_inner``),
-    the outside verge (``min_outer``) and the rise at least ``min_step``. The points are fitted
+    (per row: the view blurs with distance, the grain with it). On each row, from the bottom up,
+    between ``range_m`` (along the normal, default ``checks.min_width_m`` - 0.2 to
+    ``max_width_m`` + 0.2 m) from ``guide_px`` (pixel coefficients; default ``other``'s fit),
+    the edge is the column where the mean score of the ``2 * step_m`` window beyond it minus
+    that of the ``step_m`` window inside is largest, kept when the inside is road (``max_inner``),
+    the outside verge (``min_outer``) and the rise at least ``min_step``. With
+    ``config.trace_margin_m``, once ``TRACE_START`` rows have an edge point the edge is followed
+    instead: each row is searched within ``trace_margin_m`` (along the row, one shrunk pixel
+    more per row without a point) of the straight line through the last ``TRACE_START`` points,
+    so the edge is followed over the view where it is seen, however the flat view's width from
+    ``other`` changes with distance (a pitched road, an S-bend beyond the other line's pixels);
+    the road surface of a row whose reference lies out of the view is the last row's, and the
+    trace ends after ``trace_gap_m`` of road without a point. The points are fitted
     by ``fit_line`` with ``trim_outliers_pct``, then refitted up to three times without the
     points beyond 3 robust standard deviations (1.4826 x the median distance) of the fit (a
-    robust fit: a patch of darker grass or a shadow does not bend it). A seam, a repaved strip's edge, a shadow's edge or a concrete barrier's has grey
-    road-like surface beyond it and gives no edge.
+    robust fit: a patch of darker grass or a shadow does not bend it). A seam, a repaved strip's
+    edge, a shadow's edge or a concrete barrier's has grey road-like surface beyond it and gives
+    no edge. ``bottom_px``: the rows below it are not read (default: the view's bottom row).
+    ``grid``: the view's ``verge_grid`` made already (``bird`` is then not read).
     """
-    h, w = bird.shape[:2]
-    k = config.scale
-    small = cv2.resize(bird, (w // k, h // k), interpolation=cv2.INTER_AREA) if k > 1 else bird
-    sh, sw = small.shape[:2]
-    sat, grain, seen = verge_features(small)
+    if grid is None:
+        grid = verge_grid(bird, config.scale)
+    k, h, row0 = grid.scale, grid.height_px, grid.row0
+    sat, grain, seen = grid.sat, grid.grain, grid.seen
+    sh, sw = row0 + sat.shape[0], sat.shape[1]
     sign = 1.0 if side == "right" else -1.0
-    rows = np.arange(max(0, top_px // k), sh)
+    last_row = sh if bottom_px is None else min(sh, int(np.ceil((bottom_px + 1) / k)))
+    rows = np.arange(max(row0, top_px // k), last_row)[::-1]  # from the bottom up
     yf = rows * k + (k - 1) / 2.0  # the full view's rows at the shrunk rows' centres
     x_line = np.polyval(other.coeffs_px, yf)
-    slope = np.polyval(np.polyder(np.asarray(other.coeffs_px, float)), yf) * xm_per_px / ym_per_px
-    stretch = np.sqrt(1.0 + slope * slope) / xm_per_px  # px across per metre along the normal
+    guide = np.asarray(other.coeffs_px if guide_px is None else guide_px, float)
+    x_guide = np.polyval(guide, yf)
+
+    def stretch_of(coeffs) -> np.ndarray:  # px across per metre along the normal
+        slope = np.polyval(np.polyder(coeffs), yf) * xm_per_px / ym_per_px
+        return np.sqrt(1.0 + slope * slope) / xm_per_px
+
+    stretch, stretch_g = stretch_of(np.asarray(other.coeffs_px, float)), stretch_of(guide)
+    near_m, far_m = (checks.min_width_m - 0.2, checks.max_width_m + 0.2) if range_m is None else range_m
     win = max(2, int(round(config.step_m / xm_per_px / k)))
+    pad = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
+    trace_half = config.trace_margin_m / xm_per_px / k
+    gap_rows = max(1, int(round(config.trace_gap_m / ym_per_px / k)))
+    # the road surface of each row: between the line and the nearest the edge may be (medians
+    # of the windows on all rows at once, NaN where a row's window is short or not all seen)
+    near = np.round((x_line + sign * 0.3 * checks.min_width_m * stretch) / k).astype(int)
+    far = np.round((x_line + sign * (checks.min_width_m - 0.3) * stretch) / k).astype(int)
+    p0, p1 = np.maximum(0, np.minimum(near, far)), np.minimum(sw, np.maximum(near, far) + 1)
+    span = p1 - p0
+    refs = np.full((len(rows), 2), np.nan)
+    if len(rows) and span.max() > 0:
+        offs = np.arange(int(span.max()))
+        inside = offs[None, :] < span[:, None]
+        cols = np.clip(p0[:, None] + offs[None, :], 0, sw - 1)
+        rr = (rows - row0)[:, None]
+        ok = (span >= win) & np.all(seen[rr, cols] | ~inside, axis=1)
+        if ok.any():
+            lo_i, hi_i = (span[ok] - 1) // 2, span[ok] // 2
+            pick = np.arange(int(ok.sum()))
+            for j, feature in enumerate((sat, grain)):
+                vals = np.sort(np.where(inside, feature[rr, cols], np.nan)[ok], axis=1)  # NaN last
+                refs[ok, j] = (vals[pick, lo_i] + vals[pick, hi_i]) / 2  # np.median's, in float32
     ys, xs = [], []
+    road_sat, road_grain, missed = None, 1e-3, 0
+    if trace_half <= 0:  # every row at once: its own road surface, its range from the guide
+        use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
+        x0 = x_guide + sign * near_m * stretch_g
+        x1 = x_guide + sign * far_m * stretch_g
+        a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
+        a, b = np.maximum(np.minimum(a, b), pad[0]), np.minimum(np.maximum(a, b), sw - pad[1])
+        ys_a, xs_a = _edge_steps(sat, grain, seen, rows[use] - row0, a[use], b[use], pad, win, sign,
+                                 refs[use, 0].astype(sat.dtype),
+                                 np.maximum(refs[use, 1], 1e-3).astype(grain.dtype), config)
+        ys_a = yf[use][ys_a] if len(ys_a) else np.zeros(0)
+        xs_a = xs_a * float(k)
+        rows = rows[:0]  # the loop below is the trace's
     for i, r in enumerate(rows):
-        # the road surface of this row: between the line and the nearest the edge may be
-        near = int(round((x_line[i] + sign * 0.3 * checks.min_width_m * stretch[i]) / k))
-        far = int(round((x_line[i] + sign * (checks.min_width_m - 0.3) * stretch[i]) / k))
-        p0, p1 = max(0, min(near, far)), min(sw, max(near, far) + 1)
-        if p1 - p0 < win or not seen[r, p0:p1].all():
+        tracing = trace_half > 0 and len(xs) >= TRACE_START
+        if not np.isnan(refs[i, 0]):
+            if refs[i, 0] > config.max_road_saturation:
+                missed += 1
+                continue
+            road_sat, road_grain = float(refs[i, 0]), max(float(refs[i, 1]), 1e-3)
+        elif not tracing or road_sat is None:
             continue
-        road_sat = float(np.median(sat[r, p0:p1]))
-        if road_sat > config.max_road_saturation:
+        if tracing:
+            if missed > gap_rows:
+                break  # the edge is no longer seen: the trace ends
+            last_y, last_x = np.asarray(ys[-TRACE_START:]) / k, np.asarray(xs[-TRACE_START:]) / k
+            slope, at = np.polyfit(last_y, last_x, 1)
+            centre = slope * r + at
+            half = trace_half + missed
+            a, b = int(np.floor(centre - half)), int(np.ceil(centre + half))
+        else:
+            x0 = x_guide[i] + sign * near_m * stretch_g[i]
+            x1 = x_guide[i] + sign * far_m * stretch_g[i]
+            a, b = sorted((int(x0 // k), int(np.ceil(x1 / k))))
+        a, b = max(a, pad[0]), min(b, sw - pad[1])
+        if b <= a or not seen[r - row0, a - pad[0]:b + pad[1]].all():
+            missed += 1
             continue
-        road_grain = max(float(np.median(grain[r, p0:p1])), 1e-3)
-        x0 = x_line[i] + sign * (checks.min_width_m - 0.2) * stretch[i]
-        x1 = x_line[i] + sign * (checks.max_width_m + 0.2) * stretch[i]
-        a, b = sorted((int(x0 // k), int(np.ceil(x1 / k))))
-        pad_lo, pad_hi = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
-        a, b = max(a, pad_lo), min(b, sw - pad_hi)
-        if b <= a or not seen[r, a - pad_lo:b + pad_hi].all():
+        x = _edge_step(sat[r - row0], grain[r - row0], a, b, pad, win, sign, road_sat, road_grain, config)
+        if x is None:
+            missed += 1
             continue
-        score = np.clip((sat[r, a - pad_lo:b + pad_hi] - road_sat) / config.min_saturation_step, 0, 1)
-        if config.min_texture_ratio > 0:
-            score = np.maximum(score, np.clip((grain[r, a - pad_lo:b + pad_hi] / road_grain - 1.0)
-                                              / config.min_texture_ratio, 0, 1))
-        if sign < 0:
-            score = score[::-1]
-        c = np.concatenate([[0.0], np.cumsum(score)])
-        idx = np.arange(win, len(score) - 2 * win + 1)
-        inner = (c[idx] - c[idx - win]) / win
-        outer = (c[idx + 2 * win] - c[idx]) / (2 * win)
-        step = outer - inner
-        j = int(np.argmax(step))
-        if step[j] < config.min_step or inner[j] > config.max_inner or outer[j] < config.min_outer:
-            continue
-        # the boundary between the last inner and the first outer column, in the full view
-        x = (a - pad_lo + int(idx[j])) if sign > 0 else (b + pad_hi - int(idx[j]))
+        missed = 0
         ys.append(yf[i])
         xs.append(float(x * k))
-    ys_a, xs_a = np.asarray(ys, float), np.asarray(xs, float)
-    depth = h - top_px
+    if trace_half > 0:
+        ys_a, xs_a = np.asarray(ys, float), np.asarray(xs, float)
+    order = np.argsort(ys_a, kind="stable")  # the points from the view's top down
+    ys_a, xs_a = ys_a[order], xs_a[order]
+    depth = (h if bottom_px is None else bottom_px + 1) - top_px
     fit_cfg = SearchConfig(min_line_pixels=config.min_points, min_span_fraction=0.3,
                            min_found_span_fraction=config.min_span_fraction * depth / h,
                            trim_outliers_pct=config.trim_outliers_pct)

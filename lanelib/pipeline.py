@@ -350,17 +350,25 @@ class LanePipeline:
                 return replace(search, method="robust")
         return None
 
-    def edge_search(self, bird: np.ndarray, search: LaneSearch) -> LaneSearch | None:
+    def edge_search(self, bird: np.ndarray, search: LaneSearch, guide_px=None,
+                    range_m: tuple[float, float] | None = None,
+                    shoulder_m: float | None = None) -> LaneSearch | None:
         """Return ``search`` with its missing line replaced by the asphalt edge on that side,
         when the lane then passes the checks; else None.
 
         Only for a search that found one line, which passes its own check, and no paint at all
         on the other side (its fit not found): a painted line that is seen is never replaced.
         The edge (``lanes.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
-        ``bird``) is then checked with the found line as a lane (``check``: width within the
+        ``bird``, between ``range_m`` from ``guide_px``: by default a lane's width from the found
+        line) is then checked with the found line as a lane (``check``: width within the
         road's range, parallel, equally curved) over the rows where the edge is seen (the
         search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
-        beyond); its search's ``edge`` flags the side.
+        beyond); its search's ``edge`` flags the side. With ``shoulder_m`` (a painted line faded
+        out, ``LaneTracker`` step 8) the line is placed that far inside the edge, along its
+        normal (``lanes.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
+        (one second-order fit to both), the look-ahead and the other line kept; the search's
+        ``shoulder`` flags the side instead, and it is returned unchecked: the tracker checks it
+        against its track (the lane's width ahead, which a grade changes in the flat view).
         """
         cfg = self.config.edge
         if not cfg.enabled or search.left.found == search.right.found:
@@ -371,13 +379,29 @@ class LanePipeline:
             return None
         p = self.perspective
         fit, _ = lanes.road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, self.config.checks,
-                                 cfg, search.top_px)
+                                 cfg, search.top_px, guide_px, range_m)
         if not fit.found:
             return None
+        h = self.size[1]
+        seen_top = max(search.top_px, int(h - 1 - fit.gap_px - fit.span_px))
+        if shoulder_m is not None:
+            # the painted line the shoulder inside the edge where the edge is seen, joined beyond
+            # it to the guide (one second-order fit to both); the look-ahead and the other line
+            # are kept
+            inward = -shoulder_m if side == "right" else shoulder_m
+            placed = lanes.offset_line(fit.coeffs_px, inward, p.xm_per_px, p.ym_per_px, h, seen_top)
+            if seen_top > search.top_px and guide_px is not None:
+                near = np.arange(float(seen_top), float(h))
+                far = np.arange(float(search.top_px), float(seen_top))
+                placed = lanes.least_squares_poly(
+                    np.concatenate([near, far]),
+                    np.concatenate([np.polyval(placed, near), np.polyval(guide_px, far)]), 2, float(h))
+            return replace(search, **{side: replace(fit, coeffs_px=tuple(placed))},
+                           shoulder=(side == "left", side == "right"))
         # the look-ahead ends where the edge is seen: its fit is not extrapolated beyond, and
         # the other line is refitted on its pixels there (an S-bend's two halves are not one
         # second-order curve: the whole view's fit would not be parallel to the edge's)
-        top = max(search.top_px, int(self.size[1] - 1 - fit.gap_px - fit.span_px))
+        top = seen_top
         fits = {side: fit}
         if top > search.top_px:
             ys, xs = search.right_pixels if side == "left" else search.left_pixels
@@ -409,8 +433,7 @@ class LanePipeline:
                    for side, fit in (("left", search.left), ("right", search.right)) if not fit.found]
         if check.reason:
             reasons.append(check.reason)
-        sources = tuple(("edge" if edge else "seen") if fit.found else ""
-                        for fit, edge in ((left, search.edge[0]), (right, search.edge[1])))
+        sources = tuple(lanes.line_source(search, i) if fit.found else "" for i, fit in enumerate((left, right)))
         return FrameResult(left, right, self.measure(left, right), search.method,
                            self.line_confidence(left), self.line_confidence(right),
                            "; ".join(reasons), search, images if images is not None else {}, rejected,

@@ -63,8 +63,10 @@ class FrameResult:
     measurements are NaN. A detection that failed the checks is kept apart in ``rejected``, never
     reported as the lane. ``left_conf``/``right_conf`` are 0-1 confidences per line (0 for a line
     not found or rejected). ``sources`` says where each reported line comes from: "seen" (paint
-    found in this frame), "edge" (the unpainted asphalt edge, ``lanes.road_edge``), "inferred"
-    (from the other line and the tracked width), "held" (from earlier frames), "" (no line).
+    found in this frame), "edge" (the unpainted asphalt edge, ``lanes.road_edge``), "shoulder"
+    (a faded painted line placed its measured shoulder inside the asphalt edge,
+    ``tracking.LaneTracker`` step 8), "inferred" (from the other line and the tracked width),
+    "held" (from earlier frames), "" (no line).
     ``images`` holds the stage images (undistorted, birdseye, binary,
     search, result) when the pipeline was asked to keep them.
     """

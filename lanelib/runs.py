@@ -943,7 +943,7 @@ def video_log_row(frame: int, time_s: float, result: FrameResult) -> dict:
     is how the lane was found: ``windows`` or ``prior`` (seen in this frame), ``hold`` (held
     from earlier frames, not seen in this one), or the search tried when none was found.
     ``left_source``/``right_source`` say where each line comes from (``FrameResult.sources``:
-    seen, edge, inferred, held, or empty without a line).
+    seen, edge, shoulder, inferred, held, or empty without a line).
     """
     nan = float("nan")
     row = {"frame": frame, "time_s": round(time_s, 4), "found": int(result.found),

@@ -144,9 +144,31 @@ debug composite work on it unchanged. Per frame:
    the unpainted edge on that side is taken as the line (``LanePipeline.edge_search``,
    ``lanes.road_edge``) if the pair passes every check above. With a track only where the
    track's line on that side was an edge already (what the search found there failed the checks
-   and is dropped for it, ``_edge_candidate``): a painted line that fades out is inferred as
-   in step 3, never moved out to the asphalt edge beyond it. The result's ``sources`` say
-   "edge" for it ("seen", "inferred", "held" for the others).
+   and is dropped for it, ``_edge_candidate``). The result's ``sources`` say "edge" for it
+   ("seen", "inferred", "held" for the others).
+   **A painted line that fades out** is not moved out to the asphalt edge beyond it: the paint
+   runs a shoulder inside the edge (``sets.country_layout``: 0.35 m; real roads: a shoulder of
+   some width, constant along a stretch). While both lines are seen at the car, the tracker
+   measures each painted line's shoulder (``_shoulder_beside``): the asphalt edge is looked for
+   from the paint out to ``EdgeConfig.max_shoulder_m`` beyond it on the rows within
+   ``shoulder_near_m`` of the car (``lanes.road_edge`` from the line, the road read between the
+   lines), and where it is clearly found (edge points on half the rows, at one distance from the
+   paint's pixels within ``shoulder_spread_m``) the median distance is remembered; the shoulder
+   is the median of the last ``shoulder_frames`` measurements once half of them are in and agree
+   within ``shoulder_spread_m`` (``shoulder_m``). When that line's paint then fades (no line
+   kept there for ``reacquire_after_frames`` frames; or a line seen there only far ahead, the
+   paint returning; or one that is the asphalt edge itself, less than half the shoulder inside
+   it: the grass beside the edge passed for a line, ``_faded_side``), the edge is looked for the
+   shoulder (plus or minus the line's jump limit) beyond the line inferred from the other one,
+   and the line is placed the shoulder inside it where it is seen, joined beyond to the
+   inference (``LanePipeline.edge_search`` with ``shoulder_m``); it is kept when the pair then
+   passes every check against the track, and its ``sources`` say "shoulder" (logged; "shoulder"
+   in ``retries``). Such a line is not paint seen: it does not end the line's run of missing
+   paint, nor give a width seen at the car (step 3). Without a measured shoulder, or where the
+   edge is not found or the pair fails, the line is inferred as in step 3. On ``country``
+   (frames 173-205, the right paint missing) the right line so placed lies 0-13 cm outside the
+   truth at the car, where the inferred one lay 23-46 cm inside it: the shoulder was measured on
+   the crest, whose flat view compresses the road across (0.26 m for 0.35 m).
 
 Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
@@ -245,6 +267,17 @@ class TrackerConfig:
         edge across one or two rows does not; a crest's grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
+    shoulder_frames : 0 (off), or the newest measurements of a painted line's shoulder (the
+        distance from the paint out to the asphalt edge beyond it, step 8) that are remembered;
+        the shoulder is their median once half of them are in and they agree within
+        ``shoulder_spread_m``, and a line whose paint then fades out is placed that far inside
+        the asphalt edge.
+    shoulder_near_m : the road (m from the view's bottom row) the shoulder is measured on: at
+        the car, where the paint and the edge are sharpest and the flat view least pitched.
+    shoulder_spread_m : the largest robust spread (1.4826 x the median distance from the median,
+        m) of the edge points' distances from the paint within one frame, and of the remembered
+        measurements, for the shoulder to count as measured: the edge clearly found, and
+        running at a constant distance from the paint.
     """
 
     max_jump_m: float = 0.5
@@ -266,6 +299,9 @@ class TrackerConfig:
     restart_distance_m: float = 0.5
     road_view_run_m: float = 1.0
     road_view_step_px: int = 8
+    shoulder_frames: int = 10
+    shoulder_near_m: float = 6.0
+    shoulder_spread_m: float = 0.05
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -288,6 +324,9 @@ class TrackerConfig:
             raise ConfigError("tracking: restart_frames >= 0 (0: off) and restart_distance_m > 0")
         if self.road_view_run_m < 0 or self.road_view_step_px < 1:
             raise ConfigError("tracking: road_view_run_m >= 0 (0: off) and road_view_step_px >= 1")
+        if self.shoulder_frames < 0 or self.shoulder_near_m <= 0 or self.shoulder_spread_m <= 0:
+            raise ConfigError("tracking: shoulder_frames >= 0 (0: off), shoulder_near_m > 0 and "
+                              "shoulder_spread_m > 0")
 
 
 @dataclass(frozen=True)
@@ -328,7 +367,8 @@ class LaneTracker:
     Call ``update`` once per frame, in order; ``reset`` before a new video. After each
     ``update``, ``retries`` names the fallback searches that frame needed, in the order they
     ran (none when the cheap search passed): "road view", "windows from the track", "re-acquire",
-    "remembered bases", "fallback masks", "shorter views", "other peaks", "asphalt edge". Every fallback search reads the whole
+    "remembered bases", "fallback masks", "shorter views", "other peaks", "asphalt edge",
+    "shoulder". Every fallback search reads the whole
     view under ``ThresholdConfig.fallback_rule`` (the cheap search, its rule). ``python -m lanelib bench`` counts them and times them.
     """
 
@@ -369,9 +409,15 @@ class LaneTracker:
         self._seen_widths: deque[float] = deque(maxlen=self.config.smooth_frames)
         self._conf = (0.0, 0.0)
         self._edge = [False, False]  # (left, right): the track's line is the asphalt edge (step 8)
+        # (left, right): the newest shoulders (m) measured from the paint out to the asphalt edge (step 8)
+        self._shoulders: tuple[deque, deque] = (deque(maxlen=self.config.shoulder_frames),
+                                                deque(maxlen=self.config.shoulder_frames))
         # (left, right): accepted frames in a row that inferred the line, or saw it only short of
         # the car (the re-acquisition band, step 1)
         self._inferred_run = [0, 0]
+        # (left, right): accepted frames in a row without the line's paint seen at the car
+        # (inferred, or placed inside the asphalt edge: step 8)
+        self._faded_run = [0, 0]
         self._restart_width = float("nan")  # the width (m) a track restarted from one line infers at
 
     def _remember_lost(self) -> _LostTrack | None:
@@ -469,7 +515,8 @@ class LaneTracker:
         coefficients' bytes), confidences, look-ahead rows and seen/inferred flags of the smoothing
         and the trend, each frame's number counted back from the last frame tracked, the
         remembered bases, the hold's counters, the held confidences, the widths seen at the car
-        (``seen_width_m``), which sides' tracked lines are asphalt edges (step 8) and for how many
+        (``seen_width_m``), which sides' tracked lines are asphalt edges and the shoulders measured
+        beyond the painted ones (step 8) and for how many
         frames each line has been inferred (the re-acquisition band, step 1), and what a restart
         from one line needs (step 5): the reset track's bases and seen width, the width a
         restarted track infers at, and the lines the last frame could have restarted from. A
@@ -481,7 +528,9 @@ class LaneTracker:
 
         state = ([accepted(a) for a in self._history], [accepted(a) for a in self._trend],
                  list(self._base_history), self._lost, self._blind, self._conf, list(self._seen_widths),
-                 self._edge, self._inferred_run, self._lost_track, self._restart_width,
+                 self._edge, [list(d) for d in self._shoulders], self._faded_run, self._inferred_run,
+                 self._lost_track,
+                 self._restart_width,
                  [(side, c.tobytes()) for side, c in self._restart_candidates[1]])
         return hashlib.sha256(repr(state).encode()).digest()
 
@@ -567,8 +616,27 @@ class LaneTracker:
             if bird is None:
                 bird = det_images["birdseye"] = pipe.birdseye(raw)
             better(pipe.edge_search(bird, edgeless), "asphalt edge")
+        if (pipe.config.edge.enabled and track is not None and self.config.shoulder_frames
+                and (faded := self._faded_side(raw, det_images.get("birdseye"), best)) is not None):
+            # a painted line faded out: placed the remembered shoulder inside its asphalt edge
+            side, why_faded = faded
+            bird = det_images.get("birdseye")
+            if bird is None:
+                bird = det_images["birdseye"] = pipe.birdseye(raw)
+            ran.append("shoulder")
+            placed = self._shoulder_search(bird, side, best, track)
+            if placed is not None:
+                looked.append(placed)
+                checked = (placed, *self._check(placed.left, placed.right, track, self._band_px(placed),
+                                                placed.top_px, mask, seen))
+                if checked[1] is not None and checked[2] is not None:
+                    best = checked
+                    best[3].append(f"{('left', 'right')[side]} line {why_faded}: placed the shoulder "
+                                   f"({self.shoulder_m(side):.2f} m) inside the asphalt edge")
         self.retries = tuple(ran)
         search, left, right, why, failed = best
+        if pipe.config.edge.enabled and self.config.shoulder_frames:
+            self._measure_shoulders(raw, det_images.get("birdseye"), search, left, right)
         images = det_images if keep_images else {}
         if keep_images and search is not first and "fallback binary" in images:
             images["binary"] = images["fallback binary"]  # the views show the mask the lane came from
@@ -609,6 +677,132 @@ class LaneTracker:
         if not self._edge[0 if side == "left" else 1]:
             return None
         return replace(search, **{side: LineFit(None, reason="refused by the checks")})
+
+    def shoulder_m(self, side: int) -> float:
+        """Return the shoulder (m) of line ``side`` (0 left, 1 right): how far beyond its paint
+        the asphalt edge runs (step 8), the median of the remembered measurements once at least
+        half of ``shoulder_frames`` are in and their robust spread is within
+        ``shoulder_spread_m``; NaN otherwise."""
+        found = np.array(self._shoulders[side], float)
+        if not self.config.shoulder_frames or 2 * len(found) < self.config.shoulder_frames:
+            return float("nan")
+        median = float(np.median(found))
+        if 1.4826 * float(np.median(np.abs(found - median))) > self.config.shoulder_spread_m:
+            return float("nan")
+        return median
+
+    def _measure_shoulders(self, raw: np.ndarray, bird: np.ndarray | None, search: LaneSearch,
+                           left: LineFit | None, right: LineFit | None) -> None:
+        """Remember the shoulder of each painted line of a frame that kept both lines at the car
+        (``_shoulder_beside``, when clearly found)."""
+        if not (self._reach_car(left) and self._reach_car(right)):
+            return
+        grid = None
+        for i, (fit, other) in enumerate(((left, right), (right, left))):
+            if search.edge[i] or search.shoulder[i]:
+                continue  # not paint
+            grid = grid or self._near_grid(raw, bird)
+            shoulder = self._shoulder_beside(grid, fit, other, i, (search.left_pixels, search.right_pixels)[i])
+            if not np.isnan(shoulder):
+                self._shoulders[i].append(round(shoulder, 4))
+
+    def _near_grid(self, raw: np.ndarray, bird: np.ndarray | None) -> lanes.VergeGrid:
+        """Return the verge features (``lanes.verge_grid``) of the bird's-eye view's rows within
+        ``shoulder_near_m`` of its bottom row, what ``_shoulder_beside`` reads: from ``bird``, or
+        from those rows of RAW alone remapped."""
+        w, h = self.pipeline.size
+        k = self.pipeline.config.edge.scale
+        top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym))) // k * k
+        rows = bird[top:] if bird is not None else self.pipeline.birdseye_rows(raw, np.arange(top, h))
+        return lanes.verge_grid(rows, k, top, h)
+
+    def _shoulder_beside(self, grid: lanes.VergeGrid, fit: LineFit, other: LineFit, side: int,
+                         pixels: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+        """Return the shoulder (m) beyond line ``fit`` on ``side`` (0 left, 1 right), NaN where not
+        clearly found: the median distance (along the line's normal) from the line out to the
+        asphalt edge beyond it in ``grid`` (``_near_grid``) (``lanes.road_edge`` from 0 to ``EdgeConfig.max_shoulder_m``
+        beyond the line, the road surface read between ``fit`` and ``other``), on the rows within
+        ``shoulder_near_m`` of the view's bottom row; clearly found: edge points on at least half
+        of those rows (of the shrunk grid), their distances' robust spread (1.4826 x the median
+        distance from their median) within ``shoulder_spread_m``. With the line's ``pixels``
+        ((ys, xs) of the search) the distance on a row is from the median of its pixels on that
+        row of the shrunk grid, where it has some: the paint where it is, not a fit of the whole
+        look-ahead (on ``country``'s hairpin the right line's fit lay 5-20 cm outside its paint
+        at the car)."""
+        cfg = replace(self.pipeline.config.edge, trace_margin_m=0.0)
+        k = cfg.scale
+        top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym)))
+        _, points = lanes.road_edge(None, other, ("left", "right")[side], self._xm, self._ym, self.checks,
+                                    cfg, top, guide_px=fit.coeffs_px, range_m=(0.0, cfg.max_shoulder_m),
+                                    grid=grid)
+        if len(points) < 0.5 * (self._bottom + 1 - top) / k:
+            return float("nan")
+        ys = points[:, 1]
+        x_line = np.polyval(fit.coeffs_px, ys)
+        if pixels is not None and len(pixels[0]):
+            bins = (np.asarray(pixels[0]) // k).astype(int)
+            near = bins >= top // k
+            bins, xs = bins[near], np.asarray(pixels[1], float)[near]
+            for b in np.unique(bins):  # the paint's x on each row of the shrunk grid
+                hit = (ys // k).astype(int) == b
+                if hit.any():
+                    x_line[hit] = float(np.median(xs[bins == b]))
+        slope = np.polyval(np.polyder(np.asarray(fit.coeffs_px, float)), ys) * self._xm / self._ym
+        dist = np.abs(points[:, 0] - x_line) * self._xm / np.sqrt(1.0 + slope ** 2)
+        median = float(np.median(dist))
+        if 1.4826 * float(np.median(np.abs(dist - median))) > self.config.shoulder_spread_m:
+            return float("nan")
+        return median
+
+    def _faded_side(self, raw: np.ndarray, bird: np.ndarray | None, best: tuple) -> tuple[int, str] | None:
+        """Return the side (0 left, 1 right) whose painted line has faded out and is to be placed
+        the remembered shoulder inside the asphalt edge (step 8), with what was seen of it, or None.
+
+        The side's shoulder is known (``shoulder_m``), its tracked line is no asphalt edge, the
+        other line is kept, the side's paint was not seen at the car in the last accepted frame
+        (``_faded_run``), and: this frame kept no line there, the paint missing for
+        ``reacquire_after_frames`` frames or more (at least one; a line missing for a frame or
+        two, a dash's gap or a shadow, is still near its track and is inferred as before); or the
+        line kept there is seen only far ahead (``max_gap_m``: the paint returning ahead, which
+        would be joined nearer the car to the line inferred from the other line); or it is the
+        asphalt edge itself, not paint: the edge lies less than half the shoulder beyond it
+        (``_shoulder_beside``; the grass beside the edge can pass for a line in the search's mask:
+        on ``country`` frame 202 the line taken lay 0.42 m outside the truth, the shoulder
+        0.35 m)."""
+        search, left, right = best[:3]
+        for i, (fit, other) in enumerate(((left, right), (right, left))):
+            if other is None or self._edge[i] or not self._faded_run[i] or search.edge[i] or search.shoulder[i]:
+                continue
+            shoulder = self.shoulder_m(i)
+            if np.isnan(shoulder):
+                continue
+            if fit is None:
+                if self._faded_run[i] >= max(1, self.config.reacquire_after_frames):
+                    return i, "not found where its paint faded out"
+                continue
+            if not self._reach_car((search.left, search.right)[i]):
+                return i, "seen only far ahead where its paint faded out"
+            if self._shoulder_beside(self._near_grid(raw, bird), fit, other, i) < 0.5 * shoulder:
+                return i, "seen at the asphalt edge, where its paint runs the shoulder inside it"
+        return None
+
+    def _shoulder_search(self, bird: np.ndarray, side: int, best: tuple, track) -> LaneSearch | None:
+        """Return the best search with its line ``side`` placed the remembered shoulder inside the
+        asphalt edge on that side (``LanePipeline.edge_search``), or None where no edge is found.
+
+        The edge is looked for from the line inferred from the kept one (step 3), within the
+        shoulder plus or minus the line's jump limit (``_jump_limit_m``: how far the inference
+        may lie from the line at the car) beyond it, and followed from the car over the view
+        where it is seen (``EdgeConfig.trace_margin_m``)."""
+        search, left, right = best[:3]
+        kept = right if side == 0 else left
+        name = ("left", "right")[side]
+        guide = self._inferred(np.array(kept.coeffs_px, float), track, side, search.top_px)
+        shoulder, tol = self.shoulder_m(side), self._jump_limit_m(side)
+        faded = replace(search, **{name: LineFit(None, reason="paint faded out"),
+                                   ("right", "left")[side]: kept})
+        return self.pipeline.edge_search(bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
+                                         shoulder)
 
     def _reacquire_half_px(self, side: int) -> float:
         """Return the half width (px) of the band a line inferred for ``reacquire_after_frames``
@@ -1091,7 +1285,12 @@ class LaneTracker:
             self._trend.append(accepted)
             self._inferred_run = [0 if self._reach_car(fit) else run + 1
                                   for run, fit in zip(self._inferred_run, (left, right))]
-            if self._reach_car(left) and self._reach_car(right):  # both seen at the car: measured there
+            # a line placed the shoulder inside the asphalt edge (step 8) is no paint seen: its
+            # paint is still missing, and the width at the car is not measured on it
+            seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
+            self._faded_run = [0 if self._reach_car(fit) else run + 1
+                               for run, fit in zip(self._faded_run, seen)]
+            if self._reach_car(seen[0]) and self._reach_car(seen[1]):  # both seen at the car: measured there
                 self._seen_widths.append(lanes.normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
                                                               self._xm, self._ym))
             if self._base_history.maxlen:
@@ -1103,7 +1302,7 @@ class LaneTracker:
             for i, fit in enumerate((left, right)):
                 if fit is not None:  # an inferred line keeps the side's kind
                     self._edge[i] = bool(search.edge[i])
-            kinds = tuple("inferred" if fit is None else "edge" if search.edge[i] else "seen"
+            kinds = tuple("inferred" if fit is None else lanes.line_source(search, i)
                           for i, fit in enumerate((left, right)))
         elif track is not None and (note := self._hold(blind)):
             lc, rc = (round(c * self._hold_share(), 3) for c in self._conf)

@@ -13,7 +13,7 @@ import pytest
 from lanelib import lanes
 from lanelib.config import PipelineConfig, override
 from lanelib.evaluate import _truth_x, calibration_from_truth, evaluate_video
-from lanelib.io import read_frame
+from lanelib.io import VideoReader, read_frame
 from lanelib.pipeline import LanePipeline
 from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
 from lanelib.synth.sets import SUNNY, country_layout
@@ -217,6 +217,143 @@ def test_a_lane_whose_right_side_is_only_the_asphalt_edge_is_found_and_says_so()
     off = LanePipeline(override(PipelineConfig(), ["edge.enabled=false"]))
     assert not off.detect(raw).found
 
+
+# --------------------------------------------------------------------------- a faded line's shoulder
+
+def _painted_edge_view(shoulder_m: float = 0.35) -> tuple[np.ndarray, float, float]:
+    """``_edge_view``'s asphalt and grass with a white right line ``shoulder_m`` inside the asphalt
+    edge; return the view, the line's x and the edge's x."""
+    bird, edge_x = _edge_view((96, 120, 60))
+    line_x = edge_x - shoulder_m / XM
+    bird[:, int(round(line_x)) - 7:int(round(line_x)) + 8] = 225
+    return bird, line_x, edge_x
+
+
+def test_the_shoulder_beyond_a_painted_line_is_measured_within_a_few_cm():
+    """A white right line 0.35 m inside the asphalt edge (grass beyond): the tracker measures the
+    shoulder from the line out to the edge (``LaneTracker._shoulder_beside``, the rows within
+    ``shoulder_near_m`` of the car) within 2 cm, from the line's fit or its pixels; with grey,
+    road-like surface beyond (a barrier) no shoulder is measured."""
+    from lanelib.lanes import LineFit
+    pipe = LanePipeline(PipelineConfig())
+    tracker = LaneTracker(pipe)
+    bird, line_x, _ = _painted_edge_view()
+    line = LineFit((0.0, 0.0, line_x), 5000, 719.0)
+    grid = tracker._near_grid(None, bird)
+    assert tracker._shoulder_beside(grid, line, _left_line(), 1) == pytest.approx(0.35, abs=0.02)
+    ys = np.repeat(np.arange(400, 720), 5).astype(float)
+    xs = np.tile(line_x + np.arange(-2, 3), 320).astype(float)
+    assert tracker._shoulder_beside(grid, line, _left_line(), 1, (ys, xs)) == pytest.approx(0.35, abs=0.02)
+    barrier, _ = _edge_view((175, 175, 172))
+    barrier[:, int(round(line_x)) - 7:int(round(line_x)) + 8] = 225
+    assert np.isnan(tracker._shoulder_beside(tracker._near_grid(None, barrier), line, _left_line(), 1))
+
+
+def _faded_road(paint_missing_from_m: float):
+    """A straight, level country road (``sets.country_layout``, green grass) whose right white line
+    is missing from ``paint_missing_from_m`` on, and its renderer."""
+    look = replace(SUNNY, tree_shadows_per_100m=0.0, patches_per_100m=0.0, grass_rgb=(96, 120, 60),
+                   paint_missing_m=((paint_missing_from_m, 300.0, 1.4, 2.2),))
+    return Renderer(Scene(CurvatureProfile(), country_layout(3.4), look, seed=5), GroundGrid.build())
+
+
+def _track_faded_road(renderer, settings=(), frames: int = 26):
+    """Track the car along ``renderer``'s road from s = 5 m, 1.5 m a frame; return each frame's
+    sources and the right line's error (m, + outward) at the car against the truth."""
+    pipe = LanePipeline(override(PipelineConfig(), list(settings)), calibration_from_truth(COUNTRY))
+    tracker, h, out = LaneTracker(pipe), pipe.size[1], []
+    for k in range(frames):
+        pose = CarPose(5.0 + 1.5 * k, 0.0)
+        result, lane = tracker.update(renderer.render(pose)), lane_truth(renderer, pose)
+        x = _truth_x(lane.right_x_px)
+        ok = np.isfinite(x)
+        bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
+        bird = bird[(bird[:, 1] >= 0) & (bird[:, 1] < h)]
+        near = bird[np.argmax(bird[:, 1])]
+        err = (np.polyval(result.right.coeffs_px, near[1]) - near[0]) * XM if result.right.found else np.nan
+        out.append((result.sources, err, result.right.coeffs_px if result.right.found else None))
+    return out
+
+
+def test_a_faded_right_line_is_placed_the_measured_shoulder_inside_the_asphalt_edge():
+    """A rendered country road whose white right line stops 30 m along (the asphalt edge and the
+    grass beyond go on): while the line is seen the tracker measures its shoulder (0.35 m in the
+    generator); once the paint is gone at the car, the right line is placed that far inside the
+    asphalt edge (``sources`` "shoulder") within 3 cm of the truth at the car. With
+    ``tracking.shoulder_frames=0`` it is inferred from the double yellow, as before."""
+    renderer = _faded_road(30.0)
+    placed = _track_faded_road(renderer)
+    assert all(src == ("seen", "seen") for src, _, _ in placed[:12])
+    last = placed[-8:]
+    assert all(src == ("seen", "shoulder") for src, _, _ in last)
+    assert max(abs(err) for _, err, _ in last) <= 0.03
+    before = _track_faded_road(renderer, ["tracking.shoulder_frames=0"])
+    assert all(src == ("seen", "inferred") for src, _, _ in before[-8:])
+
+
+def test_a_road_without_paint_on_its_right_measures_no_shoulder_and_tracks_as_before():
+    """The same road with no right line at all: no shoulder is ever measured, so the asphalt edge
+    stands for the right line (step 8) and every frame's lane is the same as with
+    ``tracking.shoulder_frames=0``."""
+    renderer = _faded_road(-50.0)
+    now = _track_faded_road(renderer, frames=12)
+    before = _track_faded_road(renderer, ["tracking.shoulder_frames=0"], frames=12)
+    assert [src for src, _, _ in now] == [src for src, _, _ in before]
+    assert "shoulder" not in {s for src, _, _ in now for s in src}
+    assert [c for _, _, c in now] == [c for _, _, c in before]
+
+
+def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing():
+    """country.mp4, frames 173-201 (tracked from the start): the right white line's paint is
+    missing. Inferred from the double yellow at the width seen before the crest it lies 23-46 cm
+    inside the truth at the car (every such line false); placed the shoulder measured while it was
+    seen inside the asphalt edge ("shoulder"), 0-13 cm outside it there: the shoulder, measured
+    while the car was on the crest whose flat view compresses the road across, reads 0.26 m for
+    the generator's 0.35 m."""
+    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    truth = load_video_truth(COUNTRY)
+    tracker, h, errors, sources = LaneTracker(pipe), pipe.size[1], [], []
+    with VideoReader(COUNTRY) as reader:
+        for i, frame in enumerate(reader):
+            result = tracker.update(frame)
+            if i < 173:
+                continue
+            if i > 201:
+                break
+            lane = truth.frames[i]
+            x = _truth_x(lane.right_x_px)
+            ok = np.isfinite(x)
+            bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
+            near = bird[np.argmax(np.where(bird[:, 1] < h, bird[:, 1], -1))]
+            errors.append((np.polyval(result.right.coeffs_px, near[1]) - near[0]) * XM)
+            sources.append(result.sources[1])
+    assert sources.count("shoulder") == len(sources)
+    assert -0.02 <= min(errors) and max(errors) <= 0.13
+
+
+def test_the_asphalt_edge_is_followed_where_the_flat_view_widens_ahead():
+    """A drawn view whose asphalt edge runs 3.6 m right of the left line at the car and 5.6 m at
+    the view's top (the flat view of a road climbing ahead widens the lane): searched at a lane's
+    width from the left line (3.0-4.5 m), the edge is found only up to where it lies 4.7 m out;
+    followed from the car (``EdgeConfig.trace_margin_m``) it is found to the view's top and its
+    fit lies within 3 cm of the edge on every row."""
+    from lanelib.lanes import LineFit
+    rng = np.random.default_rng(5)
+    h, w = 720, 1280
+    rows = np.arange(h, dtype=float)
+    edge_x = 100 + (3.6 + 2.0 * ((h - 1 - rows) / (h - 1)) ** 2) / XM
+    bird = np.full((h, w, 3), 105.0)
+    bird[np.arange(w)[None, :] >= np.round(edge_x)[:, None]] = (96, 120, 60)
+    bird += rng.normal(0.0, 6.0, (h, w, 1))
+    bird[:, 93:108] = 225.0
+    bird = np.clip(bird, 0, 255).astype(np.uint8)
+    left = LineFit((0.0, 0.0, 100.0), 5000, 719.0)
+    _, points = lanes.road_edge(bird, left, "right", XM, YM)
+    assert points[:, 1].min() > 120  # the edge lies 4.7 m (and its windows) out near row 170
+    traced, points = lanes.road_edge(bird, left, "right", XM, YM, config=lanes.EdgeConfig(trace_margin_m=0.3))
+    assert traced.found and points[:, 1].min() < 20
+    check = np.linspace(0, 719, 12)
+    assert np.abs(traced.x_at(check) - np.interp(check, rows, edge_x)).max() * XM <= 0.03
 
 # --------------------------------------------------------------------------- the road seen from the car
 
