@@ -581,23 +581,33 @@ def shared_curvature(left: LineFit, right: LineFit, left_pixels, right_pixels,
 
 def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
                  height_px: int, stripes: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Return the pixels (ys, xs) of a line's inner stripe when they form a double line, else all.
+    """Return the pixels (ys, xs) of a line's inner stripe where they form a double line, else all.
 
     A double line (two stripes ``spacing_px`` apart, centre to centre) is one lane boundary,
     marked at its inner stripe, the one nearer the lane: right of the fit for the ``"left"``
     line, left of it for the ``"right"`` one. A fit through both runs between the stripes, and
     their pixels fill and scatter over the search band like a bright patch. The pixels are
     fitted as two parallel stripes (``two_stripes``: one curve, the stripes either side of it,
-    each pixel on the nearer); they are a double line when each stripe holds at least a fifth
-    of the pixels, both lie side by side (each of eight bands of rows that holds pixels of one
-    holds pixels of the other, but for a quarter of them), the stripes lie 0.6-1.5 x
-    ``spacing_px`` apart (their median spacing), each is narrow (its pixels' RMS distance from
-    it under a quarter of that spacing: the view's scale and the stripes' width scale alike),
-    and the gap between them is clear (under 5 % of the pixels within an eighth of the spacing
-    of its middle). A single line, a dashed one or texture is returned unchanged. The stripes
-    are fitted with a shared curve rather than split at the residuals of one fit: on a tight
-    bend a short line's one fit misses the curve, the residuals of the two stripes run into
+    each pixel on the nearer); they are a double line when the stripes are resolved
+    (``_stripes_resolved``: each holds at least a fifth of the pixels, they lie 0.6-1.5 x
+    ``spacing_px`` apart, each is narrow and the gap between them is clear) and lie side by
+    side (each of eight bands of rows that holds pixels of one holds pixels of the other, but
+    for a quarter of them). A single line, a dashed one or texture is returned unchanged. The
+    stripes are fitted with a shared curve rather than split at the residuals of one fit: on a
+    tight bend a short line's one fit misses the curve, the residuals of the two stripes run into
     each other and the gap looks filled (country.mp4's hairpins).
+
+    Far ahead the two stripes blur into one blob (a few raw pixels hold both, stretched by the
+    bird's-eye view) that fills the gap, and a line whose blurred rows hold many of its pixels
+    is not resolved as a whole; fitted through them it runs between the stripes, 0.11 m off
+    the inner one at the car. Its near rows may still be resolved: the eight bands are then
+    judged one by one from the car's end (each narrow stripe and a clear gap, as above; a band
+    where one stripe is worn away counts, as which stripe its pixels lie on is clear), and the
+    run of resolved bands nearest the car (two at least, bands of under 20 pixels skipped),
+    refitted on its own pixels until it settles, is a double line when it passes the rule as a
+    whole. Only its inner stripe is returned: the rows beyond the run are left out, neither
+    split (which pixels of a blur belong to which stripe is a guess) nor kept whole (the outer
+    stripe in them would pull the fit off the inner one at the car as well).
 
     Parameters
     ----------
@@ -617,25 +627,86 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     degree = 2 if span >= 0.3 * height_px else 1
     if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
         return ys, xs  # close to one fit (a single stripe): no second stripe to look for
-    coeffs, spacing, upper, _ = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
-    counts = (int((~upper).sum()), int(upper.sum()))
-    apart = float(np.median(spacing))
-    if min(counts) < 0.2 * n or not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
+    model = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
+    bands = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
+    whole = np.ones(n, bool)
+    inner = _inner_side(ys, xs, bands, whole, model, side, spacing_px)
+    if inner is not None:
+        return ys[inner], xs[inner]
+    # the near rows: the run of bands from the car's end where the stripes are resolved
+    held = np.bincount(bands, minlength=8) >= 20
+    near = whole
+    for _ in range(3):
+        coeffs, spacing, upper, _ = model
+        r = xs - np.polyval(coeffs, ys.astype(np.float64))
+        run = []
+        for band in range(7, -1, -1):
+            if not held[band]:
+                continue
+            g = bands == band
+            if not _stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False):
+                break
+            run.append(band)
+        if len(run) < 2:
+            return ys, xs
+        settled = np.isin(bands, run)
+        if (settled == near).all():
+            break
+        near = settled
+        part = two_stripes(ys[near], xs[near], 2, height_px)
+        # the near rows' model on every pixel: its curve, its spacing (linear in y, so the line
+        # through its values on the run's first and last rows) and each pixel's side
+        y = ys.astype(np.float64)
+        lo, hi = int(np.argmin(y[near])), int(np.argmax(y[near]))
+        y0, y1 = float(y[near][lo]), float(y[near][hi])
+        slope = (float(part[1][hi]) - float(part[1][lo])) / (y1 - y0) if y1 > y0 else 0.0
+        model = (part[0], float(part[1][lo]) + slope * (y - y0), xs > np.polyval(part[0], y), part[3])
+    inner = _inner_side(ys, xs, bands, near, model, side, spacing_px)
+    if inner is None:
         return ys, xs
-    r = xs - np.polyval(coeffs, ys.astype(np.float64))  # from the centre curve
-    off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
-    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g in (~upper, upper)) > apart / 4:
-        return ys, xs
-    if np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) > 0.05 * n:
-        return ys, xs  # no clear gap between them: one line the first fit misses, not two
+    return ys[inner], xs[inner]
+
+
+def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndarray, model: tuple,
+                side: str, spacing_px: float) -> np.ndarray | None:
+    """Return which pixels of ``rows`` (a mask) lie on the inner stripe of the two-stripe
+    ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel), or None when
+    those pixels are not a double line there (``inner_stripe``: resolved, side by side)."""
+    coeffs, spacing, upper, _ = model
+    r = xs[rows] - np.polyval(coeffs, ys[rows].astype(np.float64))  # from the centre curve
+    up = upper[rows]
+    if not _stripes_resolved(r, spacing[rows], up, spacing_px):
+        return None
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
-    bins = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
-    on = [np.bincount(bins[g], minlength=8) > 0 for g in (~upper, upper)]
+    on = [np.bincount(bands[rows][g], minlength=8) > 0 for g in (~up, up)]
     if (on[0] & on[1]).sum() < 0.75 * (on[0] | on[1]).sum():
-        return ys, xs
-    keep = upper if side == "left" else ~upper
-    return ys[keep], xs[keep]
+        return None
+    return rows & (upper if side == "left" else ~upper)
+
+
+def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spacing_px: float,
+                      pair: bool = True) -> bool:
+    """Return whether pixels at residuals ``r`` (px) from a two-stripe curve, with the stripes'
+    ``spacing`` (px) on their rows and ``upper`` their side, lie on two resolved stripes: each
+    stripe is narrow (its pixels' RMS distance from it under a quarter of their median spacing:
+    the view's scale and the stripes' width scale alike) and the gap between them is clear
+    (under 5 % of the pixels within an eighth of the spacing of its middle). With ``pair`` the
+    pixels must also show both: each stripe holds at least a fifth of them and their median
+    spacing is 0.6-1.5 x ``spacing_px``; without it a band of rows where one stripe is worn
+    away still counts (which stripe its pixels lie on is clear)."""
+    n = len(r)
+    counts = (int((~upper).sum()), int(upper.sum()))
+    if n == 0 or (pair and min(counts) < 0.2 * n):
+        return False
+    apart = float(np.median(spacing))
+    if pair and not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
+        return False
+    off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
+    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g in (~upper, upper) if g.any()) > abs(apart) / 4:
+        return False
+    # no clear gap between them: one line the first fit misses (or a blur of both), not two
+    return np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) <= 0.05 * n
 
 
 def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int = 0,
@@ -687,8 +758,11 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
     stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
     quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
-    lines here (``side``: "left" or "right", the side of the lane they bound). A line that scatters
-    so but is not narrowed to a stripe keeps its pixels' spread about two stripes
+    lines here (``side``: "left" or "right", the side of the lane they bound). An inner stripe
+    resolved only on the rows nearest the car is taken when its fit is found and as well
+    founded as the fit of the whole line (second order where that one is: spanning
+    ``min_span_fraction`` of the view); a short stub of it is not worth the line. A line that
+    scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
     fit = fit_line(*pixels, height_px, config, missing=missing, top_px=top_px)
@@ -696,7 +770,10 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
         stripes = two_stripes(*pixels, 2, height_px)
         inner = inner_stripe(*pixels, side, config.double_line_px, height_px, stripes)
         if len(inner[0]) < len(pixels[0]):
-            return fit_line(*inner, height_px, config, missing=missing, top_px=top_px), inner
+            narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
+            curved = config.min_span_fraction * height_px
+            if narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
+                return narrowed, inner
         n = len(pixels[0])
         right = int(stripes[2].sum())
         if min(right, n - right) >= 0.2 * n:

@@ -371,6 +371,76 @@ def test_one_line_or_stripes_too_far_apart_are_left_whole(gap_px):
     assert len(out[0]) == len(ys)
 
 
+def blurred_double_line(inner_x: float, clear_from: int, blob_px: int = 80, single: bool = False) -> np.ndarray:
+    """Return a mask with a double line on a gentle curve, its inner stripe at ``inner_x`` on the
+    bottom row (stripes 21 px wide, 38 px apart centre to centre: 0.12 m and 0.22 m), resolved
+    from the bottom row up to row ``clear_from`` and, above it, blurred into one blob ``blob_px``
+    wide centred between the stripes (far ahead a few raw pixels hold both stripes, as on
+    country.mp4); ``single``: one stripe alone, widening alike far ahead. A line at x = 960 on
+    the right."""
+    bend = (1e-4, -0.05, inner_x + 0.05 * (H - 1) - 1e-4 * (H - 1) ** 2)
+    m = np.zeros((H, W), np.uint8)
+    for y in range(H):
+        x = np.polyval(bend, y)
+        if y < clear_from:
+            centre = x if single else x - 19.0
+            m[y, int(round(centre - blob_px / 2)):int(round(centre + blob_px / 2))] = 255
+        else:
+            for stripe in ((x,) if single else (x, x - 38.0)):
+                m[y, int(round(stripe - 10.5)):int(round(stripe + 10.5))] = 255
+    draw_curve(m, (0.0, 0.0, 960.0), 21)
+    return m
+
+
+@pytest.mark.parametrize("clear_from", [300, 420])
+def test_a_double_line_blurred_ahead_is_fitted_to_its_inner_stripe_at_the_car(clear_from):
+    """A double line resolved on the view's lower 300-420 rows (10-14 m of road) and blurred into
+    one blob beyond: the blob fills the gap, so the line as a whole is not two stripes, and one
+    fit through all its pixels runs between the stripes, 19 px (0.11 m) off the inner stripe at
+    the car. The near rows, where the stripes are resolved, are narrowed to the inner stripe
+    and the blurred rows left out (neither split by a guess nor kept whole, which would pull
+    the fit 7 px, 0.04 m, off at the car): the fit lies within 2 px (0.012 m) of the inner
+    stripe on the bottom row and on the rows it rests on."""
+    mask = blurred_double_line(338.0, clear_from)
+    between = lanes.sliding_windows(mask, SearchConfig(double_line_px=0))
+    assert abs(between.left.x_at(H - 1) - 338.0) * XM_DEFAULT > 0.1
+    on = lanes.sliding_windows(mask)
+    assert abs(on.left.x_at(H - 1) - 338.0) < 2
+    assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
+    ys, xs = on.left_pixels
+    assert ys.min() >= clear_from  # the blurred rows are left out
+    bend = (1e-4, -0.05, 338.0 + 0.05 * (H - 1) - 1e-4 * (H - 1) ** 2)
+    rows = np.arange(clear_from, H)
+    assert np.abs(on.left.x_at(rows) - np.polyval(bend, rows)).max() < 2
+    assert (np.abs(xs - np.polyval(bend, ys)) <= 11).all()  # the inner stripe's pixels only
+
+
+def test_a_stub_of_inner_stripe_does_not_replace_the_whole_line():
+    """Resolved only on the lowest 180 rows (a quarter of the view, under ``min_span_fraction``),
+    a double line's inner stripe would be fitted straight, its curve unmeasured: ``fit_side``
+    keeps the fit of the whole line (between the stripes, as before) rather than that stub."""
+    ys, xs = lanes.lane_pixels(blurred_double_line(338.0, 540))
+    keep = xs < 640
+    ys, xs = ys[keep], xs[keep]
+    assert len(lanes.inner_stripe(ys, xs, "left", 38.0, H)[0]) < len(ys)  # a stub of inner stripe
+    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    assert len(used[0]) == len(ys)
+    assert fit.coeffs_px == lanes.fit_line(ys, xs, H).coeffs_px
+
+
+def test_a_single_line_or_a_double_line_blurred_at_the_car_is_left_whole():
+    """One stripe widening into a blob ahead is a single line, and a double line blurred on all
+    but the lowest band of rows shows no resolved run of rows at the car: both are returned
+    whole (no stripe is guessed where the stripes are not resolved)."""
+    for mask in (blurred_double_line(338.0, 300, single=True), blurred_double_line(338.0, 680)):
+        ys, xs = lanes.lane_pixels(mask)
+        keep = xs < 640
+        out = lanes.inner_stripe(ys[keep], xs[keep], "left", 38.0, H)
+        assert len(out[0]) == np.count_nonzero(keep)
+    single = lanes.sliding_windows(blurred_double_line(338.0, 300, single=True))
+    assert single.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
+
+
 def test_double_line_spacing_is_validated():
     with pytest.raises(lanes.ConfigError, match="double_line_px"):
         SearchConfig(double_line_px=-1)
