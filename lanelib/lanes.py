@@ -618,21 +618,29 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     height_px : height of the view (scales the first fit).
     stripes : ``two_stripes(ys, xs, 2, height_px)`` when already fitted (None: fitted here).
     """
+    keep, _ = _inner_stripe_mask(ys, xs, side, spacing_px, height_px, stripes)
+    return (ys, xs) if keep is None else (ys[keep], xs[keep])
+
+
+def _inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float, height_px: int,
+                       stripes: tuple | None) -> tuple[np.ndarray | None, bool]:
+    """Return which pixels ``inner_stripe`` keeps (None: all, not a double line) and whether the
+    line was resolved as a double line as a whole (False: on its near rows only)."""
     n = len(ys)
     if spacing_px <= 0 or n < 20:
-        return ys, xs
+        return None, False
     span = float(ys.max() - ys.min())
     if span <= 0:
-        return ys, xs
+        return None, False
     degree = 2 if span >= 0.3 * height_px else 1
     if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
-        return ys, xs  # close to one fit (a single stripe): no second stripe to look for
+        return None, False  # close to one fit (a single stripe): no second stripe to look for
     model = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
     bands = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
     whole = np.ones(n, bool)
     inner = _inner_side(ys, xs, bands, whole, model, side, spacing_px)
     if inner is not None:
-        return ys[inner], xs[inner]
+        return inner, True
     # the near rows: the run of bands from the car's end where the stripes are resolved
     held = np.bincount(bands, minlength=8) >= 20
     near = whole
@@ -648,7 +656,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
                 break
             run.append(band)
         if len(run) < 2:
-            return ys, xs
+            return None, False
         settled = np.isin(bands, run)
         if (settled == near).all():
             break
@@ -661,10 +669,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
         y0, y1 = float(y[near][lo]), float(y[near][hi])
         slope = (float(part[1][hi]) - float(part[1][lo])) / (y1 - y0) if y1 > y0 else 0.0
         model = (part[0], float(part[1][lo]) + slope * (y - y0), xs > np.polyval(part[0], y), part[3])
-    inner = _inner_side(ys, xs, bands, near, model, side, spacing_px)
-    if inner is None:
-        return ys, xs
-    return ys[inner], xs[inner]
+    return _inner_side(ys, xs, bands, near, model, side, spacing_px), False
 
 
 def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndarray, model: tuple,
@@ -758,21 +763,26 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
     stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
     quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
-    lines here (``side``: "left" or "right", the side of the lane they bound). An inner stripe
-    resolved only on the rows nearest the car is taken when its fit is found and as well
-    founded as the fit of the whole line (second order where that one is: spanning
-    ``min_span_fraction`` of the view); a short stub of it is not worth the line. A line that
+    lines here (``side``: "left" or "right", the side of the lane they bound). A line resolved
+    as a double line as a whole is its inner stripe's fit, found or not: a fit through both
+    stripes runs between them, never on the line (a patch of double line too short to fit, with
+    a stray pixel further on lending the whole its span, is not found rather than fitted through
+    both stripes and bent by that pixel). An inner stripe resolved only on the rows nearest the
+    car is taken when its fit is found and as well founded as the fit of the whole line (second
+    order where that one is: spanning ``min_span_fraction`` of the view); a short stub of it is
+    not worth the line, which was not shown to be two stripes beyond it. A line that
     scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
     fit = fit_line(*pixels, height_px, config, missing=missing, top_px=top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
         stripes = two_stripes(*pixels, 2, height_px)
-        inner = inner_stripe(*pixels, side, config.double_line_px, height_px, stripes)
-        if len(inner[0]) < len(pixels[0]):
+        keep, whole = _inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes)
+        if keep is not None:
+            inner = (pixels[0][keep], pixels[1][keep])
             narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
             curved = config.min_span_fraction * height_px
-            if narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
+            if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
                 return narrowed, inner
         n = len(pixels[0])
         right = int(stripes[2].sum())

@@ -428,6 +428,26 @@ def test_a_stub_of_inner_stripe_does_not_replace_the_whole_line():
     assert fit.coeffs_px == lanes.fit_line(ys, xs, H).coeffs_px
 
 
+def test_a_short_patch_of_double_line_is_not_fitted_through_both_stripes():
+    """A double line resolved as a whole but seen only on 50 rows, with one stray pixel on the
+    bottom row lending the whole its span: its inner stripe spans too little to be found, and
+    the line is not found, not fitted through both stripes (between them, and bent towards the
+    stray pixel: edge46_s77.mp4 frame 84, 134 px off at the car in the raw image, after which
+    the track was lost for 40 frames)."""
+    mask = np.zeros((H, W), np.uint8)
+    for y in range(600, 650):
+        for stripe in (338.0, 300.0):
+            mask[y, int(round(stripe - 10.5)):int(round(stripe + 10.5))] = 255
+    mask[H - 1, 300] = 255
+    ys, xs = lanes.lane_pixels(mask)
+    whole = lanes.fit_line(ys, xs, H)
+    assert whole.found  # the stray pixel lends the patch a span of 119 px
+    assert lanes.inner_stripe(ys, xs, "left", 38.0, H)[0].max() < 650  # resolved as a whole
+    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none", top_px=432)
+    assert not fit.found and "span" in fit.reason
+    assert (np.abs(used[1] - 338) <= 11).all()
+
+
 def test_a_single_line_or_a_double_line_blurred_at_the_car_is_left_whole():
     """One stripe widening into a blob ahead is a single line, and a double line blurred on all
     but the lowest band of rows shows no resolved run of rows at the car: both are returned
