@@ -601,8 +601,10 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     bird's-eye view) that fills the gap, and a line whose blurred rows hold many of its pixels
     is not resolved as a whole; fitted through them it runs between the stripes, 0.11 m off
     the inner one at the car. Its near rows may still be resolved: the eight bands are then
-    judged one by one from the car's end (each narrow stripe and a clear gap, as above; a band
-    where one stripe is worn away counts, as which stripe its pixels lie on is clear), and the
+    judged one by one from the car's end (each narrow stripe and a clear gap, as above, about
+    the curve; a band where one stripe is worn away counts, as which stripe its pixels lie on is
+    clear; so does a band whose own pixels form two resolved stripes, ``_band_resolved_alone``,
+    as the curve fitted through the blurred rows may miss the near ones), and the
     run of resolved bands nearest the car (two at least, bands of under 20 pixels skipped),
     refitted on its own pixels until it settles, is a double line when it passes the rule as a
     whole. Only its inner stripe is returned: the rows beyond the run are left out, neither
@@ -652,7 +654,8 @@ def _inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: fl
             if not held[band]:
                 continue
             g = bands == band
-            if not _stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False):
+            if not (_stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False)
+                    or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8)):
                 break
             run.append(band)
         if len(run) < 2:
@@ -688,6 +691,20 @@ def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndar
     if (on[0] & on[1]).sum() < 0.75 * (on[0] | on[1]).sum():
         return None
     return rows & (upper if side == "left" else ~upper)
+
+
+def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, height_px: int,
+                         rows: float) -> bool:
+    """Return whether one band of a line's rows (``rows`` high) shows two resolved stripes on
+    its own: its pixels, on at least half of its rows, fitted as two straight parallel stripes
+    (``two_stripes`` of degree 1) pass ``_stripes_resolved`` with both stripes present. The
+    line's curve, fitted through rows where the stripes blur, can miss the band's stripes at the
+    car by more than a stripe's width; the band's own pixels are not misled by those rows (but
+    pixels on a few rows only would fit any two straight stripes)."""
+    if len(np.unique(ys)) < rows / 2:
+        return False
+    coeffs, spacing, upper, _ = two_stripes(ys, xs, 1, height_px)
+    return _stripes_resolved(xs - np.polyval(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
 
 
 def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spacing_px: float,

@@ -371,19 +371,20 @@ def test_one_line_or_stripes_too_far_apart_are_left_whole(gap_px):
     assert len(out[0]) == len(ys)
 
 
-def blurred_double_line(inner_x: float, clear_from: int, blob_px: int = 80, single: bool = False) -> np.ndarray:
+def blurred_double_line(inner_x: float, clear_from: int, blob_px: int = 80, single: bool = False,
+                        lean_px: float = 0.0) -> np.ndarray:
     """Return a mask with a double line on a gentle curve, its inner stripe at ``inner_x`` on the
     bottom row (stripes 21 px wide, 38 px apart centre to centre: 0.12 m and 0.22 m), resolved
     from the bottom row up to row ``clear_from`` and, above it, blurred into one blob ``blob_px``
     wide centred between the stripes (far ahead a few raw pixels hold both stripes, as on
-    country.mp4); ``single``: one stripe alone, widening alike far ahead. A line at x = 960 on
-    the right."""
+    country.mp4); ``single``: one stripe alone, widening alike far ahead; ``lean_px``: the blob
+    centred that far right of the stripes' middle. A line at x = 960 on the right."""
     bend = (1e-4, -0.05, inner_x + 0.05 * (H - 1) - 1e-4 * (H - 1) ** 2)
     m = np.zeros((H, W), np.uint8)
     for y in range(H):
         x = np.polyval(bend, y)
         if y < clear_from:
-            centre = x if single else x - 19.0
+            centre = (x if single else x - 19.0) + lean_px
             m[y, int(round(centre - blob_px / 2)):int(round(centre + blob_px / 2))] = 255
         else:
             for stripe in ((x,) if single else (x, x - 38.0)):
@@ -426,6 +427,22 @@ def test_a_stub_of_inner_stripe_does_not_replace_the_whole_line():
     fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none")
     assert len(used[0]) == len(ys)
     assert fit.coeffs_px == lanes.fit_line(ys, xs, H).coeffs_px
+
+
+@pytest.mark.parametrize("lean_px", [40.0, -40.0])
+def test_near_rows_are_judged_on_their_own_stripes_when_the_blur_bends_the_curve(lean_px):
+    """A blob leaning 40 px to one side of the stripes ahead pulls the curve fitted to the whole
+    line 14 px off the stripes' middle at the car, where the residuals of the resolved near rows
+    then show neither two narrow stripes nor a clear gap. Each band of rows is also judged by
+    its own pixels (two straight stripes fitted to them): the near rows are resolved, and the
+    line is fitted to its inner stripe within 1 px at the car (through the blob and both
+    stripes before: 36 and 3 px off)."""
+    ys, xs = lanes.lane_pixels(blurred_double_line(338.0, 420, lean_px=lean_px))
+    keep = xs < 640
+    ys, xs = ys[keep], xs[keep]
+    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    assert used[0].min() >= 420  # the blob is left out
+    assert abs(fit.x_at(H - 1) - 338.0) < 1
 
 
 def test_a_short_patch_of_double_line_is_not_fitted_through_both_stripes():
