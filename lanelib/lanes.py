@@ -1409,13 +1409,23 @@ class VergeGrid:
     scale: int
 
 
-def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None) -> VergeGrid:
+def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None,
+               sampled: bool = False) -> VergeGrid:
     """Return the ``VergeGrid`` of a bird's-eye image, or of its rows from ``row0_px`` (a multiple
-    of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height)."""
+    of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height).
+    ``sampled``: ``bird`` holds one row of each ``scale`` rows (``grid_rows_px``), shrunk only
+    across (a quarter of the remap and of the features for a grid read on every frame)."""
     h, w = bird.shape[:2]
-    small = cv2.resize(bird, (w // scale, h // scale), interpolation=cv2.INTER_AREA) if scale > 1 else bird
+    rows = h if sampled else h // scale
+    small = cv2.resize(bird, (w // scale, rows), interpolation=cv2.INTER_AREA) if scale > 1 else bird
     sat, grain, seen = verge_features(small)
     return VergeGrid(sat, grain, seen, row0_px // scale, h if height_px is None else height_px, scale)
+
+
+def grid_rows_px(row0_px: int, height_px: int, scale: int) -> np.ndarray:
+    """Return the one row of each ``scale`` rows from ``row0_px`` (a multiple of ``scale``) to
+    ``height_px`` that a sampled ``verge_grid`` reads: the middle one of each."""
+    return np.arange(row0_px + scale // 2, height_px - scale + 1 + scale // 2, scale)
 
 
 def _edge_step(sat_row, grain_row, a: int, b: int, pad: tuple[int, int], win: int, sign: float,

@@ -708,13 +708,15 @@ class LaneTracker:
 
     def _near_grid(self, raw: np.ndarray, bird: np.ndarray | None) -> lanes.VergeGrid:
         """Return the verge features (``lanes.verge_grid``) of the bird's-eye view's rows within
-        ``shoulder_near_m`` of its bottom row, what ``_shoulder_beside`` reads: from ``bird``, or
-        from those rows of RAW alone remapped."""
+        ``shoulder_near_m`` of its bottom row, what ``_shoulder_beside`` reads: one row of each
+        ``EdgeConfig.scale`` (``lanes.grid_rows_px``; measured on every frame with both lines, so a
+        quarter of the rows), from ``bird`` or those rows of RAW alone remapped."""
         w, h = self.pipeline.size
         k = self.pipeline.config.edge.scale
         top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym))) // k * k
-        rows = bird[top:] if bird is not None else self.pipeline.birdseye_rows(raw, np.arange(top, h))
-        return lanes.verge_grid(rows, k, top, h)
+        sample = lanes.grid_rows_px(top, h, k)  # one row of each k: read on every frame, so cheap
+        rows = bird[sample] if bird is not None else self.pipeline.birdseye_rows(raw, sample)
+        return lanes.verge_grid(rows, k, top, h, sampled=True)
 
     def _shoulder_beside(self, grid: lanes.VergeGrid, fit: LineFit, other: LineFit, side: int,
                          pixels: tuple[np.ndarray, np.ndarray] | None = None) -> float:
