@@ -1168,12 +1168,19 @@ class LaneTracker:
         the straight line, and the scale at the look-ahead's top is 0.7-2.5: on ``country``
         spreads taken from fewer or scattered bands swung the clip's point accuracy from 64 to
         87 % with the number of bands; with these gates it stays at 82-87 % (78 % without).
+        The look-ahead is read only down from where the line lies in the view
+        (``_in_view_top_px``): on a tight bend the line leaves the view sideways, and above
+        that no stripes can show (as the bend check reads only rows in view, ``_bend_rows``).
+        Counted as stripes missing, on ``country``'s hairpin in tree shade (frames 140-147) no
+        spread was read, the pair of seen lines was refused as not parallel (the flat view
+        narrows the lane ahead there by 1 m), the double line was inferred from the right line
+        and drifted 0.3-0.8 m off its paint.
         """
         spacing = self.pipeline.config.search.double_line_px
         if not spacing:
             return None
         ys, gaps = lanes.stripe_spacing_px(binary, coeffs_px, spacing, top_px)
-        depth = self._bottom - top_px
+        depth = self._bottom - max(float(top_px), self._in_view_top_px(coeffs_px, top_px))
         if len(ys) < 4 or ys.max() - ys.min() < 0.5 * depth:
             return None
         slope, at_car = np.polyfit(self._bottom - ys, gaps, 1)
@@ -1183,6 +1190,14 @@ class LaneTracker:
         if not 0.7 <= 1.0 + slope / at_car * depth <= 2.5:
             return None
         return np.array([slope / at_car, 1.0])
+
+    def _in_view_top_px(self, coeffs_px, top_px: int) -> float:
+        """Return the first row (px) from which the line ``coeffs_px`` lies inside the view's
+        width all the way down to the bottom row (``top_px`` when it never leaves it)."""
+        rows = np.arange(float(top_px), self._bottom + 1.0)
+        x = np.polyval(coeffs_px, rows)
+        outside = np.flatnonzero((x < 0) | (x >= self.pipeline.size[0]))
+        return float(top_px) if not len(outside) else float(rows[outside[-1]] + 1.0)
 
     def _reach_car(self, fit: LineFit | None) -> bool:
         """Return whether ``fit`` is a line seen in this frame whose pixels reach within

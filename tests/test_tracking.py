@@ -786,3 +786,40 @@ def test_a_restarted_track_that_never_saw_both_lines_is_not_restarted_again(pipe
 def test_a_restart_needs_a_count_and_a_distance(kwargs):
     with pytest.raises(ConfigError, match="restart_frames"):
         TrackerConfig(**kwargs)
+
+
+
+def _double_line_mask(coeffs, spread_top: float, first_row: int = 0) -> np.ndarray:
+    """Return a bird's-eye mask of a double line along the fit ``coeffs`` (the inner, right
+    stripe), its outer stripe 38 px to the left at the car and ``spread_top`` times that on row 0
+    (the flat view's spread ahead), drawn from row ``first_row`` down, 10 px wide."""
+    mask = np.zeros((H, W), np.uint8)
+    for y in range(first_row, H):
+        gap = 38.0 * (1.0 + (spread_top - 1.0) * (H - 1.0 - y) / (H - 1.0))
+        x = float(np.polyval(coeffs, y))
+        for xs in (x - gap, x):
+            lo, hi = int(round(xs - 5)), int(round(xs + 5))
+            if hi > 0 and lo < W:
+                mask[y, max(lo, 0):min(hi, W)] = 255
+    return mask
+
+
+def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(pipe):
+    """A double line on a tight bend leaves the view sideways on row 420 (of 720): its stripes
+    show only below it, 300 rows, short of half the view, but all of the view where the line
+    is, and the spread they tell (drawn: 1.09 on row 500) is read (``LaneTracker._stripe_spread``).
+    Before, a line out of the view counted as its stripes missing: on ``country`` frames 140-147
+    the pair of seen lines was refused as not parallel and the double line inferred. A line
+    that stays in the view, its stripes shown on the same 300 rows only, is still not read
+    (stripes missing on over half of it)."""
+    a = -0.004  # x = 320 on the bottom row, 0 on row 420, outside the view above
+    b = (320.0 - a * ((H - 1.0) ** 2 - 420.0 ** 2)) / (H - 1.0 - 420.0)
+    bent = np.array([a, b, -a * 420.0 ** 2 - b * 420.0])
+    tracker = LaneTracker(pipe)
+    assert tracker._in_view_top_px(bent, 0) == pytest.approx(420.0, abs=1.0)
+    spread = tracker._stripe_spread(_double_line_mask(bent, 1.3), bent, 0)
+    assert spread is not None
+    assert np.polyval(spread, H - 1.0 - 500.0) == pytest.approx(1.0 + 0.3 * 219.0 / 719.0, abs=0.03)
+    straight = np.array([0.0, 0.0, 320.0])
+    assert tracker._in_view_top_px(straight, 0) == 0.0
+    assert tracker._stripe_spread(_double_line_mask(straight, 1.3, 420), straight, 0) is None
