@@ -156,19 +156,29 @@ debug composite work on it unchanged. Per frame:
    paint's pixels within ``shoulder_spread_m``) the median distance is remembered; the shoulder
    is the median of the last ``shoulder_frames`` measurements once half of them are in and agree
    within ``shoulder_spread_m`` (``shoulder_m``). When that line's paint then fades (no line
-   kept there for ``reacquire_after_frames`` frames; or a line seen there only far ahead, the
-   paint returning; or one that is the asphalt edge itself, less than half the shoulder inside
+   kept there for ``reacquire_after_frames`` frames; or a line seen there only ahead, the
+   paint returning: its pixels stop more than ``return_gap_m`` short of the view's bottom row;
+   or one that is the asphalt edge itself, less than half the shoulder inside
    it: the grass beside the edge passed for a line, ``_faded_side``), the edge is looked for the
    shoulder (plus or minus the line's jump limit) beyond the line inferred from the other one,
    and the line is placed the shoulder inside it where it is seen, joined beyond to the
-   inference (``LanePipeline.edge_search`` with ``shoulder_m``); it is kept when the pair then
+   inference (``LanePipeline.edge_search`` with ``shoulder_m``), or, where the search has
+   pixels on that side (the returning paint), joined nearer the car to them (``_joined_paint``:
+   the paint where it is seen, the edge near the car; tried first, the other if it fails); it
+   is kept when the pair then
    passes every check against the track, and its ``sources`` say "shoulder" (logged; "shoulder"
    in ``retries``). Such a line is not paint seen: it does not end the line's run of missing
-   paint, nor give a width seen at the car (step 3). Without a measured shoulder, or where the
+   paint (nor does paint seen only beyond ``return_gap_m``), nor give a width seen at the car
+   (step 3). Without a measured shoulder, or where the
    edge is not found or the pair fails, the line is inferred as in step 3. On ``country``
    (frames 173-205, the right paint missing) the right line so placed lies 0-13 cm outside the
    truth at the car, where the inferred one lay 23-46 cm inside it: the shoulder was measured on
-   the crest, whose flat view compresses the road across (0.26 m for 0.35 m).
+   the crest, whose flat view compresses the road across (0.26 m for 0.35 m). Frames 206-225:
+   the paint returns beyond the crest into a sag, seen only 3-10 m ahead, where the flat view
+   widens the lane ahead; extrapolated to the car, or joined to the inference, it lay 15-47 cm
+   inside the truth there, and the reported line 65-86 cm inside it at the view's far end
+   (13 false lines in 210-223); joined to the returning paint the reported line lies 0-5 cm
+   outside the truth at the car and 7-24 cm inside it at the far end (none).
 
 Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
@@ -302,6 +312,7 @@ class TrackerConfig:
     shoulder_frames: int = 10
     shoulder_near_m: float = 6.0
     shoulder_spread_m: float = 0.05
+    return_gap_m: float = 2.0
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -327,6 +338,8 @@ class TrackerConfig:
         if self.shoulder_frames < 0 or self.shoulder_near_m <= 0 or self.shoulder_spread_m <= 0:
             raise ConfigError("tracking: shoulder_frames >= 0 (0: off), shoulder_near_m > 0 and "
                               "shoulder_spread_m > 0")
+        if self.return_gap_m < 0:
+            raise ConfigError("tracking: return_gap_m must be 0 or more")
 
 
 @dataclass(frozen=True)
@@ -624,15 +637,16 @@ class LaneTracker:
             if bird is None:
                 bird = det_images["birdseye"] = pipe.birdseye(raw)
             ran.append("shoulder")
-            placed = self._shoulder_search(bird, side, best, track)
-            if placed is not None:
+            for placed, joined in self._shoulder_search(bird, side, best, track):
                 looked.append(placed)
                 checked = (placed, *self._check(placed.left, placed.right, track, self._band_px(placed),
                                                 placed.top_px, mask, seen))
                 if checked[1] is not None and checked[2] is not None:
                     best = checked
                     best[3].append(f"{('left', 'right')[side]} line {why_faded}: placed the shoulder "
-                                   f"({self.shoulder_m(side):.2f} m) inside the asphalt edge")
+                                   f"({self.shoulder_m(side):.2f} m) inside the asphalt edge"
+                                   + (", joined ahead to its returning paint" if joined else ""))
+                    break
         self.retries = tuple(ran)
         search, left, right, why, failed = best
         if pipe.config.edge.enabled and self.config.shoulder_frames:
@@ -782,13 +796,20 @@ class LaneTracker:
                 continue
             if not self._reach_car((search.left, search.right)[i]):
                 return i, "seen only far ahead where its paint faded out"
+            gap_m = (search.left, search.right)[i].gap_px * self._ym
+            if gap_m > self.config.return_gap_m:
+                return i, f"seen only from {gap_m:.1f} m ahead where its paint faded out"
             if self._shoulder_beside(self._near_grid(raw, bird), fit, other, i) < 0.5 * shoulder:
                 return i, "seen at the asphalt edge, where its paint runs the shoulder inside it"
         return None
 
-    def _shoulder_search(self, bird: np.ndarray, side: int, best: tuple, track) -> LaneSearch | None:
+    def _shoulder_search(self, bird: np.ndarray, side: int, best: tuple, track
+                         ) -> list[tuple[LaneSearch, bool]]:
         """Return the best search with its line ``side`` placed the remembered shoulder inside the
-        asphalt edge on that side (``LanePipeline.edge_search``), or None where no edge is found.
+        asphalt edge on that side (``LanePipeline.edge_search``), each with whether it is joined
+        to the line's returning paint: first so joined (``_joined_paint``) where the search has
+        pixels on that side, then joined beyond the edge to the line inferred from the kept one
+        (the first that passes the checks is kept); none where no edge is found.
 
         The edge is looked for from the line inferred from the kept one (step 3), within the
         shoulder plus or minus the line's jump limit (``_jump_limit_m``: how far the inference
@@ -801,8 +822,46 @@ class LaneTracker:
         shoulder, tol = self.shoulder_m(side), self._jump_limit_m(side)
         faded = replace(search, **{name: LineFit(None, reason="paint faded out"),
                                    ("right", "left")[side]: kept})
-        return self.pipeline.edge_search(bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
-                                         shoulder)
+        placed = self.pipeline.edge_search(bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
+                                           shoulder)
+        if placed is None:
+            return []
+        line = getattr(placed, name)
+        joined = self._joined_paint((search.left_pixels, search.right_pixels)[side], line, search.top_px)
+        if joined is None:
+            return [(placed, False)]
+        return [(replace(placed, **{name: joined}), True), (placed, False)]
+
+    def _joined_paint(self, pixels, placed: LineFit, top_px: int) -> LineFit | None:
+        """Return a faded line's returning paint ahead joined nearer the car to ``placed`` (the
+        line placed the shoulder inside the asphalt edge, step 8), or None with fewer than half
+        ``min_line_pixels`` paint pixels (``pixels``: (ys, xs) of the search on that side) in
+        the look-ahead (from ``top_px``).
+
+        One second-order fit to the paint's median x on each row it holds and to the placed line
+        on each row between the paint's nearest (all but ``lanes.NEAR_SHARE`` of its pixels lie
+        above it) and the view's bottom row: the paint where it is seen, the edge near the car,
+        where the paint is missing. Extrapolated to the car, or joined to the line inferred from
+        the other line, the paint seen only 5-10 m ahead in a sag beyond a crest lay 15-47 cm
+        inside the truth at the car on ``country`` (the flat view widens the lane ahead there,
+        and the inference does not follow). Its pixel count and rows are the edge's and the
+        paint's together (its confidence, ``result.line_confidence``)."""
+        ys, xs = np.asarray(pixels[0]), np.asarray(pixels[1], float)
+        keep = ys >= top_px
+        ys, xs = ys[keep], xs[keep]
+        if len(ys) < self.pipeline.config.search.min_line_pixels // 2:
+            return None
+        near = float(np.quantile(ys, 1.0 - lanes.NEAR_SHARE))
+        keep = ys <= near
+        rows, inverse = np.unique(ys[keep], return_inverse=True)
+        med = np.array([np.median(xs[keep][inverse == j]) for j in range(len(rows))])
+        unseen = np.arange(np.floor(near) + 1.0, self._bottom + 1.0)
+        coeffs = lanes.least_squares_poly(np.concatenate([rows.astype(float), unseen]),
+                                          np.concatenate([med, np.polyval(placed.coeffs_px, unseen)]), 2,
+                                          float(self.pipeline.size[1]))
+        top = min(float(rows[0]), self._bottom - placed.gap_px - placed.span_px)
+        return replace(placed, coeffs_px=coeffs, n_pixels=placed.n_pixels + int(keep.sum()),
+                       span_px=float(self._bottom - placed.gap_px - top))
 
     def _reacquire_half_px(self, side: int) -> float:
         """Return the half width (px) of the band a line inferred for ``reacquire_after_frames``
@@ -1188,6 +1247,15 @@ class LaneTracker:
         car to another line)."""
         return fit is not None and fit.gap_px * self._ym <= self.config.max_gap_m
 
+    def _paint_at_car(self, fit: LineFit | None, faded_run: int) -> bool:
+        """Return whether ``fit`` is paint seen at the car (``_reach_car``); on a side whose paint
+        has been missing at the car for ``faded_run`` accepted frames, only when its pixels reach
+        within ``return_gap_m`` of the view's bottom row (step 8: returning paint seen farther
+        ahead is joined nearer the car to the line placed inside the asphalt edge)."""
+        if not self._reach_car(fit):
+            return False
+        return not faded_run or fit.gap_px * self._ym <= self.config.return_gap_m
+
     def _graded_reference(self, left: LineFit, right: LineFit, rows: np.ndarray,
                           top_px: int, mask) -> np.ndarray | None:
         """Return the lane's width (px) on ``rows`` as the road ahead's grade makes it in the flat
@@ -1288,8 +1356,8 @@ class LaneTracker:
             # a line placed the shoulder inside the asphalt edge (step 8) is no paint seen: its
             # paint is still missing, and the width at the car is not measured on it
             seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
-            self._faded_run = [0 if self._reach_car(fit) else run + 1
-                               for run, fit in zip(self._faded_run, seen)]
+            at_car = [self._paint_at_car(fit, run) for fit, run in zip(seen, self._faded_run)]
+            self._faded_run = [0 if near else run + 1 for run, near in zip(self._faded_run, at_car)]
             if self._reach_car(seen[0]) and self._reach_car(seen[1]):  # both seen at the car: measured there
                 self._seen_widths.append(lanes.normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
                                                               self._xm, self._ym))
