@@ -288,6 +288,14 @@ class TrackerConfig:
         m) of the edge points' distances from the paint within one frame, and of the remembered
         measurements, for the shoulder to count as measured: the edge clearly found, and
         running at a constant distance from the paint.
+    return_gap_m : on a side whose paint has been missing at the car (step 8), the largest distance
+        (m of road) between the view's bottom row and the returning paint's nearest pixels for it
+        to count as seen at the car again (``max_gap_m`` for any other line); farther, the paint
+        is joined nearer the car to the line placed the shoulder inside the asphalt edge. On
+        ``country`` the right paint returning beyond the crest, into a sag, was seen 3-10 m ahead
+        and its fit extrapolated to the car lay 4-47 cm inside the truth there (the flat view
+        widens the lane ahead in a sag); the clip's figures are the same at 1, 2 and 3 m (at 6 m
+        96.4 % points, 4.4 % false lines).
     """
 
     max_jump_m: float = 0.5
