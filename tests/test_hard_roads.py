@@ -342,6 +342,30 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
     assert all(src == "shoulder" and fp == 0 for _, src, fp in returning), returning
 
 
+def test_a_line_seen_only_ahead_in_shade_is_joined_to_its_track_near_the_car():
+    """country.mp4, frames 12-30 (the first bend, tree shade over the road near the car): the
+    right line (frames 13-16) and the left line (25-29) are seen only 5-8 m ahead. Extrapolated
+    to the car their fits lay 25-39 cm off there (4 false lines: 14-16 and 28; the default,
+    ``tracking.near_gap_m=0``); with ``tracking.near_gap_m=5`` (for a line whose paint reached
+    the car in the newest frames) each is joined nearer the car to the line inferred from the
+    other line, or its track: no line is false."""
+    def false_lines(settings):
+        cfg = override(PipelineConfig(), list(settings))
+        pipe = LanePipeline(cfg, calibration_from_truth(COUNTRY))
+        truth, tracker, out = load_video_truth(COUNTRY), LaneTracker(pipe), []
+        with VideoReader(COUNTRY) as reader:
+            for i, frame in enumerate(reader):
+                result = tracker.update(frame)
+                if i > 30:
+                    break
+                if i >= 12 and score_frame(pipe, result, truth.frames[i]).fp_lines:
+                    out.append(i)
+        return out
+
+    assert false_lines(["tracking.near_gap_m=5"]) == []
+    assert false_lines([]) == [14, 15, 16, 28]
+
+
 def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_edge():
     """A faded line's paint seen again only on rows 200-450 of the view (none on the car's rows
     451-719), and the line placed the shoulder inside the asphalt edge: within 5 px of the line
