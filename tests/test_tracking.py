@@ -447,7 +447,8 @@ def test_a_line_seen_only_far_ahead_is_joined_to_the_line_inferred_near_the_car(
     assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3)
     assert r.lane_width_m == pytest.approx(3.7, abs=0.03)
     # the rule off: the extrapolated line is taken as seen at the car, and pulls the lane out
-    r_off = _tracked(pipe, TrackerConfig(max_gap_m=100.0)).update(_far_frame(pipe, right_top_dx=12.0))
+    r_off = _tracked(pipe, TrackerConfig(max_gap_m=100.0, near_gap_m=0.0)).update(
+        _far_frame(pipe, right_top_dx=12.0))
     assert "seen only" not in r_off.reason
     assert bottom_x(r_off, "right") - RIGHT_X > 3 * abs(bottom_x(r, "right") - RIGHT_X) + 3
 
