@@ -499,7 +499,7 @@ def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int,
                                  "regenerate the truth with `python -m lanelib synth --all`")
             if i == start and tracker is not None:
                 entry = tracker.state_key()
-            result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+            result = tracker.update(raw, index=i) if tracker is not None else pipeline.detect(raw)
             if i >= start:
                 rows.append(_score_row(pipeline, str(i), result, truth[i]))
     return entry
@@ -527,7 +527,7 @@ def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracke
                                          "regenerate the truth with `python -m lanelib synth --all`")
                     break
                 for pipeline, tracker, col in runners:
-                    result = tracker.update(raw) if tracker is not None else pipeline.detect(raw)
+                    result = tracker.update(raw, index=i) if tracker is not None else pipeline.detect(raw)
                     col.add(str(i), result, frames[i])
                 n += 1
                 if max_frames is not None and i + 1 >= max_frames:

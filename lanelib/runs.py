@@ -1051,7 +1051,7 @@ def lane_video_process(config: PipelineConfig, calibration: Calibration | None, 
             trackers[:] = [LaneTracker(pipeline_for(frame, current[0], calibration))]
         tracker = trackers[0]
         pipe = tracker.pipeline
-        result = tracker.update(frame, keep_images=debug)
+        result = tracker.update(frame, keep_images=debug, index=index)
         if debug:
             image = pipe.debug_composite(result, raw=frame)
         elif config.draw.video_undistorted:

@@ -151,7 +151,8 @@ debug composite work on it unchanged. Per frame:
    **A painted line that fades out** is not moved out to the asphalt edge beyond it: the paint
    runs a shoulder inside the edge (``sets.country_layout``: 0.35 m; real roads: a shoulder of
    some width, constant along a stretch). While both lines are seen at the car, the tracker
-   measures each painted line's shoulder (``_shoulder_beside``): the asphalt edge is looked for
+   measures each painted line's shoulder (``_shoulder_beside``; on one frame of each
+   ``shoulder_every``, by the frame's number in the video): the asphalt edge is looked for
    from the paint out to ``EdgeConfig.max_shoulder_m`` beyond it on the rows within
    ``shoulder_near_m`` of the car (``lanes.road_edge`` from the line, the road read between the
    lines), and where it is clearly found (edge points on half the rows, at one distance from the
@@ -290,6 +291,10 @@ class TrackerConfig:
         m) of the edge points' distances from the paint within one frame, and of the remembered
         measurements, for the shoulder to count as measured: the edge clearly found, and
         running at a constant distance from the paint.
+    shoulder_every : the shoulder is measured on one frame of each ``shoulder_every``: those whose
+        number in the video (``update``'s ``index``) it divides, so a Dask segment measures on the
+        same frames as one process. A shoulder changes over tens of metres, not from one frame to
+        the next; measured on every frame it cost 1.3 ms of a clean road's ~7 ms update.
     return_gap_m : on a side whose paint has been missing at the car (step 8), the largest distance
         (m of road) between the view's bottom row and the returning paint's nearest pixels for it
         to count as seen at the car again (``max_gap_m`` for any other line); farther, the paint
@@ -331,6 +336,7 @@ class TrackerConfig:
     shoulder_frames: int = 10
     shoulder_near_m: float = 6.0
     shoulder_spread_m: float = 0.05
+    shoulder_every: int = 4
     return_gap_m: float = 2.0
     near_gap_m: float = 0.0
 
@@ -355,9 +361,10 @@ class TrackerConfig:
             raise ConfigError("tracking: restart_frames >= 0 (0: off) and restart_distance_m > 0")
         if self.road_view_run_m < 0 or self.road_view_step_px < 1:
             raise ConfigError("tracking: road_view_run_m >= 0 (0: off) and road_view_step_px >= 1")
-        if self.shoulder_frames < 0 or self.shoulder_near_m <= 0 or self.shoulder_spread_m <= 0:
-            raise ConfigError("tracking: shoulder_frames >= 0 (0: off), shoulder_near_m > 0 and "
-                              "shoulder_spread_m > 0")
+        if (self.shoulder_frames < 0 or self.shoulder_near_m <= 0 or self.shoulder_spread_m <= 0
+                or self.shoulder_every < 1):
+            raise ConfigError("tracking: shoulder_frames >= 0 (0: off), shoulder_near_m > 0, "
+                              "shoulder_spread_m > 0 and shoulder_every >= 1")
         if self.return_gap_m < 0 or self.near_gap_m < 0:
             raise ConfigError("tracking: return_gap_m >= 0 and near_gap_m >= 0 (0: off)")
 
@@ -569,9 +576,15 @@ class LaneTracker:
 
     # ---- one frame ------------------------------------------------------------------------
 
-    def update(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
-        """Return the tracked lane in the next RAW frame of the video (see the module docstring)."""
+    def update(self, raw: np.ndarray, keep_images: bool = False, index: int | None = None) -> FrameResult:
+        """Return the tracked lane in the next RAW frame of the video (see the module docstring).
+
+        ``index``: the frame's number in the video (0 for the first), which picks the frames the
+        shoulder is measured on (``TrackerConfig.shoulder_every``); default: the frames tracked
+        since ``reset`` before this one. The lane itself does not depend on it otherwise.
+        """
         pipe = self.pipeline
+        index = self._frame if index is None else index
         self._frame += 1
         self._restart_candidates = (self._restart_candidates[1], [])
         track = self.predicted_lane()
@@ -669,7 +682,7 @@ class LaneTracker:
                     break
         self.retries = tuple(ran)
         search, left, right, why, failed = best
-        if pipe.config.edge.enabled and self.config.shoulder_frames:
+        if pipe.config.edge.enabled and self.config.shoulder_frames and index % self.config.shoulder_every == 0:
             self._measure_shoulders(raw, det_images.get("birdseye"), search, left, right)
         images = det_images if keep_images else {}
         if keep_images and search is not first and "fallback binary" in images:
