@@ -139,11 +139,11 @@ def test_keyboard_interrupt_mid_run_leaves_no_file(clip, tmp_path, monkeypatch):
     real_update = tracking.LaneTracker.update
     calls = []
 
-    def interrupted(self, raw, keep_images=False):
+    def interrupted(self, raw, keep_images=False, index=None):
         calls.append(1)
         if len(calls) % 4 == 0:  # the 4th frame of each run
             raise KeyboardInterrupt
-        return real_update(self, raw, keep_images)
+        return real_update(self, raw, keep_images, index)
 
     monkeypatch.setattr(tracking.LaneTracker, "update", interrupted)
     out, log = tmp_path / "out.mp4", tmp_path / "log.csv"
