@@ -693,6 +693,9 @@ def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndar
     return rows & (upper if side == "left" else ~upper)
 
 
+BAND_ONE_STRIPE_RMS = 0.22  # under the 0.24 x spacing two resolved stripes need (``_band_resolved_alone``)
+
+
 def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, height_px: int,
                          rows: float) -> bool:
     """Return whether one band of a line's rows (``rows`` high) shows two resolved stripes on
@@ -702,6 +705,11 @@ def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, heig
     car by more than a stripe's width; the band's own pixels are not misled by those rows (but
     pixels on a few rows only would fit any two straight stripes)."""
     if len(np.unique(ys)) < rows / 2:
+        return False
+    # two stripes side by side, each a fifth of the pixels, 0.6 x spacing_px apart or more, lie
+    # at least 0.4 x 0.6 = 0.24 x spacing_px (RMS) from any one straight line through them: a
+    # band closer than that to its own straight fit is one stripe (most bands of a single line)
+    if _least_squares(ys, xs, 1, float(height_px))[3] < len(ys) * (BAND_ONE_STRIPE_RMS * spacing_px) ** 2:
         return False
     coeffs, spacing, upper, _ = two_stripes(ys, xs, 1, height_px)
     return _stripes_resolved(xs - np.polyval(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
