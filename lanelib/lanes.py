@@ -963,6 +963,17 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
     return coeffs, spacing, upper, float((residual * residual).sum())
 
 
+def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return each distinct key of ``keys`` (a row, or a shrunk grid's row; ascending) and the
+    median of the ``xs`` that share it (``np.median``'s, for all rows at once)."""
+    keys, xs = np.asarray(keys), np.asarray(xs, float)
+    order = np.lexsort((xs, keys))
+    k, v = keys[order], xs[order]
+    rows, first, counts = np.unique(k, return_index=True, return_counts=True)
+    lo, hi = first + (counts - 1) // 2, first + counts // 2
+    return rows, (v[lo] + v[hi]) / 2
+
+
 def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
     """Return (a, b, c) of the least-squares x = a*y**2 + b*y + c (a = 0 for degree 1).
 

@@ -791,11 +791,12 @@ class LaneTracker:
         if pixels is not None and len(pixels[0]):
             bins = (np.asarray(pixels[0]) // k).astype(int)
             near = bins >= top // k
-            bins, xs = bins[near], np.asarray(pixels[1], float)[near]
-            for b in np.unique(bins):  # the paint's x on each row of the shrunk grid
-                hit = (ys // k).astype(int) == b
-                if hit.any():
-                    x_line[hit] = float(np.median(xs[bins == b]))
+            rows, paint = lanes.row_medians(bins[near], np.asarray(pixels[1], float)[near])
+            if len(rows):  # the paint's x on each grid row it holds
+                grid_rows = (ys // k).astype(int)
+                at = np.minimum(np.searchsorted(rows, grid_rows), len(rows) - 1)
+                hit = rows[at] == grid_rows
+                x_line[hit] = paint[at[hit]]
         slope = np.polyval(np.polyder(np.asarray(fit.coeffs_px, float)), ys) * self._xm / self._ym
         dist = np.abs(points[:, 0] - x_line) * self._xm / np.sqrt(1.0 + slope ** 2)
         median = float(np.median(dist))
@@ -888,8 +889,7 @@ class LaneTracker:
             return None
         near = float(np.quantile(ys, 1.0 - lanes.NEAR_SHARE))
         keep = ys <= near
-        rows, inverse = np.unique(ys[keep], return_inverse=True)
-        med = np.array([np.median(xs[keep][inverse == j]) for j in range(len(rows))])
+        rows, med = lanes.row_medians(ys[keep], xs[keep])
         unseen = np.arange(np.floor(near) + 1.0, self._bottom + 1.0)
         coeffs = lanes.least_squares_poly(np.concatenate([rows.astype(float), unseen]),
                                           np.concatenate([med, np.polyval(placed.coeffs_px, unseen)]), 2,
