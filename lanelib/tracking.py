@@ -1324,22 +1324,29 @@ class LaneTracker:
 
     def _gap_limits_m(self, left: LineFit, right: LineFit, bands: tuple[float, float], track
                       ) -> tuple[float, float]:
-        """Return ``_gap_limit_m`` of each line, with ``near_gap_m`` only where the other line
-        of this frame reaches the car within it and passes ``lanes.line_problem``: the line is
-        then joined near the car to the line inferred from it (step 2), a measurement; where the
-        other line does not reach the car, the join would be to the track alone, which drifts
-        from the road while the car moves (an overpass's shade), and the far line is
-        extrapolated as with ``max_gap_m``."""
+        """Return the largest gap (m) each line may stop short of the car by and count as seen
+        there (step 2): ``_gap_limit_m`` (``near_gap_m``) for a line whose gap exceeds
+        ``near_gap_m`` where its tracked line bends by more than ``near_gap_bend_m`` over the
+        gap (|a| * gap**2: the curvature's share of the extrapolation) and the other line of
+        this frame reaches the car within ``near_gap_m`` and passes ``lanes.line_problem``: the
+        line is then joined near the car to the line inferred from that one, a measurement.
+        Else ``max_gap_m``: on a straight road the extrapolation does not rest on the curvature
+        (a dashed line's gaps), and where the other line stops short too the join would be to
+        the track alone, which drifts from the road while the car moves (an overpass's shade)."""
         cfg = self.config
         if not cfg.near_gap_m or track is None:
             return cfg.max_gap_m, cfg.max_gap_m
         fits = (left, right)
+        # seen short of the car by more than near_gap_m, where the track bends over the gap
+        bent = [fit.found and fit.gap_px * self._ym > cfg.near_gap_m
+                and abs(track[i][0]) * fit.gap_px ** 2 * self._xm > cfg.near_gap_bend_m
+                for i, fit in enumerate(fits)]
+        if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
+            return cfg.max_gap_m, cfg.max_gap_m
         near = [fit.found and fit.gap_px * self._ym <= cfg.near_gap_m
                 and not lanes.line_problem(fit, bands[i], self.checks, self._xm, ("left", "right")[i])
                 for i, fit in enumerate(fits)]
-        bends = [fit.found and abs(track[i][0]) * fit.gap_px ** 2 * self._xm > cfg.near_gap_bend_m
-                 for i, fit in enumerate(fits)]
-        return tuple(self._gap_limit_m(i) if near[1 - i] and bends[i] else cfg.max_gap_m
+        return tuple(self._gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
                      for i in range(2))
 
     def _gap_limit_m(self, side: int) -> float:
