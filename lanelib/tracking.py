@@ -66,12 +66,20 @@ debug composite work on it unchanged. Per frame:
    smoothed track and both are kept (``_pair_outvotes_track``). A pair refused as not parallel against the track is kept when
    it is parallel on the road ahead's grade: its width changes along the view as the seen
    double line's two stripes' spacing does (``grade_pair_check``). A line whose pixels stop
-   more than ``max_gap_m`` (``near_gap_m``, when set, for a line whose paint reached the car in
-   the newest accepted frames: its track there is a measurement, ``_gap_limit_m``) short of the
-   view's bottom row (``lanes.LineFit.gap_px``: its paint
+   more than ``max_gap_m`` short of the view's bottom row (``lanes.LineFit.gap_px``: its paint
    near the car in an overpass's shade or worn away) is seen only far ahead; its position at
    the car would be an extrapolation (on ``shadows`` lines seen only 14-20 m ahead put the
    reported line 45-65 px off at the car in the raw image, false lines by the TuSimple rule).
+   **On a bend** the limit is ``near_gap_m`` (``_gap_limits_m``) for a line whose paint reached
+   the car in the newest accepted frames (``_gap_limit_m``), when the tracked line bends by more
+   than ``near_gap_bend_m`` over the gap (``|a| * gap**2``: the part of the extrapolation that
+   rests on the fitted curvature, the least certain coefficient of a line seen over a few
+   metres) and the other line of the frame reaches the car within ``near_gap_m``: a tight
+   bend's line sweeps sideways across the flat view faster ahead than a parabola does, and
+   its fit over the far rows, extrapolated a few metres to the car, is off there. On a straight
+   road (a dashed line's gaps) or when the other line stops short of the car too, the
+   limit stays ``max_gap_m`` (joined to the track alone, such a line drifted from the road
+   while the car moved under an overpass on ``shadows``).
    With a track it is kept where it was seen if it lies within ``max_jump_m`` of its tracked line there, and joined
    nearer the car (one second-order fit to both) to the line inferred from the other line
    (step 3) when that one reaches the car, or else to its tracked line; otherwise it is refused.
@@ -303,15 +311,29 @@ class TrackerConfig:
         and its fit extrapolated to the car lay 4-47 cm inside the truth there (the flat view
         widens the lane ahead in a sag); the clip's figures are the same at 1, 2 and 3 m (at 6 m
         96.4 % points, 4.4 % false lines).
-    near_gap_m : 0 (off), or ``max_gap_m`` for a line whose paint reached the car in the newest
-        accepted frames (step 2): seen now only from farther ahead (its paint near the car in a
-        tree's shade, a dashed line's gap) it is kept where seen and joined nearer the car to
-        the line inferred from the other line, or to its track, not extrapolated. On
-        ``country``'s first bend a line seen only 5-8 m ahead in tree shade, extrapolated, lay
-        25-39 cm off at the car (frames 13-15, 25-28; 4 false lines: 14-16, 28); at 5 m the
-        clip's 96.6 % points and 3.8 % false lines become 97.0 and 3.0, but it applies to a
-        dashed line's gaps too and changes the bundled clips' offsets by up to 0.5 cm (median)
-        and ``harder``'s points (99.0 to 99.1 %): off by default until that is reviewed.
+    near_gap_m : 0 (off), or ``max_gap_m`` on a bend (step 2) for a line whose paint reached the
+        car in the newest accepted frames, when the other line of the frame reaches the car
+        within it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen
+        now only from farther ahead (its paint near the car in a tree's shade) it is kept where
+        seen and joined nearer the car to the line inferred from the other line, not
+        extrapolated. On ``country`` a line seen only 1-8 m ahead in tree shade, extrapolated,
+        lay 15-39 cm off at the car: on the first bend (frames 14-16, 24-30; false lines 14-16,
+        28) and on the 35 m turn (141-148, where the double line's far rows sweep sideways
+        across the view and its fit, extrapolated 1-3 m, turned back at the car: false lines
+        140-149). 1 m (country 1.4 % false lines; 2.2 % at 0.5 m, 1.0 % at 2 m). Applied to
+        every line seen short of the car (``near_gap_bend_m`` 0), it took a dashed line's gaps
+        on straight roads too: every bundled clip's offsets moved (up to 0.4 cm median), and,
+        joined to the track where the other line was missing too, ``shadows`` fell to 93 %
+        points (frames 167-192 under the overpass).
+    near_gap_bend_m : the least bend (m) of the tracked line over a line's gap (|a| * gap**2 in
+        the view, a the tracked line's second-order coefficient) for ``near_gap_m`` to apply:
+        below it the curvature moves the extrapolation by less than that, and the line is
+        extrapolated (a dashed line on ``project``, 0-4 cm). 5 cm, a quarter of the 20 cm
+        that make a line false near the car; read from the track, not the line's own fit (a
+        dash too short for a second-order fit is fitted straight and bends 0: on ``harder`` so
+        read, one such dash extrapolated while its neighbours were joined set off a lost lane
+        for ten frames). At 3 cm the bundled clips' figures are the same (offset medians within
+        0.1 cm); at 8 cm ``harder`` has 0.2 % false lines.
     """
 
     max_jump_m: float = 0.5
@@ -338,7 +360,8 @@ class TrackerConfig:
     shoulder_spread_m: float = 0.05
     shoulder_every: int = 4
     return_gap_m: float = 2.0
-    near_gap_m: float = 0.0
+    near_gap_m: float = 1.0
+    near_gap_bend_m: float = 0.05
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -365,8 +388,9 @@ class TrackerConfig:
                 or self.shoulder_every < 1):
             raise ConfigError("tracking: shoulder_frames >= 0 (0: off), shoulder_near_m > 0, "
                               "shoulder_spread_m > 0 and shoulder_every >= 1")
-        if self.return_gap_m < 0 or self.near_gap_m < 0:
-            raise ConfigError("tracking: return_gap_m >= 0 and near_gap_m >= 0 (0: off)")
+        if self.return_gap_m < 0 or self.near_gap_m < 0 or self.near_gap_bend_m < 0:
+            raise ConfigError("tracking: return_gap_m >= 0, near_gap_m >= 0 (0: off) and "
+                              "near_gap_bend_m >= 0")
 
 
 @dataclass(frozen=True)
@@ -1030,6 +1054,7 @@ class LaneTracker:
         kept: dict[str, LineFit | None] = {"left": None, "right": None}
         bent: dict[str, LineFit] = {}  # lines refused only for bending away from the track
         distant: dict[str, LineFit] = {}  # lines seen only far ahead that lie along their track
+        limits = self._gap_limits_m(left, right, bands, track)
         for i, (side, fit) in enumerate((("left", left), ("right", right))):
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
@@ -1039,7 +1064,7 @@ class LaneTracker:
                 why.append(problem)
                 failed = True
                 continue
-            far = lanes.gap_problem(fit, self._ym, self._gap_limit_m(i), side) if track is not None else ""
+            far = lanes.gap_problem(fit, self._ym, limits[i], side) if track is not None else ""
             if far:
                 if not self._confirms_track(fit, track[i], top_px, i):
                     why.append(far)
@@ -1070,7 +1095,7 @@ class LaneTracker:
                 near = kept[other] is not None and other not in distant
                 ref = self._inferred(np.array(kept[other].coeffs_px), track, i, top_px) if near else track[i]
                 kept[side] = replace(distant[side], coeffs_px=self._joined(distant[side], ref, top_px))
-                why.append(f"{lanes.gap_problem(distant[side], self._ym, self._gap_limit_m(i), side)}; it lies "
+                why.append(f"{lanes.gap_problem(distant[side], self._ym, limits[i], side)}; it lies "
                            f"along its track there, and nearer the car "
                            + ("the line inferred from the other line is taken" if near else "its track is taken"))
         if len(bent) == 2 and self._pair_outvotes_track(bent, track, rows, top_px):
@@ -1296,6 +1321,33 @@ class LaneTracker:
         ``max_gap_m`` of the view's bottom row (not one seen only far ahead and joined nearer the
         car to another line)."""
         return fit is not None and fit.gap_px * self._ym <= self.config.max_gap_m
+
+    def _gap_limits_m(self, left: LineFit, right: LineFit, bands: tuple[float, float], track
+                      ) -> tuple[float, float]:
+        """Return the largest gap (m) each line may stop short of the car by and count as seen
+        there (step 2): ``_gap_limit_m`` (``near_gap_m``) for a line whose gap exceeds
+        ``near_gap_m`` where its tracked line bends by more than ``near_gap_bend_m`` over the
+        gap (|a| * gap**2: the curvature's share of the extrapolation) and the other line of
+        this frame reaches the car within ``near_gap_m`` and passes ``lanes.line_problem``: the
+        line is then joined near the car to the line inferred from that one, a measurement.
+        Else ``max_gap_m``: on a straight road the extrapolation does not rest on the curvature
+        (a dashed line's gaps), and where the other line stops short too the join would be to
+        the track alone, which drifts from the road while the car moves (an overpass's shade)."""
+        cfg = self.config
+        if not cfg.near_gap_m or track is None:
+            return cfg.max_gap_m, cfg.max_gap_m
+        fits = (left, right)
+        # seen short of the car by more than near_gap_m, where the track bends over the gap
+        bent = [fit.found and fit.gap_px * self._ym > cfg.near_gap_m
+                and abs(track[i][0]) * fit.gap_px ** 2 * self._xm > cfg.near_gap_bend_m
+                for i, fit in enumerate(fits)]
+        if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
+            return cfg.max_gap_m, cfg.max_gap_m
+        near = [fit.found and fit.gap_px * self._ym <= cfg.near_gap_m
+                and not lanes.line_problem(fit, bands[i], self.checks, self._xm, ("left", "right")[i])
+                for i, fit in enumerate(fits)]
+        return tuple(self._gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
+                     for i in range(2))
 
     def _gap_limit_m(self, side: int) -> float:
         """Return how far (m) short of the view's bottom row line ``side``'s pixels may stop for it

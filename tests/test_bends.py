@@ -211,10 +211,14 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # the 9.4 m look-ahead differ by more than the highway's 0.004 1/m while the bend tightens
     # (both lines within 0.1 m of the truth): refused by it, the pair of the sliding windows
     # (0.27-0.34 m off the lines) was taken instead in 3 frames and the right line inferred in
-    # 8 more. The allowance grows as the look-ahead shortens (``lanes.pair_problem``).
+    # 8 more. The allowance grows as the look-ahead shortens (``lanes.pair_problem``). A dash of
+    # the right line seen only from 2-7 m ahead on the bend is joined near the car to the line
+    # inferred from the left one (``TrackerConfig.near_gap_m``); such a joined line's curvature
+    # may differ by more (one frame, 0.0105 1/m): it is refused and the right line inferred, as
+    # accurate there (the worst error 0.218 m, 0.220 m without the join).
     start, ramp, step = 20.0, 15.0, 0.48
     tracker = LaneTracker(pipe)
-    worst = 0.0
+    worst, joined_refused = 0.0, 0
     for i in range(int((start + ramp) / step) + 1):
         s0 = i * step
         lines = clothoid_lines(s0, start, ramp, -1 / 35, 3.4)
@@ -222,8 +226,9 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
         assert r.found
         if s0 < start - BOTTOM_M:  # the bend has not reached the view's bottom row yet
             continue
-        if s0 + BOTTOM_M < start + ramp:  # tightening on the view's bottom row
-            assert "curvatures differ" not in r.reason, (i, r.reason)
+        if s0 + BOTTOM_M < start + ramp and "curvatures differ" in r.reason:  # tightening
+            assert "nearer the car the line inferred from the other line is taken" in r.reason, (i, r.reason)
+            joined_refused += 1
         for fit, (_, ahead, lateral) in zip((r.left, r.right), lines):
             y = H - 1 - (ahead - BOTTOM_M) / YM
             x = W / 2 + lateral / XM
@@ -232,6 +237,7 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # the tracked (smoothed) lines on the look-ahead's rows, from where the bend reaches the
     # view's bottom row until the car is on the 35 m arc
     assert worst < 0.25
+    assert joined_refused <= 1
 
 
 def test_the_lines_of_a_35m_hairpin_leaving_the_view_keep_their_bend(pipe):

@@ -472,6 +472,83 @@ def test_a_far_line_off_its_track_is_refused(pipe):
     assert "seen only" not in fresh.reason
 
 
+def _sweeping_frame(pipe: LanePipeline, right_from: int = H - 1, left_from: int = H - 1,
+                    sweep_px: float = 200.0, slant_px: float = 0.0) -> np.ndarray:
+    """Return a frame whose bird's-eye lines start at LEFT_X and RIGHT_X on the bottom row and
+    sweep right as x += sweep_px * (d / (H - 1))**3, d = H - 1 - y: a bend whose flat view's
+    line turns sideways ever faster ahead, which a second-order fit follows only on average.
+    Each line shows from the top row down to row ``left_from``/``right_from`` (its paint nearer
+    the car in shade); ``slant_px`` moves the shown part of a right line that stops short of the
+    car outwards by up to that much at the top row (0 at its nearest row)."""
+    bird = np.full((H, W, 3), 70, np.uint8)
+    ys = np.arange(H, dtype=float)
+    sweep = sweep_px * ((H - 1 - ys) / (H - 1)) ** 3
+    for x0, last in ((LEFT_X, left_from), (RIGHT_X, right_from)):
+        xs = x0 + sweep
+        if x0 == RIGHT_X and last < H - 1:
+            xs = xs + slant_px * (last - ys) / last
+        shown = ys <= last
+        pts = np.column_stack([xs[shown], ys[shown]]).round().astype(np.int32)
+        cv2.polylines(bird, [pts.reshape(-1, 1, 2)], False, (235, 235, 235), 24)
+    return pipe.perspective.unwarp(bird)
+
+
+def _sweep_fit_at_car(x0: float, sweep_px: float = 200.0) -> float:
+    """The x (px) on the bottom row of the second-order fit to ``_sweeping_frame``'s whole line
+    starting at ``x0``: the best a fit of the lane seen down to the car can do."""
+    ys = np.arange(H, dtype=float)
+    coeffs = lanes.least_squares_poly(ys, x0 + sweep_px * ((H - 1 - ys) / (H - 1)) ** 3, 2, float(H))
+    return float(np.polyval(coeffs, H - 1))
+
+
+def test_a_line_seen_only_from_a_few_metres_ahead_on_a_bend_is_joined_to_the_inference(pipe):
+    """On a bend, a right line seen only from 6.6 m ahead (paint in shade nearer the car; less
+    than ``max_gap_m``), whose flat-view curve sweeps sideways faster ahead than a parabola: its
+    own fit extrapolated to the car lies 40 px (0.23 m) outside the truth's. The tracked right
+    line bends 0.13 m over those 6.6 m (more than ``near_gap_bend_m``) and the left line
+    reaches the car, so the line is joined near the car to the line inferred from the left one
+    (``near_gap_m``): it lies where the whole line's fit does, to 3 px (2 cm). Rule off
+    (``near_gap_m`` 0): the extrapolation is reported, over 25 px out."""
+    one = dict(smooth_frames=1, trend_frames=0)  # the frame's own line is reported
+
+    def shaded(config: TrackerConfig, **kwargs):
+        tracker = LaneTracker(pipe, config)
+        for _ in range(4):
+            tracker.update(_sweeping_frame(pipe, **kwargs.get("before", {})))
+        return tracker.update(_sweeping_frame(pipe, **kwargs.get("now", {})))
+
+    truth = _sweep_fit_at_car(RIGHT_X)
+    r = shaded(TrackerConfig(**one), now=dict(right_from=H - 1 - 200))
+    assert r.found and "right line seen only from 6.6 m ahead" in r.reason
+    assert "nearer the car the line inferred from the other line is taken" in r.reason
+    assert bottom_x(r, "right") == pytest.approx(truth, abs=3)
+    off = shaded(TrackerConfig(near_gap_m=0.0, **one), now=dict(right_from=H - 1 - 200))
+    assert off.found and "seen only" not in off.reason
+    assert bottom_x(off, "right") - truth > 25
+    # the left line stops short of the car too: nothing near the car to join to, so both are
+    # extrapolated as before (joined to the track alone they drift while the car moves)
+    both = shaded(TrackerConfig(**one), now=dict(right_from=H - 1 - 200, left_from=H - 1 - 200))
+    assert "seen only" not in both.reason
+
+
+def test_a_line_stopping_short_of_the_car_on_a_straight_road_is_extrapolated(pipe):
+    """The same gap on a straight road (a dashed line's): the tracked line bends less than
+    ``near_gap_bend_m`` over it, the curvature plays no part in the extrapolation, and the
+    line is taken as seen (slanted here, 60 px out at the top row: extrapolated, it lies
+    23-28 px inside at the car)."""
+    tracker = LaneTracker(pipe, TrackerConfig(smooth_frames=1, trend_frames=0))
+    for _ in range(4):
+        tracker.update(_sweeping_frame(pipe, sweep_px=0.0))
+    r = tracker.update(_sweeping_frame(pipe, right_from=H - 1 - 200, sweep_px=0.0, slant_px=60.0))
+    assert r.found and "seen only" not in r.reason
+    assert 20 < RIGHT_X - bottom_x(r, "right") < 30
+
+
+def test_near_gap_needs_non_negative_limits():
+    with pytest.raises(ConfigError, match="near_gap_bend_m >= 0"):
+        TrackerConfig(near_gap_bend_m=-0.1)
+
+
 def test_max_gap_must_be_positive():
     with pytest.raises(ConfigError, match="max_gap_m must be positive"):
         TrackerConfig(max_gap_m=0.0)
