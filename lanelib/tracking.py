@@ -98,7 +98,13 @@ debug composite work on it unchanged. Per frame:
    width ahead is only as new as the last frame that saw both lines.
    The width at the car is not the tracked lane's but the median of the normal widths at the car
    of the last ``smooth_frames`` frames that saw both lines reaching the car (``seen_width_m``;
-   the tracked width on the other rows is scaled to it): once one line is inferred, the
+   the tracked width on the other rows is scaled to it), but not of a frame in which a line
+   reached it only by an extrapolation that rests on the curvature (``_bent_gap``: its pixels
+   stop more than ``near_gap_m`` short of the view's bottom row where its tracked line bends by
+   more than ``near_gap_bend_m`` over the gap; the paint near the car in a tree's shade on a
+   bend, and the other line's too, so neither was joined in step 2): its width at the car is
+   no measurement, and the median would carry its error into the lines inferred later.
+   Once one line is inferred, the
    tracked lane holds inferred lines, and a width read back from them each frame drifts (on a
    bend that turns from frame to frame by 0.26 m in 24 frames on drawn lines; on a 4.4 m
    country lane whose left line went unseen for 200 frames from 4.4 to 2.8 m, the search then
@@ -324,7 +330,9 @@ class TrackerConfig:
         every line seen short of the car (``near_gap_bend_m`` 0), it took a dashed line's gaps
         on straight roads too: every bundled clip's offsets moved (up to 0.4 cm median), and,
         joined to the track where the other line was missing too, ``shadows`` fell to 93 %
-        points (frames 167-192 under the overpass).
+        points (frames 167-192 under the overpass). The same rule keeps a frame whose line is
+        so extrapolated out of the width seen at the car (step 3, ``seen_width_m``; ``country``
+        1.4 -> 1.2 % false lines).
     near_gap_bend_m : the least bend (m) of the tracked line over a line's gap (|a| * gap**2 in
         the view, a the tracked line's second-order coefficient) for ``near_gap_m`` to apply:
         below it the curvature moves the extrapolation by less than that, and the line is
@@ -558,7 +566,8 @@ class LaneTracker:
     def seen_width_m(self) -> float:
         """Return the lane's width at the car (m, along the normal on the view's bottom row) that a
         missing line is inferred at (step 3): the median over the last ``smooth_frames`` frames
-        that saw both lines, NaN before any."""
+        that saw both lines at the car (neither extrapolated there on a bend, ``_bent_gap``),
+        NaN before any."""
         return float(np.median(self._seen_widths)) if self._seen_widths else float("nan")
 
     @property
@@ -1338,9 +1347,7 @@ class LaneTracker:
             return cfg.max_gap_m, cfg.max_gap_m
         fits = (left, right)
         # seen short of the car by more than near_gap_m, where the track bends over the gap
-        bent = [fit.found and fit.gap_px * self._ym > cfg.near_gap_m
-                and abs(track[i][0]) * fit.gap_px ** 2 * self._xm > cfg.near_gap_bend_m
-                for i, fit in enumerate(fits)]
+        bent = [fit.found and self._bent_gap(fit, track, i) for i, fit in enumerate(fits)]
         if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
             return cfg.max_gap_m, cfg.max_gap_m
         near = [fit.found and fit.gap_px * self._ym <= cfg.near_gap_m
@@ -1348,6 +1355,16 @@ class LaneTracker:
                 for i, fit in enumerate(fits)]
         return tuple(self._gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
                      for i in range(2))
+
+    def _bent_gap(self, fit: LineFit, track, side: int) -> bool:
+        """Return whether line ``side``'s ``fit`` reaches the car only by an extrapolation that
+        rests on the curvature: its pixels stop more than ``near_gap_m`` short of the view's
+        bottom row where its tracked line bends by more than ``near_gap_bend_m`` over the gap
+        (``_gap_limits_m``'s rule; False with ``near_gap_m`` 0 or without a track). Such a frame
+        gives no width at the car (step 3, ``seen_width_m``)."""
+        cfg = self.config
+        return bool(cfg.near_gap_m and track is not None and fit.gap_px * self._ym > cfg.near_gap_m
+                    and abs(track[side][0]) * fit.gap_px ** 2 * self._xm > cfg.near_gap_bend_m)
 
     def _gap_limit_m(self, side: int) -> float:
         """Return how far (m) short of the view's bottom row line ``side``'s pixels may stop for it
@@ -1471,7 +1488,8 @@ class LaneTracker:
             seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
             at_car = [self._paint_at_car(fit, run) for fit, run in zip(seen, self._faded_run)]
             self._faded_run = [0 if near else run + 1 for run, near in zip(self._faded_run, at_car)]
-            if self._reach_car(seen[0]) and self._reach_car(seen[1]):  # both seen at the car: measured there
+            if (self._reach_car(seen[0]) and self._reach_car(seen[1])  # both seen at the car: measured there
+                    and not any(self._bent_gap(fit, track, i) for i, fit in enumerate(seen))):
                 self._seen_widths.append(lanes.normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
                                                               self._xm, self._ym))
             if self._base_history.maxlen:

@@ -544,6 +544,34 @@ def test_a_line_stopping_short_of_the_car_on_a_straight_road_is_extrapolated(pip
     assert 20 < RIGHT_X - bottom_x(r, "right") < 30
 
 
+def test_a_width_extrapolated_to_the_car_on_a_bend_is_not_measured_there(pipe):
+    """Both lines of the bend seen only from 6.6 m ahead (their paint nearer the car in shade;
+    the right one slanted 60 px out at the top row), so neither is joined to an inference and
+    both are extrapolated to the car, where the pair is 0.19 m narrower than the lane: the
+    frame's lines are reported, but its width is no measurement and ``seen_width_m`` (the width
+    a line lost later is inferred at) keeps the 3.70 m seen down to the car before. Rule off
+    (``near_gap_m`` 0) it takes the 3.50 m; on a straight road (a dashed line's gaps) the
+    extrapolation does not rest on the curvature and its width counts as before."""
+    def width_after(config: TrackerConfig, sweep_px: float = 200.0):
+        tracker = LaneTracker(pipe, config)
+        for _ in range(4):
+            tracker.update(_sweeping_frame(pipe, sweep_px=sweep_px))
+        before = tracker.seen_width_m
+        r = tracker.update(_sweeping_frame(pipe, right_from=H - 1 - 200, left_from=H - 1 - 200,
+                                           sweep_px=sweep_px, slant_px=60.0))
+        return r, before, tracker.seen_width_m
+
+    one = dict(smooth_frames=1, trend_frames=0)  # the newest frame's width is the median
+    r, before, after = width_after(TrackerConfig(**one))
+    assert r.found and r.sources == ("seen", "seen")
+    assert before == pytest.approx(3.70, abs=0.01) and after == before
+    r, before, after = width_after(TrackerConfig(near_gap_m=0.0, **one))
+    assert r.found and after == pytest.approx(3.50, abs=0.02)
+    r, before, after = width_after(TrackerConfig(**one), sweep_px=0.0)
+    assert r.found and before == pytest.approx(3.70, abs=0.01)
+    assert after == pytest.approx(3.54, abs=0.02)
+
+
 def test_near_gap_needs_non_negative_limits():
     with pytest.raises(ConfigError, match="near_gap_bend_m >= 0"):
         TrackerConfig(near_gap_bend_m=-0.1)
