@@ -625,86 +625,125 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
 
 
 def _inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float, height_px: int,
-                       stripes: tuple | None) -> tuple[np.ndarray | None, bool]:
+                       stripes: tuple | None, first: tuple | None = None) -> tuple[np.ndarray | None, bool]:
     """Return which pixels ``inner_stripe`` keeps (None: all, not a double line) and whether the
-    line was resolved as a double line as a whole (False: on its near rows only)."""
+    line was resolved as a double line as a whole (False: on its near rows only). ``first``:
+    ``_least_squares(ys, xs, 2, height_px)`` when already fitted (``fit_side``)."""
     n = len(ys)
     if spacing_px <= 0 or n < 20:
         return None, False
-    span = float(ys.max() - ys.min())
+    y_min = ys.min()
+    span = float(ys.max() - y_min)
     if span <= 0:
         return None, False
     degree = 2 if span >= 0.3 * height_px else 1
-    if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
+    rss = first[3] if first is not None and degree == 2 else _least_squares(ys, xs, degree, float(height_px))[3]
+    if rss < n * (spacing_px / 4) ** 2:
         return None, False  # close to one fit (a single stripe): no second stripe to look for
-    model = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
-    bands = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
-    whole = np.ones(n, bool)
-    inner = _inner_side(ys, xs, bands, whole, model, side, spacing_px)
+    model = two_stripes(ys, xs, 2, height_px, first=first) if stripes is None else stripes
+    bands, counts, distinct = _row_bands(ys, y_min, span)
+    y = ys.astype(np.float64)
+    r = xs - _poly(model[0], y)  # from the centre curve
+    inner = _inner_side(bands, None, model, side, spacing_px, r)
     if inner is not None:
         return inner, True
     # the near rows: the run of bands from the car's end where the stripes are resolved
-    held = np.bincount(bands, minlength=8) >= 20
-    near = whole
+    held = counts >= 20
+    near = None  # all the pixels
     for _ in range(3):
         coeffs, spacing, upper, _ = model
-        r = xs - np.polyval(coeffs, ys.astype(np.float64))
+        if r is None:
+            r = xs - _poly(coeffs, y)
         run = []
         for band in range(7, -1, -1):
             if not held[band]:
                 continue
             g = bands == band
             if not (_stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False)
-                    or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8)):
+                    or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8,
+                                            None if distinct is None else distinct[band])):
                 break
             run.append(band)
         if len(run) < 2:
             return None, False
         settled = np.isin(bands, run)
-        if (settled == near).all():
+        if settled.all() if near is None else (settled == near).all():
             break
         near = settled
         part = two_stripes(ys[near], xs[near], 2, height_px)
         # the near rows' model on every pixel: its curve, its spacing (linear in y, so the line
         # through its values on the run's first and last rows) and each pixel's side
-        y = ys.astype(np.float64)
         lo, hi = int(np.argmin(y[near])), int(np.argmax(y[near]))
         y0, y1 = float(y[near][lo]), float(y[near][hi])
         slope = (float(part[1][hi]) - float(part[1][lo])) / (y1 - y0) if y1 > y0 else 0.0
         model = (part[0], float(part[1][lo]) + slope * (y - y0), xs > np.polyval(part[0], y), part[3])
-    return _inner_side(ys, xs, bands, near, model, side, spacing_px), False
+        r = None
+    if r is None:
+        r = xs - _poly(model[0], y)
+    return _inner_side(bands, near, model, side, spacing_px, r), False
 
 
-def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndarray, model: tuple,
-                side: str, spacing_px: float) -> np.ndarray | None:
-    """Return which pixels of ``rows`` (a mask) lie on the inner stripe of the two-stripe
-    ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel), or None when
-    those pixels are not a double line there (``inner_stripe``: resolved, side by side)."""
-    coeffs, spacing, upper, _ = model
-    r = xs[rows] - np.polyval(coeffs, ys[rows].astype(np.float64))  # from the centre curve
-    up = upper[rows]
-    if not _stripes_resolved(r, spacing[rows], up, spacing_px):
-        return None
+def _row_bands(ys: np.ndarray, y_min, span: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Return each pixel's band of rows (eight of ``span`` + 1 rows from ``y_min`` down), the
+    pixels in each band and the distinct rows each holds (None for pixels off the integer rows).
+
+    The band of row ``y`` is ``(y - y_min) * 8 // (span + 1)``; for integer rows it is read from a
+    table of that expression over the span's rows, so the pixels cost one look-up each."""
+    if ys.dtype.kind not in "iu":
+        bands = ((ys - y_min) * 8 // (span + 1)).astype(np.int64)
+        return bands, np.bincount(bands, minlength=8), None
+    table = ((np.arange(int(span) + 1) * 8) // (span + 1)).astype(np.intp)
+    offset = (ys - y_min).astype(np.intp)
+    per_row = np.bincount(offset, minlength=len(table))
+    counts = np.bincount(table, weights=per_row, minlength=8)
+    distinct = np.bincount(table, weights=per_row > 0, minlength=8)
+    return table[offset], counts, distinct
+
+
+def _poly(coeffs, y: np.ndarray) -> np.ndarray:
+    """Return ``np.polyval`` of a second-order ``coeffs`` (a, b, c) on ``y`` (the same values:
+    Horner's rule, without polyval's array of zeros)."""
+    a, b, c = coeffs
+    return (a * y + b) * y + c
+
+
+def _inner_side(bands: np.ndarray, rows: np.ndarray | None, model: tuple, side: str, spacing_px: float,
+                r: np.ndarray) -> np.ndarray | None:
+    """Return which pixels of ``rows`` (a mask; None: all) lie on the inner stripe of the
+    two-stripe ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel; ``r``:
+    each pixel's residual from its curve), or None when those pixels are not a double line there
+    (``inner_stripe``: resolved, side by side)."""
+    _, spacing, upper, _ = model
+    if rows is None:
+        up, on_rows = upper, bands
+        if not _stripes_resolved(r, spacing, up, spacing_px):
+            return None
+    else:
+        up, on_rows = upper[rows], bands[rows]
+        if not _stripes_resolved(r[rows], spacing[rows], up, spacing_px):
+            return None
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
-    on = [np.bincount(bands[rows][g], minlength=8) > 0 for g in (~up, up)]
+    on = [np.bincount(on_rows[g], minlength=8) > 0 for g in (~up, up)]
     if (on[0] & on[1]).sum() < 0.75 * (on[0] | on[1]).sum():
         return None
-    return rows & (upper if side == "left" else ~upper)
+    keep = upper if side == "left" else ~upper
+    return keep.copy() if rows is None else rows & keep
 
 
 BAND_ONE_STRIPE_RMS = 0.22  # under the 0.24 x spacing two resolved stripes need (``_band_resolved_alone``)
 
 
 def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, height_px: int,
-                         rows: float) -> bool:
+                         rows: float, distinct: float | None = None) -> bool:
     """Return whether one band of a line's rows (``rows`` high) shows two resolved stripes on
     its own: its pixels, on at least half of its rows, fitted as two straight parallel stripes
     (``two_stripes`` of degree 1) pass ``_stripes_resolved`` with both stripes present. The
     line's curve, fitted through rows where the stripes blur, can miss the band's stripes at the
     car by more than a stripe's width; the band's own pixels are not misled by those rows (but
-    pixels on a few rows only would fit any two straight stripes)."""
-    if len(np.unique(ys)) < rows / 2:
+    pixels on a few rows only would fit any two straight stripes). ``distinct``: the band's
+    distinct rows when already counted."""
+    if (len(np.unique(ys)) if distinct is None else distinct) < rows / 2:
         return False
     # two stripes side by side, each a fifth of the pixels, 0.6 x spacing_px apart or more, lie
     # at least 0.4 x 0.6 = 0.24 x spacing_px (RMS) from any one straight line through them: a
@@ -712,7 +751,7 @@ def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, heig
     if _least_squares(ys, xs, 1, float(height_px))[3] < len(ys) * (BAND_ONE_STRIPE_RMS * spacing_px) ** 2:
         return False
     coeffs, spacing, upper, _ = two_stripes(ys, xs, 1, height_px)
-    return _stripes_resolved(xs - np.polyval(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
+    return _stripes_resolved(xs - _poly(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
 
 
 def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spacing_px: float,
@@ -726,14 +765,20 @@ def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spa
     spacing is 0.6-1.5 x ``spacing_px``; without it a band of rows where one stripe is worn
     away still counts (which stripe its pixels lie on is clear)."""
     n = len(r)
-    counts = (int((~upper).sum()), int(upper.sum()))
-    if n == 0 or (pair and min(counts) < 0.2 * n):
+    if n == 0:
+        return False
+    right = int(np.count_nonzero(upper))
+    if pair and min(n - right, right) < 0.2 * n:
+        return False
+    # the median lies between the least and the greatest spacing: those decide most lines at once
+    if pair and (float(spacing.max()) < 0.6 * spacing_px or float(spacing.min()) > 1.5 * spacing_px):
         return False
     apart = float(np.median(spacing))
     if pair and not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
         return False
     off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
-    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g in (~upper, upper) if g.any()) > abs(apart) / 4:
+    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g, held in ((~upper, right < n), (upper, right > 0))
+           if held) > abs(apart) / 4:
         return False
     # no clear gap between them: one line the first fit misses (or a blur of both), not two
     return np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) <= 0.05 * n
@@ -799,10 +844,10 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
-    fit = fit_line(*pixels, height_px, config, missing=missing, top_px=top_px)
+    fit, first = _fit_line(*pixels, height_px, config, missing, top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        stripes = two_stripes(*pixels, 2, height_px)
-        keep, whole = _inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes)
+        stripes = two_stripes(*pixels, 2, height_px, first=first)
+        keep, whole = _inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
         if keep is not None:
             inner = (pixels[0][keep], pixels[1][keep])
             narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
@@ -810,7 +855,7 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
             if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
                 return narrowed, inner
         n = len(pixels[0])
-        right = int(stripes[2].sum())
+        right = int(np.count_nonzero(stripes[2]))
         if min(right, n - right) >= 0.2 * n:
             fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
     return fit, pixels
@@ -875,16 +920,25 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
     the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
     resolved bend: a tight bend's line that leaves the view sideways).
     """
+    return _fit_line(ys, xs, height_px, config, missing, top_px)[0]
+
+
+def _fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
+              top_px: int) -> tuple[LineFit, tuple[float, float, float, float] | None]:
+    """Return ``fit_line``'s fit and its first fit: ``_least_squares`` of degree 2 of all the
+    pixels (None when the line was turned down before it), which ``fit_side`` hands on to the
+    stripe test rather than fit the same pixels again."""
     n = len(ys)
     if n == 0:
-        return LineFit(None, 0, 0.0, missing)
+        return LineFit(None, 0, 0.0, missing), None
     span = float(ys.max() - ys.min())
     if n < config.min_line_pixels:
-        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})")
+        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})"), None
     if span < config.min_found_span_fraction * height_px:
-        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height")
+        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height"), None
     degree = 2
-    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    first = _least_squares(ys, xs, degree, float(height_px))
+    a, b, c, rss = first
     if span < config.min_span_fraction * height_px and not (
             top_px > 0 and config.short_bend_resolution > 0
             and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
@@ -899,11 +953,11 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
             span = float(ys.max() - ys.min())
             a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
-    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap)
+    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap), first
 
 
-def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
-                iterations: int = 8) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, float]:
+def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, iterations: int = 8,
+                first: tuple | None = None) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, float]:
     """Return a line's pixels fitted as two parallel stripes: the centre curve's (a, b, c), the
     stripes' spacing (px) on each pixel's row, which pixels lie on the right-hand stripe (larger
     x), and the residual sum of squares (px**2) of the pixels about their stripe.
@@ -915,6 +969,8 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
     residual is the pixels' spread within their stripes: a double line's two narrow stripes
     leave little of it (their width / sqrt(12)), where one curve through both runs in the gap;
     pixels spread evenly over a band keep half their RMS spread (each half of the band).
+    ``first``: ``_least_squares(ys, xs, 2, height_px)`` when already fitted (``fit_side``:
+    ``fit_line``'s first fit; used for degree 2 only).
     """
     scale = float(height_px)
     y = ys.astype(np.float64)
@@ -923,22 +979,29 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
     x0 = float(xs.mean())
     x = xs.astype(np.float64) - x0
     k = degree + 1  # terms of the centre curve: 1, t (, t**2)
-    a, b, c, rss = _least_squares(ys, xs, degree, scale)
-    one = ((a, b, c), np.zeros_like(t), np.zeros(len(t), bool), rss)  # one stripe
+    a, b, c, rss = first if first is not None and degree == 2 else _least_squares(ys, xs, degree, scale)
     # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
     # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
-    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
-    t2 = t * t
-    powers = np.stack([np.ones_like(t), t, t2, t2 * t, t2 * t2])
-    q = powers.sum(axis=1)
-    xt = powers[:2] * x
-    xsum = np.array([float(x.sum()), float(xt[1].sum()), float((x * t2).sum())])
-    per_pixel = np.concatenate([powers[:k + 1], xt])
-    upper = xs > np.polyval((a, b, c), y)
+    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads); the per-pixel terms
+    # are written into one array: rows 1, t, .., t**(k) then x, x * t
+    n = len(t)
+    per_pixel = np.empty((k + 3, n))
+    per_pixel[0] = 1.0
+    per_pixel[1] = t
+    t2 = np.multiply(t, t, out=per_pixel[2]) if k >= 2 else t * t
+    if k >= 3:
+        np.multiply(t2, t, out=per_pixel[3])
+    np.multiply(per_pixel[0], x, out=per_pixel[k + 1])
+    xt1 = np.multiply(t, x, out=per_pixel[k + 2])
+    q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()),
+                  float((t2 * t).sum() if k < 3 else per_pixel[3].sum()), float((t2 * t2).sum())])
+    xsum = np.array([float(x.sum()), float(xt1.sum()), float((x * t2).sum())])
+    powers = per_pixel[:k]
+    upper = xs > (a * y + b) * y + c  # np.polyval((a, b, c), y), without its zeros
     for i in range(iterations):
-        if upper.all() or not upper.any():
-            return one
         right = np.einsum("ij,j->i", per_pixel, upper.astype(np.float64))
+        if right[0] == 0.0 or right[0] == n:  # the count of the right-hand stripe's pixels
+            return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
         st = right[:k + 1] - 0.5 * q[:k + 1]  # sums of s * t**j
         gram = np.zeros((k + 2, k + 2))
         for r in range(k):
@@ -949,12 +1012,12 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
         try:
             p = np.linalg.solve(gram, rhs)
         except np.linalg.LinAlgError:
-            return one
-        centre = np.einsum("i,ij->j", p[:k], powers[:k])
-        moved = (x > centre) != upper
-        if i == iterations - 1 or not moved.any():
+            return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
+        centre = np.einsum("i,ij->j", p[:k], powers)
+        now = x > centre
+        if i == iterations - 1 or not (now != upper).any():
             break
-        upper = x > centre
+        upper = now
     spacing = p[k] + p[k + 1] * t
     residual = x - centre - np.where(upper, 0.5, -0.5) * spacing
     p2 = p[2] if degree == 2 else 0.0
