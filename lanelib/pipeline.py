@@ -210,7 +210,8 @@ class LanePipeline:
         for name in self._context_masks:
             m = thresholds.mask(channels, getattr(tconf, name))
             computed[name] = join([m[c] for c in cuts])
-        return thresholds.combine(join([grown[c] for c in cuts]), tconf, computed)
+        pieces = channels.cut(cuts, join)  # the colour spaces those masks converted, cut too
+        return thresholds.combine(pieces.rgb, tconf, computed, channels=pieces)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                      keep_images: bool = False, top_px: int = 0) -> tuple[LaneSearch, dict]:
