@@ -448,12 +448,23 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
 
     With ``top_px`` > 0 only the rows from ``top_px`` down are read (as in ``sliding_windows``).
     """
-    h = binary.shape[0]
+    h, w = binary.shape[:2]
     top_px = int(min(max(top_px, 0), h - 1))
-    ys, xs = lane_pixels(binary)
-    if top_px:
-        first = int(np.searchsorted(ys, top_px))
-        ys, xs = ys[first:], xs[first:]
+    # only the columns that the bands around the found fits reach hold pixels the search reads
+    found = [p.x_at(np.arange(top_px, h, dtype=np.float64)) for p in (left, right) if p.found]
+    lo = min(float(x.min()) for x in found) - config.prior_margin_px if found else 0.0
+    hi = max(float(x.max()) for x in found) + config.prior_margin_px if found else 0.0
+    if math.isfinite(lo) and math.isfinite(hi):
+        c0 = min(w, max(0, math.floor(lo) - 1))
+        c1 = max(c0, min(w, math.ceil(hi) + 2))
+    else:
+        c0, c1 = 0, w
+    if c1 > c0:
+        ys, xs = lane_pixels(binary[top_px:, c0:c1])
+        ys += top_px
+        xs += c0
+    else:
+        ys, xs = np.empty(0, np.int32), np.empty(0, np.int32)
     picked = {}
     for side, prior in (("left", left), ("right", right)):
         if not prior.found:
@@ -996,24 +1007,32 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, ite
     q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()),
                   float((t2 * t).sum() if k < 3 else per_pixel[3].sum()), float((t2 * t2).sum())])
     xsum = np.array([float(x.sum()), float(xt1.sum()), float((x * t2).sum())])
-    powers = per_pixel[:k]
+    # the blocks of the normal equations that do not depend on the split
+    fixed = np.zeros((k + 2, k + 2))
+    for r in range(k):
+        fixed[r, :k] = q[r:r + k]
+    fixed[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
     upper = xs > (a * y + b) * y + c  # np.polyval((a, b, c), y), without its zeros
+    right = np.empty(k + 3)
     for i in range(iterations):
-        right = np.einsum("ij,j->i", per_pixel, upper.astype(np.float64))
-        if right[0] == 0.0 or right[0] == n:  # the count of the right-hand stripe's pixels
+        right[0] = np.count_nonzero(upper)  # the right-hand stripe's pixels (the sum of its 1s)
+        if right[0] == 0 or right[0] == n:
             return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
+        right[1:] = np.einsum("ij,j->i", per_pixel[1:], upper.astype(np.float64))
         st = right[:k + 1] - 0.5 * q[:k + 1]  # sums of s * t**j
-        gram = np.zeros((k + 2, k + 2))
+        gram = fixed.copy()
         for r in range(k):
-            gram[r, :k] = q[r:r + k]
             gram[r, k:] = gram[k:, r] = st[r:r + 2]
-        gram[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
         rhs = np.concatenate([xsum[:k], right[k + 1:] - 0.5 * xsum[:2]])
         try:
             p = np.linalg.solve(gram, rhs)
         except np.linalg.LinAlgError:
             return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
-        centre = np.einsum("i,ij->j", p[:k], powers)
+        # the centre curve p0 + p1 t (+ p2 t**2), summed in that order (as einsum did)
+        centre = np.multiply(t, p[1])
+        centre += p[0]
+        if k == 3:
+            centre += np.multiply(t2, p[2])
         now = x > centre
         if i == iterations - 1 or not (now != upper).any():
             break
