@@ -242,6 +242,8 @@ class LineFit:
         """Return x (px) of the line at rows ``y`` (px); raises if the line was not found."""
         if self.coeffs_px is None:
             raise ValueError(f"line not found: {self.reason}")
+        if isinstance(y, np.ndarray) and y.ndim and (y.dtype.kind in "iu" or y.dtype == np.float64):
+            return _poly(self.coeffs_px, y)  # np.polyval's values, without its array of zeros
         return np.polyval(self.coeffs_px, y)
 
 
@@ -639,7 +641,7 @@ def _inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: fl
                        stripes: tuple | None, first: tuple | None = None) -> tuple[np.ndarray | None, bool]:
     """Return which pixels ``inner_stripe`` keeps (None: all, not a double line) and whether the
     line was resolved as a double line as a whole (False: on its near rows only). ``first``:
-    ``_least_squares(ys, xs, 2, height_px)`` when already fitted (``fit_side``)."""
+    ``fit_line``'s first fit of the same pixels (``_fit_line``) when already made (``fit_side``)."""
     n = len(ys)
     if spacing_px <= 0 or n < 20:
         return None, False
@@ -935,10 +937,11 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
 
 
 def _fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
-              top_px: int) -> tuple[LineFit, tuple[float, float, float, float] | None]:
+              top_px: int) -> tuple[LineFit, tuple | None]:
     """Return ``fit_line``'s fit and its first fit: ``_least_squares`` of degree 2 of all the
-    pixels (None when the line was turned down before it), which ``fit_side`` hands on to the
-    stripe test rather than fit the same pixels again."""
+    pixels and the sums it read (a, b, c, rss, ``_normal_sums``; None when the line was turned
+    down before it), which ``fit_side`` hands on to the stripe test rather than fit the same
+    pixels again."""
     n = len(ys)
     if n == 0:
         return LineFit(None, 0, 0.0, missing), None
@@ -948,8 +951,9 @@ def _fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConf
     if span < config.min_found_span_fraction * height_px:
         return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height"), None
     degree = 2
-    first = _least_squares(ys, xs, degree, float(height_px))
-    a, b, c, rss = first
+    sums = _normal_sums(ys, xs, float(height_px))
+    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px), sums)
+    first = (a, b, c, rss, sums)
     if span < config.min_span_fraction * height_px and not (
             top_px > 0 and config.short_bend_resolution > 0
             and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
@@ -980,33 +984,39 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, ite
     residual is the pixels' spread within their stripes: a double line's two narrow stripes
     leave little of it (their width / sqrt(12)), where one curve through both runs in the gap;
     pixels spread evenly over a band keep half their RMS spread (each half of the band).
-    ``first``: ``_least_squares(ys, xs, 2, height_px)`` when already fitted (``fit_side``:
-    ``fit_line``'s first fit; used for degree 2 only).
+    ``first``: ``fit_line``'s first fit (a, b, c, rss and its ``_normal_sums``) of the same
+    pixels when already made (``fit_side``; used for degree 2 only).
     """
     scale = float(height_px)
-    y = ys.astype(np.float64)
-    m = float(y.mean())
-    t = (y - m) / scale
-    x0 = float(xs.mean())
-    x = xs.astype(np.float64) - x0
     k = degree + 1  # terms of the centre curve: 1, t (, t**2)
-    a, b, c, rss = first if first is not None and degree == 2 else _least_squares(ys, xs, degree, scale)
-    # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
-    # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
-    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads); the per-pixel terms
-    # are written into one array: rows 1, t, .., t**(k) then x, x * t
-    n = len(t)
+    n = len(ys)
+    # the per-pixel terms in one array: rows 1, t, .., t**k, then x, x * t (x about its mean)
     per_pixel = np.empty((k + 3, n))
     per_pixel[0] = 1.0
-    per_pixel[1] = t
-    t2 = np.multiply(t, t, out=per_pixel[2]) if k >= 2 else t * t
-    if k >= 3:
-        np.multiply(t2, t, out=per_pixel[3])
-    np.multiply(per_pixel[0], x, out=per_pixel[k + 1])
-    xt1 = np.multiply(t, x, out=per_pixel[k + 2])
-    q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()),
-                  float((t2 * t).sum() if k < 3 else per_pixel[3].sum()), float((t2 * t2).sum())])
-    xsum = np.array([float(x.sum()), float(xt1.sum()), float((x * t2).sum())])
+    if first is not None and degree == 2 and (xs.dtype.kind in "iu" or xs.dtype == np.float64):
+        # fit_line's first fit read the same arrays and sums (x's mean the same: integer or
+        # float64 pixels' sums do not depend on the order they are added in)
+        a, b, c, rss, (y, m, t, t2, t3, st, x0, x, xt, sx) = first
+        per_pixel[1], per_pixel[2], per_pixel[3], per_pixel[4], per_pixel[5] = t, t2, t3, x, xt
+        q, xsum = np.array(st), np.array(sx)
+    else:
+        y = ys.astype(np.float64)
+        m = float(y.mean())
+        t = (y - m) / scale
+        x0 = float(xs.mean())
+        x = xs.astype(np.float64) - x0
+        a, b, c, rss = _least_squares(ys, xs, degree, scale)
+        # the normal equations from sums of t**j and x * t**j over all pixels and over the
+        # right-hand stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less
+        # half the whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
+        per_pixel[1] = t
+        t2 = np.multiply(t, t, out=per_pixel[2])
+        t3 = np.multiply(t2, t, out=per_pixel[3]) if k >= 3 else t2 * t
+        np.multiply(per_pixel[0], x, out=per_pixel[k + 1])
+        xt = np.multiply(t, x, out=per_pixel[k + 2])
+        q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()), float(t3.sum()),
+                      float((t2 * t2).sum())])
+        xsum = np.array([float(x.sum()), float(xt.sum()), float((x * t2).sum())])
     # the blocks of the normal equations that do not depend on the split
     fixed = np.zeros((k + 2, k + 2))
     for r in range(k):
@@ -1066,23 +1076,15 @@ def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float
     return _least_squares(ys, xs, degree, scale)[:3]
 
 
-def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int,
-                   scale: float) -> tuple[float, float, float, float]:
+def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
+                   sums: tuple | None = None) -> tuple[float, float, float, float]:
     """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).
 
     The residual comes from the same sums: for the least-squares solution p of G p = s it is
     sum(x**2) - p . s, with x taken about its mean so that the difference keeps its digits.
+    ``sums``: ``_normal_sums(ys, xs, scale)`` when already made.
     """
-    y = ys.astype(np.float64)
-    x = xs.astype(np.float64)
-    m = float(y.mean())
-    t = (y - m) / scale
-    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
-    t2 = t * t
-    st = [float(len(t)), float(t.sum()), float(t2.sum()), float((t2 * t).sum()), float((t2 * t2).sum())]
-    x0 = float(x.mean())
-    x -= x0
-    sx = [float(x.sum()), float((x * t).sum()), float((x * t2).sum())]
+    _, m, _, _, _, st, x0, x, _, sx = _normal_sums(ys, xs, scale) if sums is None else sums
     k = degree + 1
     gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
     p = np.linalg.solve(gram, np.array(sx[:k]))  # x - x0 = p0 + p1*t (+ p2*t**2)
@@ -1092,6 +1094,25 @@ def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int,
     b = p[1] / scale - 2 * p2 * m / scale ** 2
     c = x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2
     return float(a), float(b), float(c), rss
+
+
+def _normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
+    """Return what ``_least_squares`` fits from: y (float), its mean m, t = (y - m) / ``scale``,
+    t**2, t**3, the sums of t**0..4, x's mean x0, x - x0, (x - x0) * t and the sums of (x - x0) *
+    t**0..2; ``two_stripes`` starts from the same arrays and sums."""
+    y = ys.astype(np.float64)
+    x = xs.astype(np.float64)
+    m = float(y.mean())
+    t = (y - m) / scale
+    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
+    t2 = t * t
+    t3 = t2 * t
+    st = [float(len(t)), float(t.sum()), float(t2.sum()), float(t3.sum()), float((t2 * t2).sum())]
+    x0 = float(x.mean())
+    x -= x0
+    xt = x * t
+    sx = [float(x.sum()), float(xt.sum()), float((x * t2).sum())]
+    return y, m, t, t2, t3, st, x0, x, xt, sx
 
 
 def fit_to_metres(coeffs_px, xm_per_px: float, ym_per_px: float) -> tuple[float, float, float]:
