@@ -242,6 +242,8 @@ class LineFit:
         """Return x (px) of the line at rows ``y`` (px); raises if the line was not found."""
         if self.coeffs_px is None:
             raise ValueError(f"line not found: {self.reason}")
+        if isinstance(y, np.ndarray) and y.ndim and (y.dtype.kind in "iu" or y.dtype == np.float64):
+            return _poly(self.coeffs_px, y)  # np.polyval's values, without its array of zeros
         return np.polyval(self.coeffs_px, y)
 
 
@@ -448,12 +450,23 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
 
     With ``top_px`` > 0 only the rows from ``top_px`` down are read (as in ``sliding_windows``).
     """
-    h = binary.shape[0]
+    h, w = binary.shape[:2]
     top_px = int(min(max(top_px, 0), h - 1))
-    ys, xs = lane_pixels(binary)
-    if top_px:
-        first = int(np.searchsorted(ys, top_px))
-        ys, xs = ys[first:], xs[first:]
+    # only the columns that the bands around the found fits reach hold pixels the search reads
+    found = [p.x_at(np.arange(top_px, h, dtype=np.float64)) for p in (left, right) if p.found]
+    lo = min(float(x.min()) for x in found) - config.prior_margin_px if found else 0.0
+    hi = max(float(x.max()) for x in found) + config.prior_margin_px if found else 0.0
+    if math.isfinite(lo) and math.isfinite(hi):
+        c0 = min(w, max(0, math.floor(lo) - 1))
+        c1 = max(c0, min(w, math.ceil(hi) + 2))
+    else:
+        c0, c1 = 0, w
+    if c1 > c0:
+        ys, xs = lane_pixels(binary[top_px:, c0:c1])
+        ys += top_px
+        xs += c0
+    else:
+        ys, xs = np.empty(0, np.int32), np.empty(0, np.int32)
     picked = {}
     for side, prior in (("left", left), ("right", right)):
         if not prior.found:
@@ -625,86 +638,125 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
 
 
 def _inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float, height_px: int,
-                       stripes: tuple | None) -> tuple[np.ndarray | None, bool]:
+                       stripes: tuple | None, first: tuple | None = None) -> tuple[np.ndarray | None, bool]:
     """Return which pixels ``inner_stripe`` keeps (None: all, not a double line) and whether the
-    line was resolved as a double line as a whole (False: on its near rows only)."""
+    line was resolved as a double line as a whole (False: on its near rows only). ``first``:
+    ``fit_line``'s first fit of the same pixels (``_fit_line``) when already made (``fit_side``)."""
     n = len(ys)
     if spacing_px <= 0 or n < 20:
         return None, False
-    span = float(ys.max() - ys.min())
+    y_min = ys.min()
+    span = float(ys.max() - y_min)
     if span <= 0:
         return None, False
     degree = 2 if span >= 0.3 * height_px else 1
-    if _least_squares(ys, xs, degree, float(height_px))[3] < n * (spacing_px / 4) ** 2:
+    rss = first[3] if first is not None and degree == 2 else _least_squares(ys, xs, degree, float(height_px))[3]
+    if rss < n * (spacing_px / 4) ** 2:
         return None, False  # close to one fit (a single stripe): no second stripe to look for
-    model = two_stripes(ys, xs, 2, height_px) if stripes is None else stripes
-    bands = ((ys - ys.min()) * 8 // (span + 1)).astype(np.int64)
-    whole = np.ones(n, bool)
-    inner = _inner_side(ys, xs, bands, whole, model, side, spacing_px)
+    model = two_stripes(ys, xs, 2, height_px, first=first) if stripes is None else stripes
+    bands, counts, distinct = _row_bands(ys, y_min, span)
+    y = ys.astype(np.float64)
+    r = xs - _poly(model[0], y)  # from the centre curve
+    inner = _inner_side(bands, None, model, side, spacing_px, r)
     if inner is not None:
         return inner, True
     # the near rows: the run of bands from the car's end where the stripes are resolved
-    held = np.bincount(bands, minlength=8) >= 20
-    near = whole
+    held = counts >= 20
+    near = None  # all the pixels
     for _ in range(3):
         coeffs, spacing, upper, _ = model
-        r = xs - np.polyval(coeffs, ys.astype(np.float64))
+        if r is None:
+            r = xs - _poly(coeffs, y)
         run = []
         for band in range(7, -1, -1):
             if not held[band]:
                 continue
             g = bands == band
             if not (_stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False)
-                    or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8)):
+                    or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8,
+                                            None if distinct is None else distinct[band])):
                 break
             run.append(band)
         if len(run) < 2:
             return None, False
         settled = np.isin(bands, run)
-        if (settled == near).all():
+        if settled.all() if near is None else (settled == near).all():
             break
         near = settled
         part = two_stripes(ys[near], xs[near], 2, height_px)
         # the near rows' model on every pixel: its curve, its spacing (linear in y, so the line
         # through its values on the run's first and last rows) and each pixel's side
-        y = ys.astype(np.float64)
         lo, hi = int(np.argmin(y[near])), int(np.argmax(y[near]))
         y0, y1 = float(y[near][lo]), float(y[near][hi])
         slope = (float(part[1][hi]) - float(part[1][lo])) / (y1 - y0) if y1 > y0 else 0.0
         model = (part[0], float(part[1][lo]) + slope * (y - y0), xs > np.polyval(part[0], y), part[3])
-    return _inner_side(ys, xs, bands, near, model, side, spacing_px), False
+        r = None
+    if r is None:
+        r = xs - _poly(model[0], y)
+    return _inner_side(bands, near, model, side, spacing_px, r), False
 
 
-def _inner_side(ys: np.ndarray, xs: np.ndarray, bands: np.ndarray, rows: np.ndarray, model: tuple,
-                side: str, spacing_px: float) -> np.ndarray | None:
-    """Return which pixels of ``rows`` (a mask) lie on the inner stripe of the two-stripe
-    ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel), or None when
-    those pixels are not a double line there (``inner_stripe``: resolved, side by side)."""
-    coeffs, spacing, upper, _ = model
-    r = xs[rows] - np.polyval(coeffs, ys[rows].astype(np.float64))  # from the centre curve
-    up = upper[rows]
-    if not _stripes_resolved(r, spacing[rows], up, spacing_px):
-        return None
+def _row_bands(ys: np.ndarray, y_min, span: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Return each pixel's band of rows (eight of ``span`` + 1 rows from ``y_min`` down), the
+    pixels in each band and the distinct rows each holds (None for pixels off the integer rows).
+
+    The band of row ``y`` is ``(y - y_min) * 8 // (span + 1)``; for integer rows it is read from a
+    table of that expression over the span's rows, so the pixels cost one look-up each."""
+    if ys.dtype.kind not in "iu":
+        bands = ((ys - y_min) * 8 // (span + 1)).astype(np.int64)
+        return bands, np.bincount(bands, minlength=8), None
+    table = ((np.arange(int(span) + 1) * 8) // (span + 1)).astype(np.intp)
+    offset = (ys - y_min).astype(np.intp)
+    per_row = np.bincount(offset, minlength=len(table))
+    counts = np.bincount(table, weights=per_row, minlength=8)
+    distinct = np.bincount(table, weights=per_row > 0, minlength=8)
+    return table[offset], counts, distinct
+
+
+def _poly(coeffs, y: np.ndarray) -> np.ndarray:
+    """Return ``np.polyval`` of a second-order ``coeffs`` (a, b, c) on ``y`` (the same values:
+    Horner's rule, without polyval's array of zeros)."""
+    a, b, c = coeffs
+    return (a * y + b) * y + c
+
+
+def _inner_side(bands: np.ndarray, rows: np.ndarray | None, model: tuple, side: str, spacing_px: float,
+                r: np.ndarray) -> np.ndarray | None:
+    """Return which pixels of ``rows`` (a mask; None: all) lie on the inner stripe of the
+    two-stripe ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel; ``r``:
+    each pixel's residual from its curve), or None when those pixels are not a double line there
+    (``inner_stripe``: resolved, side by side)."""
+    _, spacing, upper, _ = model
+    if rows is None:
+        up, on_rows = upper, bands
+        if not _stripes_resolved(r, spacing, up, spacing_px):
+            return None
+    else:
+        up, on_rows = upper[rows], bands[rows]
+        if not _stripes_resolved(r[rows], spacing[rows], up, spacing_px):
+            return None
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
-    on = [np.bincount(bands[rows][g], minlength=8) > 0 for g in (~up, up)]
+    on = [np.bincount(on_rows[g], minlength=8) > 0 for g in (~up, up)]
     if (on[0] & on[1]).sum() < 0.75 * (on[0] | on[1]).sum():
         return None
-    return rows & (upper if side == "left" else ~upper)
+    keep = upper if side == "left" else ~upper
+    return keep.copy() if rows is None else rows & keep
 
 
 BAND_ONE_STRIPE_RMS = 0.22  # under the 0.24 x spacing two resolved stripes need (``_band_resolved_alone``)
 
 
 def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, height_px: int,
-                         rows: float) -> bool:
+                         rows: float, distinct: float | None = None) -> bool:
     """Return whether one band of a line's rows (``rows`` high) shows two resolved stripes on
     its own: its pixels, on at least half of its rows, fitted as two straight parallel stripes
     (``two_stripes`` of degree 1) pass ``_stripes_resolved`` with both stripes present. The
     line's curve, fitted through rows where the stripes blur, can miss the band's stripes at the
     car by more than a stripe's width; the band's own pixels are not misled by those rows (but
-    pixels on a few rows only would fit any two straight stripes)."""
-    if len(np.unique(ys)) < rows / 2:
+    pixels on a few rows only would fit any two straight stripes). ``distinct``: the band's
+    distinct rows when already counted."""
+    if (len(np.unique(ys)) if distinct is None else distinct) < rows / 2:
         return False
     # two stripes side by side, each a fifth of the pixels, 0.6 x spacing_px apart or more, lie
     # at least 0.4 x 0.6 = 0.24 x spacing_px (RMS) from any one straight line through them: a
@@ -712,7 +764,7 @@ def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, heig
     if _least_squares(ys, xs, 1, float(height_px))[3] < len(ys) * (BAND_ONE_STRIPE_RMS * spacing_px) ** 2:
         return False
     coeffs, spacing, upper, _ = two_stripes(ys, xs, 1, height_px)
-    return _stripes_resolved(xs - np.polyval(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
+    return _stripes_resolved(xs - _poly(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
 
 
 def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spacing_px: float,
@@ -726,14 +778,20 @@ def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spa
     spacing is 0.6-1.5 x ``spacing_px``; without it a band of rows where one stripe is worn
     away still counts (which stripe its pixels lie on is clear)."""
     n = len(r)
-    counts = (int((~upper).sum()), int(upper.sum()))
-    if n == 0 or (pair and min(counts) < 0.2 * n):
+    if n == 0:
+        return False
+    right = int(np.count_nonzero(upper))
+    if pair and min(n - right, right) < 0.2 * n:
+        return False
+    # the median lies between the least and the greatest spacing: those decide most lines at once
+    if pair and (float(spacing.max()) < 0.6 * spacing_px or float(spacing.min()) > 1.5 * spacing_px):
         return False
     apart = float(np.median(spacing))
     if pair and not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
         return False
     off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
-    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g in (~upper, upper) if g.any()) > abs(apart) / 4:
+    if max(float(np.sqrt(np.mean(off[g] ** 2))) for g, held in ((~upper, right < n), (upper, right > 0))
+           if held) > abs(apart) / 4:
         return False
     # no clear gap between them: one line the first fit misses (or a blur of both), not two
     return np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) <= 0.05 * n
@@ -799,10 +857,10 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
-    fit = fit_line(*pixels, height_px, config, missing=missing, top_px=top_px)
+    fit, first = _fit_line(*pixels, height_px, config, missing, top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        stripes = two_stripes(*pixels, 2, height_px)
-        keep, whole = _inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes)
+        stripes = two_stripes(*pixels, 2, height_px, first=first)
+        keep, whole = _inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
         if keep is not None:
             inner = (pixels[0][keep], pixels[1][keep])
             narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
@@ -810,7 +868,7 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
             if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
                 return narrowed, inner
         n = len(pixels[0])
-        right = int(stripes[2].sum())
+        right = int(np.count_nonzero(stripes[2]))
         if min(right, n - right) >= 0.2 * n:
             fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
     return fit, pixels
@@ -875,16 +933,27 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
     the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
     resolved bend: a tight bend's line that leaves the view sideways).
     """
+    return _fit_line(ys, xs, height_px, config, missing, top_px)[0]
+
+
+def _fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
+              top_px: int) -> tuple[LineFit, tuple | None]:
+    """Return ``fit_line``'s fit and its first fit: ``_least_squares`` of degree 2 of all the
+    pixels and the sums it read (a, b, c, rss, ``_normal_sums``; None when the line was turned
+    down before it), which ``fit_side`` hands on to the stripe test rather than fit the same
+    pixels again."""
     n = len(ys)
     if n == 0:
-        return LineFit(None, 0, 0.0, missing)
+        return LineFit(None, 0, 0.0, missing), None
     span = float(ys.max() - ys.min())
     if n < config.min_line_pixels:
-        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})")
+        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})"), None
     if span < config.min_found_span_fraction * height_px:
-        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height")
+        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height"), None
     degree = 2
-    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
+    sums = _normal_sums(ys, xs, float(height_px))
+    a, b, c, rss = _least_squares(ys, xs, degree, float(height_px), sums)
+    first = (a, b, c, rss, sums)
     if span < config.min_span_fraction * height_px and not (
             top_px > 0 and config.short_bend_resolution > 0
             and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
@@ -899,11 +968,11 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
             span = float(ys.max() - ys.min())
             a, b, c, rss = _least_squares(ys, xs, degree, float(height_px))
     gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
-    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap)
+    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap), first
 
 
-def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
-                iterations: int = 8) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, float]:
+def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, iterations: int = 8,
+                first: tuple | None = None) -> tuple[tuple[float, float, float], np.ndarray, np.ndarray, float]:
     """Return a line's pixels fitted as two parallel stripes: the centre curve's (a, b, c), the
     stripes' spacing (px) on each pixel's row, which pixels lie on the right-hand stripe (larger
     x), and the residual sum of squares (px**2) of the pixels about their stripe.
@@ -915,46 +984,69 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int,
     residual is the pixels' spread within their stripes: a double line's two narrow stripes
     leave little of it (their width / sqrt(12)), where one curve through both runs in the gap;
     pixels spread evenly over a band keep half their RMS spread (each half of the band).
+    ``first``: ``fit_line``'s first fit (a, b, c, rss and its ``_normal_sums``) of the same
+    pixels when already made (``fit_side``; used for degree 2 only).
     """
     scale = float(height_px)
-    y = ys.astype(np.float64)
-    m = float(y.mean())
-    t = (y - m) / scale
-    x0 = float(xs.mean())
-    x = xs.astype(np.float64) - x0
     k = degree + 1  # terms of the centre curve: 1, t (, t**2)
-    a, b, c, rss = _least_squares(ys, xs, degree, scale)
-    one = ((a, b, c), np.zeros_like(t), np.zeros(len(t), bool), rss)  # one stripe
-    # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
-    # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
-    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
-    t2 = t * t
-    powers = np.stack([np.ones_like(t), t, t2, t2 * t, t2 * t2])
-    q = powers.sum(axis=1)
-    xt = powers[:2] * x
-    xsum = np.array([float(x.sum()), float(xt[1].sum()), float((x * t2).sum())])
-    per_pixel = np.concatenate([powers[:k + 1], xt])
-    upper = xs > np.polyval((a, b, c), y)
+    n = len(ys)
+    # the per-pixel terms in one array: rows 1, t, .., t**k, then x, x * t (x about its mean)
+    per_pixel = np.empty((k + 3, n))
+    per_pixel[0] = 1.0
+    if first is not None and degree == 2 and (xs.dtype.kind in "iu" or xs.dtype == np.float64):
+        # fit_line's first fit read the same arrays and sums (x's mean the same: integer or
+        # float64 pixels' sums do not depend on the order they are added in)
+        a, b, c, rss, (y, m, t, t2, t3, st, x0, x, xt, sx) = first
+        per_pixel[1], per_pixel[2], per_pixel[3], per_pixel[4], per_pixel[5] = t, t2, t3, x, xt
+        q, xsum = np.array(st), np.array(sx)
+    else:
+        y = ys.astype(np.float64)
+        m = float(y.mean())
+        t = (y - m) / scale
+        x0 = float(xs.mean())
+        x = xs.astype(np.float64) - x0
+        a, b, c, rss = _least_squares(ys, xs, degree, scale)
+        # the normal equations from sums of t**j and x * t**j over all pixels and over the
+        # right-hand stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less
+        # half the whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
+        per_pixel[1] = t
+        t2 = np.multiply(t, t, out=per_pixel[2])
+        t3 = np.multiply(t2, t, out=per_pixel[3]) if k >= 3 else t2 * t
+        np.multiply(per_pixel[0], x, out=per_pixel[k + 1])
+        xt = np.multiply(t, x, out=per_pixel[k + 2])
+        q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()), float(t3.sum()),
+                      float((t2 * t2).sum())])
+        xsum = np.array([float(x.sum()), float(xt.sum()), float((x * t2).sum())])
+    # the blocks of the normal equations that do not depend on the split
+    fixed = np.zeros((k + 2, k + 2))
+    for r in range(k):
+        fixed[r, :k] = q[r:r + k]
+    fixed[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
+    upper = xs > (a * y + b) * y + c  # np.polyval((a, b, c), y), without its zeros
+    right = np.empty(k + 3)
     for i in range(iterations):
-        if upper.all() or not upper.any():
-            return one
-        right = np.einsum("ij,j->i", per_pixel, upper.astype(np.float64))
+        right[0] = np.count_nonzero(upper)  # the right-hand stripe's pixels (the sum of its 1s)
+        if right[0] == 0 or right[0] == n:
+            return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
+        right[1:] = np.einsum("ij,j->i", per_pixel[1:], upper.astype(np.float64))
         st = right[:k + 1] - 0.5 * q[:k + 1]  # sums of s * t**j
-        gram = np.zeros((k + 2, k + 2))
+        gram = fixed.copy()
         for r in range(k):
-            gram[r, :k] = q[r:r + k]
             gram[r, k:] = gram[k:, r] = st[r:r + 2]
-        gram[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
         rhs = np.concatenate([xsum[:k], right[k + 1:] - 0.5 * xsum[:2]])
         try:
             p = np.linalg.solve(gram, rhs)
         except np.linalg.LinAlgError:
-            return one
-        centre = np.einsum("i,ij->j", p[:k], powers[:k])
-        moved = (x > centre) != upper
-        if i == iterations - 1 or not moved.any():
+            return (a, b, c), np.zeros_like(t), np.zeros(n, bool), rss  # one stripe
+        # the centre curve p0 + p1 t (+ p2 t**2), summed in that order (as einsum did)
+        centre = np.multiply(t, p[1])
+        centre += p[0]
+        if k == 3:
+            centre += np.multiply(t2, p[2])
+        now = x > centre
+        if i == iterations - 1 or not (now != upper).any():
             break
-        upper = x > centre
+        upper = now
     spacing = p[k] + p[k + 1] * t
     residual = x - centre - np.where(upper, 0.5, -0.5) * spacing
     p2 = p[2] if degree == 2 else 0.0
@@ -984,23 +1076,15 @@ def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float
     return _least_squares(ys, xs, degree, scale)[:3]
 
 
-def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int,
-                   scale: float) -> tuple[float, float, float, float]:
+def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
+                   sums: tuple | None = None) -> tuple[float, float, float, float]:
     """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).
 
     The residual comes from the same sums: for the least-squares solution p of G p = s it is
     sum(x**2) - p . s, with x taken about its mean so that the difference keeps its digits.
+    ``sums``: ``_normal_sums(ys, xs, scale)`` when already made.
     """
-    y = ys.astype(np.float64)
-    x = xs.astype(np.float64)
-    m = float(y.mean())
-    t = (y - m) / scale
-    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
-    t2 = t * t
-    st = [float(len(t)), float(t.sum()), float(t2.sum()), float((t2 * t).sum()), float((t2 * t2).sum())]
-    x0 = float(x.mean())
-    x -= x0
-    sx = [float(x.sum()), float((x * t).sum()), float((x * t2).sum())]
+    _, m, _, _, _, st, x0, x, _, sx = _normal_sums(ys, xs, scale) if sums is None else sums
     k = degree + 1
     gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
     p = np.linalg.solve(gram, np.array(sx[:k]))  # x - x0 = p0 + p1*t (+ p2*t**2)
@@ -1010,6 +1094,25 @@ def _least_squares(ys: np.ndarray, xs: np.ndarray, degree: int,
     b = p[1] / scale - 2 * p2 * m / scale ** 2
     c = x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2
     return float(a), float(b), float(c), rss
+
+
+def _normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
+    """Return what ``_least_squares`` fits from: y (float), its mean m, t = (y - m) / ``scale``,
+    t**2, t**3, the sums of t**0..4, x's mean x0, x - x0, (x - x0) * t and the sums of (x - x0) *
+    t**0..2; ``two_stripes`` starts from the same arrays and sums."""
+    y = ys.astype(np.float64)
+    x = xs.astype(np.float64)
+    m = float(y.mean())
+    t = (y - m) / scale
+    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
+    t2 = t * t
+    t3 = t2 * t
+    st = [float(len(t)), float(t.sum()), float(t2.sum()), float(t3.sum()), float((t2 * t2).sum())]
+    x0 = float(x.mean())
+    x -= x0
+    xt = x * t
+    sx = [float(x.sum()), float(xt.sum()), float((x * t2).sum())]
+    return y, m, t, t2, t3, st, x0, x, xt, sx
 
 
 def fit_to_metres(coeffs_px, xm_per_px: float, ym_per_px: float) -> tuple[float, float, float]:

@@ -177,11 +177,13 @@ class LanePipeline:
                 continue
             b0, b1 = max(0, y0 - cy), min(h, y1 + cy)
             boxes = [(max(0, lo - cx), min(w, hi + cx)) for lo, hi in pieces]
-            if len(boxes) == 1:
-                maps = (m1[b0:b1, boxes[0][0]:boxes[0][1]], m2[b0:b1, boxes[0][0]:boxes[0][1]])
-            else:
-                maps = tuple(np.hstack([m[b0:b1, a0:a1] for a0, a1 in boxes]) for m in (m1, m2))
-            grown = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
+            # each box remapped into its place on the canvas (no stacked copy of the maps)
+            grown = np.empty((b1 - b0, sum(a1 - a0 for a0, a1 in boxes), raw.shape[2]), np.uint8)
+            x = 0
+            for a0, a1 in boxes:
+                cv2.remap(raw, m1[b0:b1, a0:a1], m2[b0:b1, a0:a1], cv2.INTER_LINEAR,
+                          dst=grown[:, x:x + a1 - a0])
+                x += a1 - a0
             cuts, x = [], 0  # where each piece's band lies in the grown canvas
             for (lo, hi), (a0, a1) in zip(pieces, boxes):
                 cuts.append((slice(y0 - b0, y1 - b0), slice(x + lo - a0, x + hi - a0)))
@@ -210,7 +212,8 @@ class LanePipeline:
         for name in self._context_masks:
             m = thresholds.mask(channels, getattr(tconf, name))
             computed[name] = join([m[c] for c in cuts])
-        return thresholds.combine(join([grown[c] for c in cuts]), tconf, computed)
+        pieces = channels.cut(cuts, join)  # the colour spaces those masks converted, cut too
+        return thresholds.combine(pieces.rgb, tconf, computed, channels=pieces)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                      keep_images: bool = False, top_px: int = 0) -> tuple[LaneSearch, dict]:

@@ -288,6 +288,17 @@ class Channels:
             self._spaces[name] = cv2.cvtColor(self.rgb, SPACES[name][0])
         return self._spaces[name]
 
+    def cut(self, pieces: list[tuple[slice, slice]], join: Callable[[list[np.ndarray]], np.ndarray]
+            ) -> "Channels":
+        """Return the ``Channels`` of the ``pieces`` (row and column slices) of this image laid side
+        by side by ``join`` (e.g. ``np.hstack``), with every colour space converted so far cut
+        alike rather than converted again (a conversion is per pixel)."""
+        out = Channels(join([self.rgb[c] for c in pieces]))
+        for name, img in self._spaces.items():
+            if name != "rgb":
+                out._spaces[name] = join([img[c] for c in pieces])
+        return out
+
     def channel(self, space: str, channel: str) -> np.ndarray:
         """Return one channel (uint8, H x W) of the image in ``space``."""
         img = self.space(space)
@@ -450,8 +461,12 @@ def mask(rgb: np.ndarray | Channels, spec) -> np.ndarray:
 
 # --------------------------------------------------------------------------- rule
 
+@functools.lru_cache(maxsize=32)
 def compile_rule(rule: str, names: tuple[str, ...]) -> ast.expr:
-    """Return the parsed rule; anything but mask names, ``| & ~`` and parentheses raises."""
+    """Return the parsed rule; anything but mask names, ``| & ~`` and parentheses raises.
+
+    Parsed once per rule (cached: ``combine`` reads it on every frame's band pieces); the tree
+    returned is shared, so it is only read, never changed."""
     try:
         tree = ast.parse(rule, mode="eval").body
     except SyntaxError as e:
@@ -542,17 +557,19 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None,
-            rule: str | None = None) -> np.ndarray:
+            rule: str | None = None, channels: Channels | None = None) -> np.ndarray:
     """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``,
     e.g. ``config.fallback_rule``).
 
     Only masks that the rule names and that are enabled are computed; ``computed`` may pass
     masks already made (e.g. by ``masks``) so the tuner does not compute them twice. With
     ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
-    ``make_clahe`` (else one is made for this image).
+    ``make_clahe`` (else one is made for this image). ``channels``: the ``Channels`` of the
+    image the masks look at, made already (``Channels.cut``; without ``config.clahe`` only).
     """
     cache = dict(computed or {})
-    channels: list[Channels] = []  # made (and equalised) only if a mask is still to compute
+    # made (and equalised) only if a mask is still to compute
+    channels: list[Channels] = [channels] if channels is not None and not config.clahe else []
 
     def get(name: str) -> np.ndarray | None:
         spec = getattr(config, name)

@@ -37,6 +37,23 @@ def test_masks_are_uint8_zero_or_255(road):
         assert m.dtype == np.uint8 and set(np.unique(m)) <= {0, 255}, name
 
 
+
+def test_channels_cut_from_a_larger_image_equal_those_of_the_pieces(road):
+    """``Channels.cut``: the pieces of an image side by side, with the colour spaces converted so
+    far cut alike, give the same spaces and masks as the pieces converted on their own."""
+    rng = np.random.default_rng(3)
+    img = np.clip(road.astype(int) + rng.integers(-40, 40, road.shape), 0, 255).astype(np.uint8)
+    cuts = [(slice(10, 90), slice(80, 140)), (slice(10, 90), slice(290, 330))]
+    whole = th.Channels(img)
+    whole.space("hls")  # converted before the cut: cut, not converted again
+    pieces = whole.cut(cuts, np.hstack)
+    alone = th.Channels(np.hstack([img[c] for c in cuts]))
+    assert np.array_equal(pieces.rgb, alone.rgb)
+    for space in ("hls", "hsv"):
+        assert np.array_equal(pieces.space(space), alone.space(space)), space
+    cfg = th.ThresholdConfig()
+    assert np.array_equal(th.combine(pieces.rgb, cfg, channels=pieces), th.combine(alone.rgb, cfg))
+
 @pytest.mark.parametrize("space,channel,expected", [
     ("hls", "s", 255), ("hsv", "v", 255), ("rgb", "r", 255), ("gray", "y", 76), ("lab", "l", 136)])  # L* 53.2 of sRGB red, x 255/100
 def test_channel_values_of_pure_red(space, channel, expected):
