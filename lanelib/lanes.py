@@ -727,14 +727,10 @@ def _inner_side(bands: np.ndarray, rows: np.ndarray | None, model: tuple, side: 
     each pixel's residual from its curve), or None when those pixels are not a double line there
     (``inner_stripe``: resolved, side by side)."""
     _, spacing, upper, _ = model
-    if rows is None:
-        up, on_rows = upper, bands
-        if not _stripes_resolved(r, spacing, up, spacing_px):
-            return None
-    else:
-        up, on_rows = upper[rows], bands[rows]
-        if not _stripes_resolved(r[rows], spacing[rows], up, spacing_px):
-            return None
+    on_rows, r, spacing, up = (bands, r, spacing, upper) if rows is None else (
+        bands[rows], r[rows], spacing[rows], upper[rows])
+    if not _stripes_resolved(r, spacing, up, spacing_px):
+        return None
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
     on = [np.bincount(on_rows[g], minlength=8) > 0 for g in (~up, up)]
@@ -990,39 +986,29 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, ite
     scale = float(height_px)
     k = degree + 1  # terms of the centre curve: 1, t (, t**2)
     n = len(ys)
-    # the per-pixel terms in one array: rows 1, t, .., t**k, then x, x * t (x about its mean)
-    per_pixel = np.empty((k + 3, n))
-    per_pixel[0] = 1.0
     if first is not None and degree == 2 and (xs.dtype.kind in "iu" or xs.dtype == np.float64):
         # fit_line's first fit read the same arrays and sums (x's mean the same: integer or
         # float64 pixels' sums do not depend on the order they are added in)
-        a, b, c, rss, (y, m, t, t2, t3, st, x0, x, xt, sx) = first
-        per_pixel[1], per_pixel[2], per_pixel[3], per_pixel[4], per_pixel[5] = t, t2, t3, x, xt
-        q, xsum = np.array(st), np.array(sx)
+        a, b, c, rss, sums = first
     else:
-        y = ys.astype(np.float64)
-        m = float(y.mean())
-        t = (y - m) / scale
-        x0 = float(xs.mean())
-        x = xs.astype(np.float64) - x0
-        a, b, c, rss = _least_squares(ys, xs, degree, scale)
-        # the normal equations from sums of t**j and x * t**j over all pixels and over the
-        # right-hand stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less
-        # half the whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
-        per_pixel[1] = t
-        t2 = np.multiply(t, t, out=per_pixel[2])
-        t3 = np.multiply(t2, t, out=per_pixel[3]) if k >= 3 else t2 * t
-        np.multiply(per_pixel[0], x, out=per_pixel[k + 1])
-        xt = np.multiply(t, x, out=per_pixel[k + 2])
-        q = np.array([float(per_pixel[0].sum()), float(t.sum()), float(t2.sum()), float(t3.sum()),
-                      float((t2 * t2).sum())])
-        xsum = np.array([float(x.sum()), float(xt.sum()), float((x * t2).sum())])
+        sums = _normal_sums(ys, xs, scale)
+        a, b, c, rss = _least_squares(ys, xs, degree, scale, sums)
+    # the normal equations from sums of t**j and x * t**j over all pixels and over the right-hand
+    # stripe's (s = +-1/2 per stripe: sums of s * t**j are the right stripe's less half the
+    # whole), by numpy reductions as in ``_least_squares`` (no BLAS threads)
+    y, m, t, t2, t3, st, x0, x, xt, sx = sums
+    q, xsum = np.array(st), np.array(sx)
+    # the per-pixel terms in one array: rows 1, t, .., t**k, then x, x * t (x about its mean)
+    per_pixel = np.empty((k + 3, n))
+    per_pixel[0] = 1.0
+    for j, term in enumerate((t, t2, t3)[:k] + (x, xt), start=1):
+        per_pixel[j] = term
     # the blocks of the normal equations that do not depend on the split
     fixed = np.zeros((k + 2, k + 2))
     for r in range(k):
         fixed[r, :k] = q[r:r + k]
     fixed[k:, k:] = 0.25 * np.array([[q[0], q[1]], [q[1], q[2]]])
-    upper = xs > (a * y + b) * y + c  # np.polyval((a, b, c), y), without its zeros
+    upper = xs > _poly((a, b, c), y)
     right = np.empty(k + 3)
     for i in range(iterations):
         right[0] = np.count_nonzero(upper)  # the right-hand stripe's pixels (the sum of its 1s)
