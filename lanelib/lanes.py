@@ -1781,6 +1781,19 @@ class LinesConfig:
         lines are seen at a grazing angle, thin and dim, and the texture is blurred).
     extend_m : how far (m along the road) a line is taken to go on beyond its last pixels at
         either end, within the view: a dashed line is seen through a gap (9 m on a highway).
+    view_half_width_m, view_ahead_m, view_xm_per_px, view_ym_per_px : the lines view
+        (``perspective.LinesView``): the road seen either side of the car's centre line and
+        ahead of the ego view's bottom row, and its metres per pixel across and along the road.
+        A camera that sees the road only some tens of metres ahead (a low camera in traffic)
+        needs a shorter, finer view than a highway camera.
+    method : how lines are found in the view: "trace" (``find_lines``: histogram peaks, then
+        windows that follow each line) or "vote" (``linevote.vote_lines``: narrow runs of
+        paint vote for straight lines, so a line seen in pieces between vehicles or as sparse
+        dashes is one line).
+    max_paint_width_m, vote_tolerance_m, max_lines : the vote's widest run of paint, how far
+        (across) a run may lie from a line to vote for it, and how many lines it reports.
+    heading_spread : the most (m across per m along) a line's slope in the view may differ from
+        the common heading of the lines in it (lane lines are parallel).
     """
 
     lane_width_m: float = 3.7
@@ -1802,8 +1815,23 @@ class LinesConfig:
     near_m: float = 25.0
     near_half_width_m: float = 5.0
     extend_m: float = 9.0
+    view_half_width_m: float = 14.0
+    view_ahead_m: float = 150.0
+    view_xm_per_px: float = 0.016
+    view_ym_per_px: float = 0.2
+    method: str = "trace"
+    max_paint_width_m: float = 0.45
+    vote_tolerance_m: float = 0.15
+    max_lines: int = 6
+    heading_spread: float = 0.02
 
     def __post_init__(self):
+        if self.method not in ("trace", "vote"):
+            raise ConfigError(f"lines.method: {self.method!r} is not a method; use \"trace\" or \"vote\"")
+        if min(self.max_paint_width_m, self.vote_tolerance_m) <= 0 or self.max_lines < 1:
+            raise ConfigError("lines: max_paint_width_m and vote_tolerance_m must be positive, max_lines 1 or more")
+        if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
+            raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")

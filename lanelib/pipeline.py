@@ -16,7 +16,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from . import draw, lanes, thresholds
+from . import draw, lanes, linevote, thresholds
 from .camera import Calibration, Undistorter
 from .config import PipelineConfig
 from .errors import InputError
@@ -277,7 +277,9 @@ class LanePipeline:
         maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked
         (with the view's transform back to the raw frame, ``_lines_to_raw``)."""
         if self._lines_view is None:
-            view = LinesView(self.perspective)
+            lc = self.config.lines
+            view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px, lc.view_ahead_m,
+                             lc.view_ym_per_px)
             raw_to_view = self.lens.inverse + view
             self._lines_view = (view, raw_to_view.remap_maps(view.size),
                                 thresholds.scaled(self.config.thresholds, view.scale_from_ego))
@@ -312,8 +314,9 @@ class LanePipeline:
             mask = cv2.bitwise_or(mask, low)
         wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
         mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
+        find = linevote.vote_lines if config.method == "vote" else lanes.find_lines
         lines = tuple(image_line(line, self._lines_to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
-                      for line in lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px))
+                      for line in find(mask, config, view.xm_per_px, view.ym_per_px))
         images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
         return LinesResult(lines, ego_result, images)
 

@@ -1,0 +1,159 @@
+"""Every lane line in the lines view by a vote over straight lines (``LinesConfig.method = "vote"``).
+
+On real roads a line is seen in pieces: dashes, the gaps between vehicles that hide it, worn
+paint. Tracing it window by window stops at the first long gap; a vote does not. In the
+bird's-eye lines view every lane line runs nearly along the road, so each is close to a straight
+line ``x = x0 + s * t`` (``t`` the distance ahead of the view's bottom row, ``s`` its slope
+across the road, set by the car's heading). Each row's narrow runs of paint vote, by their
+centres, for the ``(x0, s)`` cells they lie on; a cell's votes are the metres of road along
+which the line has paint. The strongest cells that are not the same line as a stronger one
+(nearer than ``min_gap_fraction`` of a lane width somewhere in the view, or crossing it there)
+become lines, fitted on the run centres near them (a parabola when they span far enough).
+
+A run wider than ``max_paint_width_m`` is not paint (a car, a shadow's edge, a verge), so it
+casts no vote; a line whose paint spans less than ``min_span_m`` along the road, or that has less
+than ``min_peak_m`` of paint, or whose run centres scatter more than ``max_scatter_m`` around
+its fit, is not reported.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .lanes import LinesConfig, ViewLine, least_squares_poly
+
+
+def run_centres(binary: np.ndarray, max_width_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows and centre columns of the horizontal runs of a 0/255 mask no wider than
+    ``max_width_px``, row by row from the top.
+
+    Examples
+    --------
+    >>> m = np.zeros((2, 10), np.uint8); m[0, 2:5] = 255; m[1, 0:9] = 255
+    >>> run_centres(m, 4)
+    (array([0]), array([3.]))
+    """
+    on = (binary > 0).astype(np.int8)
+    edges = np.diff(np.pad(on, ((0, 0), (1, 1))), axis=1)
+    rs, starts = np.nonzero(edges == 1)
+    _, ends = np.nonzero(edges == -1)  # row-major order: each run's end follows its start
+    narrow = (ends - starts) <= max_width_px
+    return rs[narrow], (starts[narrow] + ends[narrow] - 1) / 2.0
+
+
+def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, width: int) -> np.ndarray:
+    """Return the vote table (slope, x0 bin): how many run centres lie on each straight line."""
+    n_bins = int(np.ceil(width / bin_px)) + 1
+    table = np.zeros((len(slopes), n_bins), np.float32)
+    for k, s in enumerate(slopes):
+        b = np.rint((xc - s * t) / bin_px).astype(np.int64)
+        ok = (b >= 0) & (b < n_bins)
+        table[k] = np.bincount(b[ok], minlength=n_bins)
+    # a line straddles two bins: a cell counts its neighbours' votes too
+    return table + np.roll(table, 1, axis=1) * 0.5 + np.roll(table, -1, axis=1) * 0.5
+
+
+def _common_heading(table: np.ndarray, slopes: np.ndarray, least: float, spread: float) -> np.ndarray:
+    """Return the vote table with the slopes far from the view's common heading cleared.
+
+    Lane lines are parallel, so in one view they share a slope (the car's heading to the road),
+    up to what a bend bends them. The common heading is the slope whose cells above ``least``
+    hold the most votes; slopes more than ``spread`` (px across per px along) from it vote no more.
+    """
+    strong = np.where(table >= least, table, 0.0).sum(axis=1)
+    if not strong.any():
+        return table
+    k = int(np.argmax(strong))
+    far = np.abs(slopes - slopes[k]) > spread
+    out = table.copy()
+    out[far] = 0.0
+    return out
+
+
+def _same_line(x0: float, s: float, other: tuple[float, float], t_max: float, gap_px: float) -> bool:
+    """Return whether the straight lines (x0, s) and ``other`` come nearer than ``gap_px`` or cross
+    anywhere between the bottom of the view (t=0) and ``t_max``."""
+    d0 = x0 - other[0]
+    d1 = d0 + (s - other[1]) * t_max
+    return min(abs(d0), abs(d1)) < gap_px or d0 * d1 < 0
+
+
+def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: float) -> tuple | None:
+    """Return the fit (a, b, c) of x against the view row of the run centres ``near``, with its
+    robust scatter (px), or None when too few."""
+    if np.count_nonzero(near) < 3:
+        return None
+    y = (h - 1) - t[near]
+    x = xc[near]
+    degree = 2 if np.ptp(y) >= curved_px else 1
+    a, b, c = least_squares_poly(y, x, degree, float(h))
+    scatter = 1.4826 * float(np.median(np.abs(x - np.polyval((a, b, c), y))))
+    return (a, b, c), scatter
+
+
+def vote_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
+               ym_per_px: float = 0.1) -> list[ViewLine]:
+    """Return every line of a bird's-eye lane mask found by a vote over straight lines, left to right.
+
+    Parameters
+    ----------
+    binary : the 0/255 lane mask of the lines view (``perspective.LinesView``).
+    config : the search in metres (``LinesConfig``: ``max_paint_width_m``, ``vote_tolerance_m``,
+        ``max_slope``, ``min_gap_fraction``, ``min_peak_m``, ``min_span_m``, ``max_scatter_m``,
+        ``curved_span_m``, ``extend_m``).
+    xm_per_px, ym_per_px : metres per view pixel across and along the road.
+
+    Examples
+    --------
+    Two dashed lines 3.7 m apart, one of them tilted, in a view of 0.02 m x 0.1 m pixels:
+
+    >>> m = np.zeros((400, 600), np.uint8)
+    >>> for y in range(400):
+    ...     if y % 60 < 30:                                # 3 m dashes, 3 m gaps
+    ...         m[y, 110:118] = 255                        # straight, centre 113.5 px
+    ...         x = int(round(485 + 0.25 * (399 - y)))     # 0.05 m across per m along
+    ...         m[y, x - 4:x + 4] = 255                    # centre x - 0.5 px
+    >>> lines = vote_lines(m, LinesConfig(min_span_m=5, extend_m=0), 0.02, 0.1)
+    >>> [round(float(line.x_at(399)), 1) for line in lines]
+    [113.5, 484.5]
+    """
+    h, w = binary.shape[:2]
+    rows, xc = run_centres(binary, config.max_paint_width_m / xm_per_px)
+    if len(rows) < 3:
+        return []
+    t = (h - 1) - rows.astype(np.float64)  # view rows ahead of the bottom row
+    max_slope = config.max_slope * ym_per_px / xm_per_px  # px across per px along
+    tol = config.vote_tolerance_m / xm_per_px
+    slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
+    table = _votes(t, xc, slopes, tol, w)
+    least = config.min_peak_m / ym_per_px
+    table = _common_heading(table, slopes, least, config.heading_spread * ym_per_px / xm_per_px)
+    gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
+    curved = config.curved_span_m / ym_per_px
+    chosen: list[tuple[float, float]] = []
+    lines: list[ViewLine] = []
+    order = np.argsort(-table, axis=None, kind="stable")
+    for flat in order[: 50 * (config.max_lines + 1)]:
+        k, b = divmod(int(flat), table.shape[1])
+        if table[k, b] < least or len(lines) >= config.max_lines:
+            break
+        x0, s = b * tol, float(slopes[k])
+        if any(_same_line(x0, s, c, h - 1, gap) for c in chosen):
+            continue
+        chosen.append((x0, s))
+        near = np.abs(xc - (x0 + s * t)) <= tol
+        fitted = _fit(t, xc, near, h, curved)
+        if fitted is None:
+            continue
+        coeffs, scatter = fitted
+        y_near = rows[near]
+        span_m = float(np.ptp(y_near)) * ym_per_px
+        if span_m < config.min_span_m or scatter * xm_per_px > config.max_scatter_m:
+            continue
+        lines.append(ViewLine(coeffs, float(y_near.min()), float(y_near.max()), int(near.sum()), scatter))
+    if config.extend_m > 0:
+        more = config.extend_m / ym_per_px
+        lines = [replace(line, y_top_px=max(0.0, line.y_top_px - more),
+                         y_bottom_px=min(h - 1.0, line.y_bottom_px + more)) for line in lines]
+    return sorted(lines, key=lambda line: float(line.x_at(h - 1)))
