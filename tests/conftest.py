@@ -1,4 +1,4 @@
-"""Shared test fixtures: where the Udacity data lives (``lanelib.data``), the README's tables, and a
+"""Shared test fixtures: where the real data lives (``lanelib.data``), the README's tables, and a
 synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``)."""
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def _need(name: str) -> Path:
-    path = data.udacity(name=name)
+    path = data.dataset(name)
     if path is None:
         pytest.skip(data.missing_reason(name=name))
     return path
@@ -35,6 +35,18 @@ def udacity_advanced() -> Path:
 def udacity_p1() -> Path:
     """Path of udacity-lanelines-p1/ (test_images, test_videos), or skip."""
     return _need(data.UDACITY_P1)
+
+
+@pytest.fixture(scope="session")
+def culane_dev() -> Path:
+    """Path of culane-dev/ (driver_161_90frame/..., list.txt: 120 real CULane frames), or skip."""
+    return _need(data.CULANE_DEV)
+
+
+@pytest.fixture(scope="session")
+def tusimple_dev() -> Path:
+    """Path of tusimple-dev/ (clips/..., label_data.json at 512x288, label_data_fullres.json), or skip."""
+    return _need(data.TUSIMPLE_DEV)
 
 
 @pytest.fixture(scope="session")
