@@ -9,7 +9,7 @@ OUT    ?= out
 # Udacity data for the real-data tests and benchmarks (skipped when absent)
 export LANELIB_DATA ?= $(abspath ../shared/data)
 
-.PHONY: demo test portability bench lab venv clean e2e-deps
+.PHONY: demo test portability bench scoreboard lab venv clean e2e-deps
 
 venv: $(STAMP)
 
@@ -64,6 +64,10 @@ e2e-deps:
 
 bench: $(STAMP)
 	$(PY) -m lanelib bench
+
+# One table of lanelib on every data set at hand, real data first (rows without their data are skipped)
+scoreboard: $(STAMP)
+	$(PY) -m lanelib scoreboard --out $(OUT)/scoreboard --json $(OUT)/scoreboard.json
 
 lab: $(STAMP)
 	$(VENV)/bin/jupyter lab notebooks/

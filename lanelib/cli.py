@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from . import bench, data, evaluate, geometry, hough, runs, synth
+from . import bench, data, evaluate, geometry, hough, runs, scoreboard, synth
 from .benchmarks import culane, metrics, tusimple
 from .camera import Calibration, calibrate, parse_pattern
 from .config import PipelineConfig, load_config_or_preset, override, save_parts
@@ -64,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_evaluate(sub)
     _add_predict(sub)
     _add_synth(sub)
+    _add_scoreboard(sub)
     return parser
 
 
@@ -726,6 +727,42 @@ def _add_synth(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _add_scoreboard(sub) -> None:
+    rows = ", ".join(f"{k} ({title})" for k, (title, _) in scoreboard.ROWS.items())
+    p = sub.add_parser(
+        "scoreboard", help="one table of lanelib on every data set at hand, real data first",
+        description="Measure lanelib on the real data (LANELIB_DATA: CULane and TuSimple dev frames "
+                    "predicted and scored by the official rules; the Udacity and P1 clips tracked "
+                    "and scored by plausible frames: lane found, 3.0-4.5 m wide, |offset| < 0.6 m) "
+                    "and on synthetic data with exact truth, in one run on one thread, and print one "
+                    "table with the time per frame. A row whose data is absent says why and is "
+                    "skipped. See lanelib/scoreboard.py for each row.",
+        epilog=_exit_codes("1 some rows failed: one `error:` line each, the others are in the table;"))
+    p.add_argument("--json", type=Path, metavar="FILE", help="also write the figures as JSON")
+    p.add_argument("--out", type=Path, default=scoreboard.DEFAULT_OUT, metavar="DIR",
+                   help="folder for the predictions (replaced every run), the synthetic samples and "
+                        "the upscaled TuSimple frames (kept); default: out/scoreboard")
+    p.add_argument("--only", metavar="ROW,...", help=f"run only these rows: {rows}")
+    p.set_defaults(func=_run_scoreboard)
+
+
+def _run_scoreboard(args) -> int:
+    if args.json:
+        check_output(args.json)  # before the run, not after it
+    only = [k.strip() for k in args.only.split(",") if k.strip()] if args.only is not None else None
+    rows = scoreboard.run(args.out, only, on_row=lambda r: print(
+        f"scoreboard: {r.key} {'skipped' if r.skipped else 'failed' if r.error else 'done'} "
+        f"({r.seconds:g} s)", file=sys.stderr))
+    print(scoreboard.format_table(rows))
+    if args.json:
+        write_json(args.json, {"rows": [r.to_dict() for r in rows]})
+        print(f"figures written to {args.json}")
+    for r in rows:
+        if r.error:
+            print(f"error: {r.key}: {r.error}", file=sys.stderr)
+    return 1 if any(r.error for r in rows) else 0
+
+
 def _add_bench(sub) -> None:
     p = sub.add_parser("bench", help="speed of the detection path and of the video command",
                        description="Time the per-frame detection path against one full-frame remap "
@@ -761,8 +798,10 @@ def main(argv: list[str] | None = None) -> int:
     1 : the run finished but some inputs failed: a file of a folder (``images``, ``hough``,
         ``evaluate images``) that could not be read or processed has its own row with an
         ``error`` and one ``error:`` line on stderr; a frame of ``predict`` that could not be
-        read has one ``error:`` line and no prediction (a later run retries it); or a video (``video``, ``hough``) broke off
-        half-way, and its outputs keep the frames before the break (``PartialOutputError``).
+        read has one ``error:`` line and no prediction (a later run retries it); a row of
+        ``scoreboard`` failed (one ``error:`` line each, the other rows in the table); or a video
+        (``video``, ``hough``) broke off half-way, and its outputs keep the frames before the
+        break (``PartialOutputError``).
     2 : nothing was run: a usage error (argparse), or a ``LaneLibError`` before any work (missing
         or empty input folder, unreadable or empty video, bad config or calibration, an output
         over an input); one line on stderr, nothing written.

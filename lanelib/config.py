@@ -229,6 +229,18 @@ def preset(name: str) -> PipelineConfig:
     return load_config(PRESETS_DIR / f"{name}.json")
 
 
+def benchmark_config(benchmark: str) -> PipelineConfig:
+    """Return the config a benchmark's frames are predicted with by default: the bundled preset
+    named like the benchmark (``"tusimple"``, ``"culane"``) when there is one, else the defaults.
+
+    Examples
+    --------
+    >>> benchmark_config("no-such-benchmark") == PipelineConfig()
+    True
+    """
+    return preset(benchmark) if benchmark in preset_names() else PipelineConfig()
+
+
 def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
     """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec``.
 

@@ -1,15 +1,21 @@
-"""Where data lives: the repository's bundled data and the Udacity data beside it.
+"""Where data lives: the repository's bundled data and the real data beside it.
 
-The only module that reads ``LANELIB_DATA``. The notebooks, the tuners, the benchmarks and the
-tests ask here instead of building paths of their own.
+The only module that reads ``LANELIB_DATA``. The notebooks, the tuners, the benchmarks, the
+scoreboard and the tests ask here instead of building paths of their own.
 
 - The **repository** holds the bundled synthetic data: ``camera_cal/``, ``test_images/`` and
   ``videos/`` (``repo_root``, ``bundled``).
-- The **Udacity data** (MIT-licensed lane-finding images, chessboards and clips) is read in place
-  from the folder ``LANELIB_DATA`` names, by default ``../shared/data`` beside the repository. It
-  holds ``udacity-advanced/`` (``camera_cal/``, ``test_images/``, ``videos/project_video.mp4``)
-  and ``udacity-lanelines-p1/`` (``test_images/``, ``test_videos/``). Where it is absent, the
-  functions below return None or raise ``InputError`` saying how to point at it.
+- The **real data** is read in place from the folder ``LANELIB_DATA`` names, by default
+  ``../shared/data`` beside the repository (``data_root``). It holds the Udacity data
+  (MIT-licensed lane-finding images, chessboards and clips): ``udacity-advanced/``
+  (``camera_cal/``, ``test_images/``, ``videos/project_video.mp4`` and
+  ``videos/challenge_video.mp4``) and ``udacity-lanelines-p1/`` (``test_images/``,
+  ``test_videos/``); and real labelled frames in the benchmarks' formats: ``culane-dev/``
+  (``driver_161_90frame/...`` and ``list.txt``) and ``tusimple-dev/`` (``clips/...``,
+  ``label_data.json`` at 512x288, ``label_data_fullres.json`` at 1280x720). ``dataset`` and
+  ``require`` find a path in any of them (``udacity``, ``require_udacity``, ``culane_dev``,
+  ``tusimple_dev``, ``challenge_video`` name the usual ones); where it is absent, they return
+  None or raise ``InputError``, and ``missing_reason`` says how to point at it.
 """
 from __future__ import annotations
 
@@ -23,10 +29,20 @@ from .errors import InputError
 ENV = "LANELIB_DATA"
 UDACITY_ADVANCED = "udacity-advanced"
 UDACITY_P1 = "udacity-lanelines-p1"
+CULANE_DEV = "culane-dev"
+TUSIMPLE_DEV = "tusimple-dev"
+PROJECT_VIDEO = "videos/project_video.mp4"       # in UDACITY_ADVANCED
+CHALLENGE_VIDEO = "videos/challenge_video.mp4"   # in UDACITY_ADVANCED
+CULANE_DEV_LIST = "list.txt"                     # in CULANE_DEV: CULane's list of its images
+TUSIMPLE_DEV_LABELS = "label_data.json"          # in TUSIMPLE_DEV: the labels at 512x288
+TUSIMPLE_DEV_FULLRES = "label_data_fullres.json"  # in TUSIMPLE_DEV: the official 1280x720 rows
+# the file a data set's folder is used by: without it the set counts as absent
+NEEDS = {CULANE_DEV: CULANE_DEV_LIST, TUSIMPLE_DEV: TUSIMPLE_DEV_FULLRES}
 PACKAGE_REPO = Path(__file__).resolve().parents[1]
 BUNDLED = ("camera_cal", "test_images", "videos")
-HOW_TO_POINT = (f"set {ENV} to the folder holding {UDACITY_ADVANCED}/ and {UDACITY_P1}/ "
-                "(default: ../shared/data beside the repository; see the README, 'The Udacity dataset')")
+HOW_TO_POINT = (f"set {ENV} to the folder holding {UDACITY_ADVANCED}/ and {UDACITY_P1}/ (Udacity data), "
+                f"{CULANE_DEV}/ and {TUSIMPLE_DEV}/ (real benchmark frames); default: ../shared/data "
+                "beside the repository (see the README, 'The Udacity dataset')")
 
 
 def repo_root(start: str | os.PathLike | None = None) -> Path:
@@ -61,38 +77,85 @@ def bundled(kind: str, root: str | os.PathLike | None = None) -> Path:
 
 
 def data_root() -> Path:
-    """Return the folder of the Udacity data: ``$LANELIB_DATA``, else ``../shared/data`` beside the repo."""
+    """Return the folder of the real data: ``$LANELIB_DATA``, else ``../shared/data`` beside the repo."""
     env = os.environ.get(ENV)
     if env:
         return Path(env).expanduser()
     return PACKAGE_REPO.parent / "shared" / "data"
 
 
-def udacity(sub: str = "", name: str = UDACITY_ADVANCED) -> Path | None:
+def _path(name: str, sub: str) -> Path:
+    return data_root() / name / sub if sub else data_root() / name
+
+
+def dataset(name: str, sub: str = "") -> Path | None:
     """Return ``<data_root>/<name>/<sub>`` when it exists, else None.
 
     Parameters
     ----------
-    sub : path inside the data set, e.g. ``"videos/project_video.mp4"`` or ``"test_images"``.
-    name : the data set folder: ``UDACITY_ADVANCED`` (default) or ``UDACITY_P1``.
+    name : the data set folder: ``UDACITY_ADVANCED``, ``UDACITY_P1``, ``CULANE_DEV`` or
+        ``TUSIMPLE_DEV``. A set listed in ``NEEDS`` counts as absent without its file there.
+    sub : path inside the data set, e.g. ``PROJECT_VIDEO`` or ``"test_images"``.
+
+    Examples
+    --------
+    >>> dataset(UDACITY_ADVANCED, "no/such/file.mp4") is None
+    True
     """
-    path = data_root() / name / sub if sub else data_root() / name
+    if name in NEEDS and not _path(name, NEEDS[name]).is_file():
+        return None
+    path = _path(name, sub)
     return path if path.exists() else None
 
 
-def require_udacity(sub: str = "", name: str = UDACITY_ADVANCED) -> Path:
-    """Return ``udacity(sub, name)``; raise ``InputError`` saying how to point at the data if absent."""
-    path = udacity(sub, name)
+def require(name: str, sub: str = "") -> Path:
+    """Return ``dataset(name, sub)``; raise ``InputError`` saying how to point at the data if absent."""
+    path = dataset(name, sub)
     if path is None:
-        missing = data_root() / name / sub if sub else data_root() / name
-        raise InputError(f"{missing} not found: {HOW_TO_POINT}")
+        raise InputError(missing_reason(sub, name))
     return path
 
 
 def missing_reason(sub: str = "", name: str = UDACITY_ADVANCED) -> str:
-    """Return why ``udacity(sub, name)`` is None and how to fix it (for skip messages)."""
-    missing = data_root() / name / sub if sub else data_root() / name
+    """Return why ``dataset(name, sub)`` is None and how to fix it (for skip messages).
+
+    The path named is the one looked for: ``sub``, or the file a set listed in ``NEEDS`` is
+    used by when that file is missing.
+
+    Examples
+    --------
+    >>> "LANELIB_DATA" in missing_reason("no_such_file.txt", CULANE_DEV)
+    True
+    """
+    need = NEEDS.get(name, "")
+    missing = _path(name, need) if need and not _path(name, need).is_file() else _path(name, sub)
     return f"{missing} not found: {HOW_TO_POINT}"
+
+
+def udacity(sub: str = "", name: str = UDACITY_ADVANCED) -> Path | None:
+    """Return ``dataset(name, sub)``: a path in the Udacity data (``UDACITY_ADVANCED`` by default)."""
+    return dataset(name, sub)
+
+
+def require_udacity(sub: str = "", name: str = UDACITY_ADVANCED) -> Path:
+    """Return ``require(name, sub)``: a path in the Udacity data, or ``InputError`` saying how to point at it."""
+    return require(name, sub)
+
+
+def culane_dev() -> Path | None:
+    """Return the root of the real CULane frames (``driver_161_90frame/...``, ``CULANE_DEV_LIST``), or None."""
+    return dataset(CULANE_DEV)
+
+
+def tusimple_dev() -> Path | None:
+    """Return the root of the real TuSimple frames (``clips/...``, ``TUSIMPLE_DEV_LABELS`` at
+    512x288, ``TUSIMPLE_DEV_FULLRES`` at 1280x720), or None."""
+    return dataset(TUSIMPLE_DEV)
+
+
+def challenge_video() -> Path | None:
+    """Return the Udacity challenge video (the highway camera of ``udacity_calibration``), or None."""
+    return dataset(UDACITY_ADVANCED, CHALLENGE_VIDEO)
 
 
 @functools.lru_cache(maxsize=4)

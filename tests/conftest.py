@@ -1,4 +1,4 @@
-"""Shared test fixtures: where the Udacity data lives (``lanelib.data``), the README's tables, and a
+"""Shared test fixtures: where the real data lives (``lanelib.data``), the README's tables, and a
 synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``)."""
 from __future__ import annotations
 
@@ -18,23 +18,25 @@ from lanelib.synth import Camera, CurvatureProfile, GroundGrid, video_sets, writ
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _need(name: str) -> Path:
-    path = data.udacity(name=name)
-    if path is None:
-        pytest.skip(data.missing_reason(name=name))
-    return path
+def _data_set(fixture: str, name: str, what: str):
+    """Return the session fixture ``fixture``: the path of the real data set ``name`` (``what``
+    it holds), or a skip that says how to point at it."""
+
+    def find() -> Path:
+        path = data.dataset(name)
+        if path is None:
+            pytest.skip(data.missing_reason(name=name))
+        return path
+
+    find.__doc__ = f"Path of {name}/ ({what}), or skip."
+    return pytest.fixture(find, scope="session", name=fixture)
 
 
-@pytest.fixture(scope="session")
-def udacity_advanced() -> Path:
-    """Path of udacity-advanced/ (camera_cal, test_images, videos), or skip."""
-    return _need(data.UDACITY_ADVANCED)
-
-
-@pytest.fixture(scope="session")
-def udacity_p1() -> Path:
-    """Path of udacity-lanelines-p1/ (test_images, test_videos), or skip."""
-    return _need(data.UDACITY_P1)
+udacity_advanced = _data_set("udacity_advanced", data.UDACITY_ADVANCED, "camera_cal, test_images, videos")
+udacity_p1 = _data_set("udacity_p1", data.UDACITY_P1, "test_images, test_videos")
+culane_dev = _data_set("culane_dev", data.CULANE_DEV, "driver_161_90frame/..., list.txt: 120 real CULane frames")
+tusimple_dev = _data_set("tusimple_dev", data.TUSIMPLE_DEV,
+                         "clips/..., label_data.json at 512x288, label_data_fullres.json at 1280x720")
 
 
 @pytest.fixture(scope="session")

@@ -3,7 +3,7 @@
 The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; io; the stages
 on arrays (thresholds, lanes, result, draw); geometry (camera, perspective, geometry); data;
 the basic pipeline and the tracker; config; the one-frame engine (pipeline); runs, evaluate,
-bench, synth, benchmarks; widgets; cli. A module imports only from its own layer or below,
+bench, synth, benchmarks; the scoreboard; widgets; cli. A module imports only from its own layer or below,
 never from above, and every import is at module level (a function-level
 import hides a cycle instead of removing it).
 """
@@ -171,6 +171,7 @@ LAYERS = [
     {"lanelib.pipeline"},
     {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
      "lanelib.benchmarks"},
+    {"lanelib.scoreboard"},                 # measures with runs, evaluate and the benchmarks
     {"lanelib.widgets"},
     {"lanelib.cli", "lanelib.__main__", "lanelib"},
 ]
