@@ -229,6 +229,21 @@ def preset(name: str) -> PipelineConfig:
     return load_config(PRESETS_DIR / f"{name}.json")
 
 
+def benchmark_config(benchmark: str) -> PipelineConfig:
+    """Return the config a benchmark's frames are predicted with by default: the bundled preset
+    named like it (``tusimple``, ``culane``: the benchmark's fixed camera), else the built-in one.
+
+    Frames of another size than the preset's ``perspective.size_px`` get its points scaled to
+    their size (``pipeline.LanePipeline``).
+
+    Examples
+    --------
+    >>> benchmark_config("no such benchmark") == PipelineConfig()
+    True
+    """
+    return preset(benchmark) if benchmark in preset_names() else PipelineConfig()
+
+
 def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
     """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec``.
 
