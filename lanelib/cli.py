@@ -19,7 +19,8 @@ from pathlib import Path
 from . import bench, data, evaluate, geometry, hough, runs, scoreboard, synth
 from .benchmarks import culane, metrics, tusimple
 from .camera import Calibration, calibrate, parse_pattern
-from .config import PipelineConfig, load_config_or_preset, override, save_parts
+from .config import (PipelineConfig, benchmark_config, load_config_or_preset, override, preset_names,
+                     save_parts)
 from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
 from .io import VIDEO_SUFFIXES, check_not_input, check_output, list_images, write_json
@@ -68,20 +69,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _common_pipeline_args(p: argparse.ArgumentParser) -> None:
+def _common_pipeline_args(p: argparse.ArgumentParser, default: str = "built-in") -> None:
+    """Add --calibration, --config (``default``: what the help says is used without it) and --set."""
     p.add_argument("--calibration", type=Path, metavar="FILE",
                    help="camera calibration JSON from `calibrate` (default: none, frames are "
                         "taken as undistorted)")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig JSON (e.g. saved by a notebook tuner) or the name of a "
                         "bundled preset (p1: the 960x540 Udacity P1 camera; highway: the default "
-                        "checks; country: lanes 2.5-5.0 m wide on bends to 30 m); default: built-in")
+                        "checks; country: lanes 2.5-5.0 m wide on bends to 30 m; tusimple, culane: "
+                        f"the benchmark's camera); default: {default}")
     _set_arg(p)
 
 
-def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False) -> None:
+_REFUSED_STOPS = "an estimate that fails or is not confident stops the run (exit 2)"
+_REFUSED_FALLS_BACK = ("once per sequence folder; a sequence whose estimate fails or is not confident keeps "
+                       "the config's points, and one line says which and why (the run goes on)")
+
+
+def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False,
+                   refused: str = _REFUSED_STOPS) -> None:
     """Add the options of the road geometry estimate (``auto``: behind ``--auto-geometry``;
-    ``video``: its help says how a video's geometry is checked and refined)."""
+    ``video``: its help says how a video's geometry is checked and refined; ``refused``: what
+    its help says a refused estimate does)."""
     if auto:
         through = ("; estimated from the first --geometry-seconds, then checked every 0.5 s: the vanishing point "
                    "is refined along the horizon as straight road accumulates, and the geometry "
@@ -89,8 +99,8 @@ def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False) 
                    if video else "")
         p.add_argument("--auto-geometry", action="store_true",
                        help="estimate the bird's-eye points and scale from the frames themselves "
-                            f"(see `geometry --help`) instead of the config's perspective{through}; an "
-                            "estimate that fails or is not confident stops the run (exit 2)")
+                            f"(see `geometry --help`) instead of the config's perspective{through}; "
+                            f"{refused}")
     g = p.add_argument_group("road geometry" + (" (with --auto-geometry)" if auto else ""))
     g.add_argument("--lane-width", type=float, default=runs.GeometryOptions.lane_width_m, metavar="M",
                    help="the ego lane's width, which sets the scale across the road (default 3.7)")
@@ -124,18 +134,19 @@ def _print_geometry(geo) -> None:
 
 def _set_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="settings", action="append", default=[], metavar="KEY=VALUE",
-                   help="set one config value over --config, dotted as in the JSON file, e.g. "
-                        "--set search.trim_outliers_pct=95 --set thresholds.clahe=true (repeatable)")
+                   help="set one config value over --config (or its default), dotted as in the JSON "
+                        "file, e.g. --set search.trim_outliers_pct=95 --set thresholds.clahe=true "
+                        "(repeatable)")
 
 
-def _load_config(args) -> PipelineConfig:
-    """Return the config of --config (file or preset; default built-in) with each --set applied."""
-    config = load_config_or_preset(args.config) if args.config else PipelineConfig()
+def _load_config(args, default: PipelineConfig = PipelineConfig()) -> PipelineConfig:
+    """Return the config of --config (file or preset; else ``default``) with each --set applied."""
+    config = load_config_or_preset(args.config) if args.config else default
     return override(config, args.settings)
 
 
-def _load_pipeline_inputs(args):
-    config = _load_config(args)
+def _load_pipeline_inputs(args, default: PipelineConfig = PipelineConfig()):
+    config = _load_config(args, default)
     calibration = Calibration.load(args.calibration) if args.calibration else None
     return config, calibration
 
@@ -594,10 +605,11 @@ def _add_predict(sub) -> None:
                         "DATASET_ROOT/list/test.txt)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="PRED_DIR",
                    help="folder for the predictions (not DATASET_ROOT)")
-    _common_pipeline_args(p)
+    _common_pipeline_args(p, default="the preset named like the benchmark (tusimple or culane: its "
+                                      "camera's bird's-eye points)")
     p.add_argument("--no-progress", action="store_true", help="do not show the progress bar")
     _dask_args(p, "predict")
-    _geometry_args(p, auto=True)
+    _geometry_args(p, auto=True, refused=_REFUSED_FALLS_BACK)
     p.set_defaults(func=_run_predict)
 
 
@@ -634,13 +646,27 @@ def _dask_args(p, command: str) -> None:
                         "doubles a frame's time)")
 
 
+def _config_name(args) -> str:
+    """Return what the notes call the config of a ``predict`` run, e.g. "the culane preset"."""
+    if args.config:
+        name = f"--config {args.config}"
+    elif args.benchmark in preset_names():
+        name = f"the {args.benchmark} preset"
+    else:
+        name = "the built-in config"
+    return name + (" with --set" if args.settings else "")
+
+
 def _run_predict(args) -> int:
-    config, calibration = _load_pipeline_inputs(args)
+    config, calibration = _load_pipeline_inputs(args, benchmark_config(args.benchmark))
     options = _geometry_options(args) if args.auto_geometry else None
 
-    def show(sequence, geo) -> None:
+    def show(sequence, estimate) -> None:
+        if isinstance(estimate, runs.GeometryFallback):
+            print(estimate.note(_config_name(args)))
+            return
         print(f"{sequence}: road geometry from its frames")
-        _print_geometry(geo)
+        _print_geometry(estimate)
 
     run = runs.predict_benchmark(args.benchmark, args.root, args.output, args.list_file, config,
                                  calibration, args.calibration, options, progress=not args.no_progress,

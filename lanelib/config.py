@@ -231,11 +231,14 @@ def preset(name: str) -> PipelineConfig:
 
 def benchmark_config(benchmark: str) -> PipelineConfig:
     """Return the config a benchmark's frames are predicted with by default: the bundled preset
-    named like the benchmark (``"tusimple"``, ``"culane"``) when there is one, else the defaults.
+    named like it (``tusimple``, ``culane``: the benchmark's fixed camera), else the built-in one.
+
+    Frames of another size than the preset's ``perspective.size_px`` get its points scaled to
+    their size (``pipeline.LanePipeline``).
 
     Examples
     --------
-    >>> benchmark_config("no-such-benchmark") == PipelineConfig()
+    >>> benchmark_config("no such benchmark") == PipelineConfig()
     True
     """
     return preset(benchmark) if benchmark in preset_names() else PipelineConfig()

@@ -50,7 +50,7 @@ from tqdm import tqdm
 from . import cluster, geometry, hough, io
 from .benchmarks import culane, tusimple
 from .camera import Calibration
-from .config import PipelineConfig, to_dict
+from .config import PipelineConfig, benchmark_config, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
 from .geometry import RoadGeometry
@@ -635,12 +635,15 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
         fixes = ([] if calibration is not None or options.focal_px else ["a calibration (--calibration)"])
         fixes.append("frames of a longer straight stretch" + ("" if Path(source).is_dir() else
                                                               " (--geometry-seconds)"))
-        raise GeometryError(
-            f"{source}: the road geometry estimated from {len(frames)} frames ({len(geo.frames_used)} "
-            f"on straight road) has confidence {geo.confidence:.2f}, below {geometry.LOW_CONFIDENCE} "
-            f"({'; '.join(geo.assumptions)}); give {' or '.join(fixes)}, or pass "
-            "--accept-low-confidence to use it anyway")
+        raise GeometryError(f"{source}: {_low_confidence(geo, len(frames))} ({'; '.join(geo.assumptions)}); "
+                            f"give {' or '.join(fixes)}, or pass --accept-low-confidence to use it anyway")
     return geo
+
+
+def _low_confidence(geo: RoadGeometry, n_frames: int) -> str:
+    """Return why ``geo``, estimated from ``n_frames`` frames, is refused for its confidence."""
+    return (f"the road geometry estimated from {n_frames} frames ({len(geo.frames_used)} on straight "
+            f"road) has confidence {geo.confidence:.2f}, below {geometry.LOW_CONFIDENCE}")
 
 
 def geometry_calibration(calibration: Calibration | None, geo: RoadGeometry) -> Calibration | None:
@@ -1272,12 +1275,35 @@ class FrameOutcome:
 
 
 @dataclass(frozen=True)
+class GeometryFallback:
+    """A sequence of a ``predict_benchmark`` run whose geometry estimate was not used: its frames
+    keep the bird's-eye points of the run's config. ``reason`` says why (the frames give no
+    consistent vanishing point, none could be read, or the confidence is too low)."""
+
+    sequence: str
+    reason: str
+
+    def note(self, points_of: str) -> str:
+        """Return the one-line note of this fallback; ``points_of`` names the config, e.g.
+        ``"the tusimple preset"``.
+
+        Examples
+        --------
+        >>> GeometryFallback("clips/0313-1", "no road").note("the tusimple preset")
+        "clips/0313-1: road geometry not used (no road); its frames use the tusimple preset's bird's-eye points"
+        """
+        return (f"{self.sequence}: road geometry not used ({self.reason}); its frames use {points_of}'s "
+                "bird's-eye points")
+
+
+@dataclass(frozen=True)
 class PredictRun:
     """What ``predict_benchmark`` did: frames listed, skipped (predicted before), predicted, failed.
 
     ``outcomes`` holds the frames run now, in list order; ``output`` is the prediction file
     (TuSimple) or folder (CULane) to pass to ``evaluate``; ``geometries`` the road geometry of each
-    sequence estimated (``--auto-geometry``).
+    sequence whose estimate is used (``--auto-geometry``), ``fallbacks`` the sequences whose
+    estimate was refused or failed (they keep the config's points), both in list order.
     """
 
     frames: int
@@ -1286,6 +1312,7 @@ class PredictRun:
     output: Path
     seconds: float
     geometries: tuple[tuple[str, RoadGeometry], ...] = ()
+    fallbacks: tuple[GeometryFallback, ...] = ()
 
     @property
     def failed(self) -> tuple[FrameOutcome, ...]:
@@ -1469,11 +1496,14 @@ def _check_settings(out: Path, settings: dict) -> bool:
     return True
 
 
-def _sequence_geometry(work: Sequence[FrameWork], root: Path, calibration: Calibration | None,
-                       options: GeometryOptions) -> RoadGeometry:
+def _sequence_geometry(work: Sequence[FrameWork], calibration: Calibration | None,
+                       options: GeometryOptions) -> RoadGeometry | GeometryFallback:
     """Return the geometry of one sequence, estimated from up to ``options.max_frames`` of its
-    frames, evenly spread (``checked_geometry``); an image that cannot be read is left out here
-    (``predict_frame`` reports it)."""
+    frames, evenly spread, or a ``GeometryFallback`` saying why it is not used: the estimate
+    failed (``GeometryError``, or frames it cannot take) or its confidence is below
+    ``geometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``. A value, not an
+    exception, so that a Dask task returns it like a geometry. An image that cannot be read is
+    left out here (``predict_frame`` reports it)."""
     step = max(1, math.ceil(len(work) / options.max_frames))
     frames = []
     for w in work[::step]:
@@ -1481,8 +1511,18 @@ def _sequence_geometry(work: Sequence[FrameWork], root: Path, calibration: Calib
             frames.append(io.read_image(w.image))
         except InputError:
             continue
-    # one calibration serves every sequence's frames: no lens is estimated per sequence
-    return checked_geometry(frames, root / work[0].sequence, calibration, options, lens_from_road=False)
+    sequence = work[0].sequence
+    if not frames:
+        return GeometryFallback(sequence, "none of its images could be read")
+    try:
+        # one calibration serves every sequence's frames: no lens is estimated per sequence
+        geo = options.estimate(frames, calibration, lens_from_road=False)
+    except (GeometryError, InputError) as e:
+        return GeometryFallback(sequence, str(e))
+    if geo.low_confidence and not options.accept_low_confidence:
+        return GeometryFallback(sequence, f"{_low_confidence(geo, len(frames))}; --accept-low-confidence "
+                                          "uses it")
+    return geo
 
 
 def _assemble_tusimple(work: Sequence[FrameWork], out: Path, inputs: Sequence[Path]) -> Path:
@@ -1497,12 +1537,40 @@ def _assemble_tusimple(work: Sequence[FrameWork], out: Path, inputs: Sequence[Pa
     return tusimple.write_predictions(path, records, inputs=inputs)
 
 
+def _sequence_configs(work: Sequence[FrameWork], sequences: Sequence[str], config: PipelineConfig,
+                      calibration: Calibration | None, options: GeometryOptions, client,
+                      on_geometry: Callable[[str, RoadGeometry | GeometryFallback], None] | None
+                      ) -> tuple[dict[str, PipelineConfig], list[tuple[str, RoadGeometry]], list[GeometryFallback]]:
+    """Return the config of each of ``sequences`` (``config`` with its estimated geometry, or
+    ``config`` itself where the estimate is not used), the geometries used and the fallbacks.
+
+    The estimates run here, or on the Dask ``client``'s workers, one task per sequence.
+    """
+    groups = [[w for w in work if w.sequence == sequence] for sequence in sequences]
+    if client is None:
+        estimates = (_sequence_geometry(g, calibration, options) for g in groups)
+    else:  # one task per sequence, all sent at once; results in order
+        estimates = cluster.map_ordered(client, _sequence_geometry, groups, calibration=calibration,
+                                        options=options)
+    configs, geometries, fallbacks = {}, [], []
+    for sequence, estimate in zip(sequences, estimates):
+        if on_geometry is not None:
+            on_geometry(sequence, estimate)
+        if isinstance(estimate, GeometryFallback):
+            fallbacks.append(estimate)
+            configs[sequence] = config
+        else:
+            geometries.append((sequence, estimate))
+            configs[sequence] = with_geometry(config, estimate)
+    return configs, geometries, fallbacks
+
+
 def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os.PathLike,
                       list_file: str | os.PathLike | None = None,
-                      config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
+                      config: PipelineConfig | None = None, calibration: Calibration | None = None,
                       calibration_file: str | os.PathLike | None = None,
                       auto_geometry: GeometryOptions | None = None, progress: bool = True,
-                      on_geometry: Callable[[str, RoadGeometry], None] | None = None,
+                      on_geometry: Callable[[str, RoadGeometry | GeometryFallback], None] | None = None,
                       workers: int = 1, scheduler: str | None = None) -> PredictRun:
     """Return what the run did after predicting every labelled frame of a benchmark dataset.
 
@@ -1522,15 +1590,21 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     Parameters
     ----------
     benchmark, root, list_file : the dataset (``benchmark_work``).
-    config, calibration : as for ``LanePipeline``; ``calibration_file`` names the calibration in
-        the settings record.
+    config : as for ``LanePipeline``; None (the default): ``lanelib.config.benchmark_config``, the
+        bundled preset of the benchmark's camera. Frames of another size than its
+        ``perspective.size_px`` get its points scaled to their size (``LanePipeline``), which is
+        right for resized copies of the same camera's frames; the thresholds' widths in px are
+        not scaled (in a smaller frame they span more road).
+    calibration : as for ``LanePipeline``; ``calibration_file`` names it in the settings record.
     auto_geometry : estimate the bird's-eye points and scale once per sequence (one camera's
         folder, ``frame_sequence``) from up to ``max_frames`` of its frames, and use them for that
         sequence's frames instead of ``config.perspective`` (only sequences with frames still to
-        predict are estimated). A failed or unconfident estimate stops the run before any frame
-        is written (``checked_geometry``).
+        predict are estimated). Where the estimate fails or its confidence is too low
+        (``_sequence_geometry``), the sequence keeps ``config.perspective`` and the run goes on:
+        ``PredictRun.fallbacks`` says which and why.
     progress : show a tqdm bar.
-    on_geometry : called with (sequence, geometry) for each estimate (the CLI prints it).
+    on_geometry : called with (sequence, geometry or ``GeometryFallback``) for each estimate, in
+        list order, before any frame is predicted (the CLI prints them).
     workers, scheduler : where the frames are predicted (``cluster.dask_client``): 1 worker (the
         default) in this process; more on a Dask ``LocalCluster`` of that many processes; or the
         workers of the Dask scheduler at ``scheduler``. With Dask the frames go in chunks
@@ -1545,10 +1619,9 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     InputError
         For a bad dataset or list (``benchmark_work``) or a folder of other settings; nothing is
         written then.
-    GeometryError
-        If a sequence's geometry cannot be estimated with confidence.
     """
     out = Path(out_dir)
+    config = benchmark_config(benchmark) if config is None else config
     work = benchmark_work(benchmark, root, out, list_file)
     settings = _settings(benchmark, Path(root), config,
                          None if calibration_file is None else str(calibration_file), auto_geometry)
@@ -1558,20 +1631,10 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     # the cluster is reached before anything is written: a bad --scheduler leaves no trace
     with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client:
         sequences = list(dict.fromkeys(w.sequence for w in todo))
-        configs = {sequence: config for sequence in sequences}
-        geometries = []
+        configs, geometries, fallbacks = {sequence: config for sequence in sequences}, [], []
         if auto_geometry is not None:
-            groups = [[w for w in work if w.sequence == sequence] for sequence in sequences]
-            if client is None:
-                estimates = (_sequence_geometry(g, Path(root), calibration, auto_geometry) for g in groups)
-            else:  # one task per sequence, all sent at once; results in order
-                estimates = cluster.map_ordered(client, _sequence_geometry, groups, root=Path(root),
-                                                calibration=calibration, options=auto_geometry)
-            for sequence, geo in zip(sequences, estimates):
-                geometries.append((sequence, geo))
-                if on_geometry is not None:
-                    on_geometry(sequence, geo)
-                configs[sequence] = with_geometry(config, geo)
+            configs, geometries, fallbacks = _sequence_configs(work, sequences, config, calibration,
+                                                               auto_geometry, client, on_geometry)
         if not recorded:
             path = out / PREDICT_SETTINGS
             io.remove_stale_temp_files(path)
@@ -1592,4 +1655,4 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     if benchmark == "tusimple":
         output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
     return PredictRun(len(work), len(work) - len(todo), tuple(outcomes), output,
-                      time.perf_counter() - t0, tuple(geometries))
+                      time.perf_counter() - t0, tuple(geometries), tuple(fallbacks))

@@ -1,6 +1,7 @@
 """Tests of the synthetic benchmark samples (``synth.datasets``) and ``predict`` (``runs.predict_benchmark``):
-the layouts and their labels, predictions in each format, resuming, bad input, and the round trip
-through ``evaluate``. The samples are a few frames each, rendered once per module."""
+the layouts and their labels, predictions in each format, resuming, bad input, the round trip
+through ``evaluate``, the default config (the benchmark's preset) and the sequences whose geometry
+estimate is not used. The samples are a few frames each, rendered once per module."""
 from __future__ import annotations
 
 import json
@@ -11,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import io, runs
+from lanelib import config, io, runs
 from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.cli import main
 from lanelib.config import PipelineConfig
@@ -279,3 +280,104 @@ def test_detect_lines_finds_the_labelled_lines_with_the_true_geometry(ts_root):
             total += 1
             matched += max(metrics.line_accuracy(p, gt, thr, True) for p in preds) >= 0.85
     assert matched >= total - 1, f"{matched} of {total} labelled lines found"
+
+
+# --------------------------------------------------------------------------- the config and geometry of a run
+
+def settings_config(out: Path) -> dict:
+    return json.loads((out / runs.PREDICT_SETTINGS).read_text())["config"]
+
+
+@pytest.fixture
+def culane_preset(tmp_path, monkeypatch) -> PipelineConfig:
+    """The bundled presets, the culane one replaced by a camera of its own (other points, scale)."""
+    presets = Path(shutil.copytree(config.PRESETS_DIR, tmp_path / "presets"))
+    (presets / "culane.json").write_text(json.dumps({"perspective": {
+        "src_px": [[760, 400], [300, 590], [1340, 590], [880, 400]],
+        "dst_px": [[410, 0], [410, 590], [1230, 590], [1230, 0]], "size_px": [1640, 590],
+        "lane_width_m": 3.75, "visible_length_m": 30.0}}))
+    monkeypatch.setattr(config, "PRESETS_DIR", presets)
+    assert config.preset("culane") != PipelineConfig()
+    return config.preset("culane")
+
+
+def test_predict_uses_the_benchmarks_preset_unless_told_otherwise(tmp_path, cu_root, culane_preset, capsys):
+    def run(name: str, *extra: str) -> dict:
+        assert main(["predict", "culane", str(cu_root), "-o", str(tmp_path / name), "--no-progress", *extra]) == 0
+        return settings_config(tmp_path / name)
+
+    assert run("default") == config.to_dict(culane_preset) == config.to_dict(config.benchmark_config("culane"))
+    assert run("highway", "--config", "highway") == config.to_dict(config.preset("highway"))
+    assert run("set", "--set", "lines.min_span_m=4") == config.to_dict(
+        config.override(culane_preset, ["lines.min_span_m=4"]))
+    # the library's default is the CLI's
+    runs.predict_benchmark("culane", cu_root, tmp_path / "library", progress=False)
+    assert settings_config(tmp_path / "library") == config.to_dict(culane_preset)
+    assert config.benchmark_config("no such benchmark") == PipelineConfig()
+    with pytest.raises(SystemExit):
+        main(["predict", "--help"])
+    assert "default: the preset named like the benchmark" in " ".join(capsys.readouterr().out.split())
+
+
+@pytest.fixture(scope="module")
+def cu_two(tmp_path_factory) -> Path:
+    """A CULane sample of two sequences of 5 frames (the first one's estimate has confidence 1)."""
+    root = tmp_path_factory.mktemp("culane_two")
+    write_dataset("culane", root, 10, per_sequence=5)
+    return root
+
+
+def sequence_entries(root: Path) -> dict[str, list[str]]:
+    entries: dict[str, list[str]] = {}
+    for entry in culane.read_list(root / "list" / "test.txt"):
+        entries.setdefault(runs.frame_sequence("culane", entry), []).append(entry)
+    return entries
+
+
+def lines_texts(out: Path, entries: list[str]) -> list[str]:
+    return [culane.lines_path(out, e).read_text() for e in entries]
+
+
+def test_a_sequence_without_a_vanishing_point_keeps_the_preset_and_the_run_goes_on(tmp_path, cu_two, capsys):
+    reference = tmp_path / "reference"  # every sequence as rendered
+    assert predict("culane", cu_two, reference) == 0
+    root = copy(cu_two, tmp_path)
+    (good, good_entries), (grey, grey_entries) = sequence_entries(root).items()
+    for entry in grey_entries:
+        io.write_image(root / entry.lstrip("/"), np.full((590, 1640, 3), 90, np.uint8))
+    capsys.readouterr()
+    assert predict("culane", root, tmp_path / "pred") == 0
+    text = capsys.readouterr().out
+    notes = [line for line in text.splitlines() if "road geometry not used" in line]
+    assert len(notes) == 1 and notes[0].startswith(f"{grey}: road geometry not used (no consistent vanishing point")
+    assert "no road" in notes[0] and notes[0].endswith("its frames use the culane preset's bird's-eye points")
+    assert f"{good}: road geometry from its frames" in text and "10 frames: 10 predicted" in text
+    # every frame is written: the grey ones with no line, the others as with every sequence confident
+    assert lines_texts(tmp_path / "pred", grey_entries) == [""] * 5
+    assert lines_texts(tmp_path / "pred", good_entries) == lines_texts(reference, good_entries)
+    # ... where the estimate moved the lines from where the preset's points put them
+    assert main(["predict", "culane", str(root), "-o", str(tmp_path / "preset"), "--no-progress"]) == 0
+    assert lines_texts(tmp_path / "preset", good_entries) != lines_texts(reference, good_entries)
+
+
+def test_an_unconfident_estimate_falls_back_unless_accepted(tmp_path, cu_two):
+    root = copy(cu_two, tmp_path)
+    sequence, entries = next(iter(sequence_entries(root).items()))
+    for entry in entries[:3]:  # 2 frames of road left: too few for a confident estimate
+        io.write_image(root / entry.lstrip("/"), np.full((590, 1640, 3), 90, np.uint8))
+    lst = tmp_path / "list.txt"
+    lst.write_text("".join(f"{e}\n" for e in entries))
+    common = dict(list_file=lst, progress=False)
+    refused = runs.predict_benchmark("culane", root, tmp_path / "refused", auto_geometry=runs.GeometryOptions(),
+                                     **common)
+    assert refused.geometries == () and [f.sequence for f in refused.fallbacks] == [sequence]
+    reason = refused.fallbacks[0].reason
+    assert "has confidence 0." in reason and "below 0.5" in reason and "--accept-low-confidence" in reason
+    assert len(refused.outcomes) == 5 and not refused.failed
+    # its frames are predicted with the config's points, as without --auto-geometry
+    runs.predict_benchmark("culane", root, tmp_path / "preset", **common)
+    assert lines_texts(tmp_path / "refused", entries) == lines_texts(tmp_path / "preset", entries)
+    accepted = runs.predict_benchmark("culane", root, tmp_path / "accepted", **common,
+                                      auto_geometry=runs.GeometryOptions(accept_low_confidence=True))
+    assert [s for s, _ in accepted.geometries] == [sequence] and accepted.fallbacks == ()
+    assert accepted.geometries[0][1].low_confidence
