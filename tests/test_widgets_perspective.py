@@ -9,7 +9,8 @@ import ipyevents
 import pytest
 
 from lanelib import widgets
-from lanelib.perspective import PerspectiveConfig, trapezoid_src
+from lanelib.config import PipelineConfig, load_config, save_config
+from lanelib.perspective import PerspectiveConfig
 from lanelib.widgets.perspective import click_to_frame
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,7 +82,8 @@ def test_a_per_corner_control_moves_only_its_corner(tuner):
                                                before.src_px[3])
     # the symmetric sliders follow as the summary
     assert tuner.controls["top_width"].value == pytest.approx(715.7 - 570.0)
-    assert tuner.controls["centre_x"].value == pytest.approx((570.0 + 715.7 + 193.0 + 1087.0) / 4, abs=0.005)
+    # (on the sliders' 0.1 px step)
+    assert tuner.controls["centre_x"].value == pytest.approx((570.0 + 715.7 + 193.0 + 1087.0) / 4, abs=0.05)
     # a dst side moves that side only
     tuner.controls["dst.left_x"].value = 300.0
     assert tuner.config.perspective.dst_px == ((300.0, 0.0), (300.0, 720.0), (960.0, 720.0), (960.0, 0.0))
@@ -90,18 +92,72 @@ def test_a_per_corner_control_moves_only_its_corner(tuner):
     assert tuner.controls["dst_margin"].value == 310.0
 
 
-def test_a_symmetric_slider_rewrites_all_four_corners(tuner):
-    tuner.set_points(PUBLISHED[1][0], _dst(350, 940))
+def _src_controls(tuner) -> tuple:
+    return tuple((tuner.controls[f"src.{c}.x"].value, tuner.controls[f"src.{c}.y"].value)
+                 for c in ("tl", "bl", "br", "tr"))
+
+
+def test_a_symmetric_slider_moves_the_corners_by_its_change_only(tuner):
+    tuner.set_points(PUBLISHED[1][0], _dst(350, 940))  # off-centre: top centre 645, bottom 665
+    set_ = tuner.config.perspective
     tuner.controls["top_y"].value = 470.0
-    src = tuner.config.perspective.src_px
-    assert src == trapezoid_src(470.0, 720.0, 132.0, 924.0, 655.0)
-    for corner, (x, y) in zip(("tl", "bl", "br", "tr"), src):
-        assert (tuner.controls[f"src.{corner}.x"].value, tuner.controls[f"src.{corner}.y"].value) == (x, y)
+    assert tuner.config.perspective.src_px == ((579, 470), (203, 720), (1127, 720), (711, 470))
+    assert _src_controls(tuner) == tuner.config.perspective.src_px
     assert tuner.config.perspective.dst_px == _dst(350, 940)  # a src slider leaves the dst alone
+    tuner.controls["top_width"].value = 142.0
+    tuner.controls["bottom_width"].value = 904.0
+    tuner.controls["centre_x"].value = 650.0
+    assert tuner.config.perspective.src_px == ((569, 470), (208, 720), (1112, 720), (711, 470))
+    assert tuner.error == ""
+    # the other sliders keep their values; the per-corner controls follow
+    assert {k: tuner.controls[k].value for k in ("top_y", "top_width", "bottom_width", "centre_x")} == {
+        "top_y": 470.0, "top_width": 142.0, "bottom_width": 904.0, "centre_x": 650.0}
+    assert _src_controls(tuner) == tuner.config.perspective.src_px
+    # dst_margin moves both dst lines inwards by its change (the margins were 350 and 340)
+    assert tuner.controls["dst_margin"].value == 345.0
     tuner.controls["dst_margin"].value = 320.0
-    assert tuner.config.perspective.dst_px == _dst(320, 960)
-    assert tuner.config.perspective.src_px == src
-    assert (tuner.controls["dst.left_x"].value, tuner.controls["dst.right_x"].value) == (320.0, 960.0)
+    assert tuner.config.perspective.dst_px == _dst(325, 965)
+    assert (tuner.controls["dst.left_x"].value, tuner.controls["dst.right_x"].value) == (325.0, 965.0)
+    # every slider back: the points as they were set, exactly
+    for key, value in (("centre_x", 655.0), ("top_y", 460.0), ("dst_margin", 345.0),
+                       ("bottom_width", 924.0), ("top_width", 132.0)):
+        tuner.controls[key].value = value
+    assert tuner.config.perspective == set_
+
+
+def test_sliders_moved_away_and_back_restore_the_loaded_points_exactly(tuner, tmp_path):
+    # an off-centre, tilted point set with its own length and car line, as a file holds it
+    loaded = PerspectiveConfig(((601.37, 452.81), (188.05, 717.3), (1121.6, 712.94), (704.19, 455.02)),
+                               ((333.3, 0.0), (318.7, 720.0), (947.1, 720.0), (951.9, 4.5)),
+                               (1280, 720), 3.6, 31.234, 651.25)
+    path = tmp_path / "loaded.json"
+    save_config(PipelineConfig(perspective=loaded), path)
+    tuner.load(path)
+    assert tuner.config.perspective == loaded
+    for key in ("top_y", "top_width", "bottom_width", "centre_x", "dst_margin"):
+        shown = tuner.controls[key].value
+        tuner.controls[key].value = shown + 7.3
+        moved = tuner.config.perspective
+        assert moved != loaded and tuner.error == "", key
+        # only what the slider means changed: the other corners, or the other part, stay exact
+        if key == "top_y":
+            assert [p[0] for p in moved.src_px] == [p[0] for p in loaded.src_px]
+            assert moved.src_px[1:3] == loaded.src_px[1:3]
+        if key == "dst_margin":
+            assert moved.src_px == loaded.src_px and moved.visible_length_m == loaded.visible_length_m
+        else:
+            assert moved.dst_px == loaded.dst_px
+        tuner.controls[key].value = shown
+        assert tuner.config.perspective == loaded, key
+        assert _src_controls(tuner) == loaded.src_px
+    # several sliders away at once, and back in another order
+    values = {k: tuner.controls[k].value for k in ("top_y", "centre_x", "top_width", "dst_margin")}
+    for key, value in values.items():
+        tuner.controls[key].value = value - 4.2
+    for key in reversed(values):
+        tuner.controls[key].value = values[key]
+    assert tuner.config.perspective == loaded
+    assert tuner.save(tmp_path / "again.json") and load_config(tmp_path / "again.json").perspective == loaded
 
 
 def test_four_clicks_place_the_four_corners(tuner):
