@@ -67,7 +67,8 @@ from __future__ import annotations
 # lanelib.perspective; they are re-exported here for code that imported them from widgets
 from ..draw import sheet, shrink
 from ..perspective import StraightLineCheck, straight_line_check
-from .base import Tuner, image_choices, video_choices
+from .base import Tuner
+from .choices import image_choices, video_choices
 from .fit import FitTuner
 from .hough import HoughTuner, hough_image_choices
 from .perspective import PerspectiveTuner

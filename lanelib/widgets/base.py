@@ -1,5 +1,5 @@
-"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load), the
-image picker's choices and the layout helpers of the controls.
+"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load) and the
+layout helpers of the controls; the picker's choices live in ``widgets/choices.py``.
 
 A tuner shows an image picker, its controls, one persistent ``ipywidgets.Image`` holding JPEG bytes
 of a downscaled ``draw.sheet`` of named views, and a text readout of the numbers that matter.
@@ -33,48 +33,14 @@ import numpy as np
 from .. import io
 from ..camera import Calibration
 from ..config import PipelineConfig, from_dict, load_config, migrate, save_parts, to_dict
-from ..data import UDACITY_ADVANCED, bundled, data_root, repo_root, udacity, udacity_calibration
+from ..data import repo_root, udacity, udacity_calibration
 from ..draw import sheet
 from ..errors import ConfigError, InputError, LaneLibError
 from ..pipeline import LanePipeline
+from .choices import UDACITY_PREFIX, VIDEO_PREFIX, image_choices, is_video, video_choices  # noqa: F401
 
-UDACITY_PREFIX = "udacity/"
-VIDEO_PREFIX = "videos/"
 PARTS = tuple(f.name for f in fields(PipelineConfig))  # the parts of a PipelineConfig file
 T = TypeVar("T")
-
-
-def image_choices(root: str | os.PathLike | None = None,
-                  data: str | os.PathLike | None = None, videos: bool = False) -> dict[str, Path]:
-    """Return the picker's images: label -> path, bundled ``test_images/`` first.
-
-    Bundled images are labelled by file name; the Udacity test images, when ``data`` (default
-    ``data_root()``) holds ``udacity-advanced/test_images``, follow as ``"udacity/<name>"``; with
-    ``videos``, the bundled videos come last as ``"videos/<name>"`` (``video_choices``).
-    """
-    out = {p.name: p for p in io.list_images(bundled("test_images", root))}
-    extra = Path(data if data is not None else data_root()) / UDACITY_ADVANCED / "test_images"
-    if extra.is_dir():
-        out.update({UDACITY_PREFIX + p.name: p for p in io.list_images(extra)})
-    if videos:
-        out.update(video_choices(root))
-    return out
-
-
-def video_choices(root: str | os.PathLike | None = None) -> dict[str, Path]:
-    """Return the bundled videos (``videos/*.mp4``) as picker items: ``"videos/<name>"`` -> path.
-
-    Give them to a tuner with the images (``{**image_choices(), **video_choices()}``, or
-    ``image_choices(videos=True)``): picking one shows a frame slider.
-    """
-    folder = bundled("videos", root)
-    files = sorted(folder.glob("*.mp4")) if folder.is_dir() else []
-    return {VIDEO_PREFIX + p.name: p for p in files}
-
-
-def is_video(path: str | os.PathLike) -> bool:
-    """Return True if ``path`` is named like a video (``io.VIDEO_SUFFIXES``)."""
-    return Path(path).suffix.lower() in io.VIDEO_SUFFIXES
 
 
 class Tuner:

@@ -16,7 +16,8 @@ from ..camera import Calibration
 from ..config import PipelineConfig
 from ..data import UDACITY_ADVANCED, UDACITY_P1, bundled, data_root
 from ..draw import shrink
-from .base import UDACITY_PREFIX, Tuner, row, sized
+from .base import Tuner, row, sized
+from .choices import UDACITY_PREFIX
 
 UDACITY_P1_PREFIX = "udacity-p1/"
 _PLAIN_KEYS = ("blur_kernel_px", "rho_px", "theta_deg", "threshold_votes", "min_line_length_px",

@@ -21,7 +21,8 @@ from ..errors import InputError
 from ..pipeline import LanePipeline
 from ..result import FrameResult
 from ..tracking import LaneTracker
-from .base import Tuner, fmt, is_video, row, sized, video_choices
+from .base import Tuner, fmt, row, sized
+from .choices import is_video, video_choices
 
 DEFAULT_MAX_FRAMES = 125  # 5 s at 25 fps
 STRIP_SIZE_PX = (1200, 160)  # (w, h) of the strip of confidences and offsets
