@@ -1,16 +1,21 @@
 """``PerspectiveTuner``'s four points: per-corner controls, the symmetric shortcut, ``set_points``
-and clicks on the preview (synthetic ``ipyevents`` event dicts, as the browser sends them)."""
+and clicks on the preview (synthetic ``ipyevents`` event dicts, as the browser sends them); folders
+of frames of other sizes (CULane-like 1640x590, a TuSimple-like tree)."""
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
+import cv2
 import ipyevents
+import numpy as np
 import pytest
 
-from lanelib import widgets
+from lanelib import io, widgets
 from lanelib.config import PipelineConfig, load_config, save_config
-from lanelib.perspective import PerspectiveConfig
+from lanelib.errors import InputError
+from lanelib.perspective import PerspectiveConfig, scaled
 from lanelib.widgets.perspective import click_to_frame
 
 REPO = Path(__file__).resolve().parents[1]
@@ -125,11 +130,25 @@ def test_a_symmetric_slider_moves_the_corners_by_its_change_only(tuner):
     assert tuner.config.perspective == set_
 
 
-def test_sliders_moved_away_and_back_restore_the_loaded_points_exactly(tuner, tmp_path):
-    # an off-centre, tilted point set with its own length and car line, as a file holds it
-    loaded = PerspectiveConfig(((601.37, 452.81), (188.05, 717.3), (1121.6, 712.94), (704.19, 455.02)),
-                               ((333.3, 0.0), (318.7, 720.0), (947.1, 720.0), (951.9, 4.5)),
-                               (1280, 720), 3.6, 31.234, 651.25)
+# off-centre, tilted point sets with their own lengths and car lines, as files hold them
+LOADED = {
+    "1280x720": PerspectiveConfig(((601.37, 452.81), (188.05, 717.3), (1121.6, 712.94), (704.19, 455.02)),
+                                  ((333.3, 0.0), (318.7, 720.0), (947.1, 720.0), (951.9, 4.5)),
+                                  (1280, 720), 3.6, 31.234, 651.25),
+    "1640x590": PerspectiveConfig(((771.234, 361.5), (301.2, 588.0), (1452.875, 583.1), (902.6, 360.25)),
+                                  ((430.0, 0.0), (430.0, 590.0), (1190.0, 590.0), (1190.0, 0.0)),
+                                  (1640, 590), 3.75, 27.5),
+}
+
+
+@pytest.mark.parametrize("size", LOADED)
+def test_sliders_moved_away_and_back_restore_the_loaded_points_exactly(size, camera, culane_folder,
+                                                                       tmp_path):
+    if size == "1280x720":
+        tuner = widgets.PerspectiveTuner({STRAIGHT: REPO / "test_images" / STRAIGHT}, calibration=camera)
+    else:
+        tuner = widgets.PerspectiveTuner(culane_folder)
+    loaded = LOADED[size]
     path = tmp_path / "loaded.json"
     save_config(PipelineConfig(perspective=loaded), path)
     tuner.load(path)
@@ -157,7 +176,62 @@ def test_sliders_moved_away_and_back_restore_the_loaded_points_exactly(tuner, tm
     for key in reversed(values):
         tuner.controls[key].value = values[key]
     assert tuner.config.perspective == loaded
-    assert tuner.save(tmp_path / "again.json") and load_config(tmp_path / "again.json").perspective == loaded
+    assert load_config(tuner.save(tmp_path / "again.json")).perspective == loaded
+
+
+# --------------------------------------------------------------------------- frames of any size
+
+SLIDERS = ("top_y", "centre_x", "top_width", "bottom_width", "dst_margin")
+
+
+def test_a_folder_of_culane_frames_opens_with_the_sliders_spanning_1640x590(culane_folder, tmp_path):
+    tuner = widgets.PerspectiveTuner(culane_folder)  # no calibration: the frames as recorded
+    assert list(tuner.images) == ["00000.jpg", "00030.jpg", "00060.jpg"]  # no .lines.txt, no README
+    assert tuner.raw.shape == (590, 1640, 3)
+    assert tuner.config.perspective == scaled(PerspectiveConfig(), (1640, 590))
+    c = tuner.controls
+    assert {k: c[k].max for k in SLIDERS} == {"top_y": 589, "centre_x": 1640, "top_width": 1640,
+                                              "bottom_width": 3280, "dst_margin": 819}
+    assert all(0 < c[k].value < c[k].max for k in SLIDERS)
+    assert (c["src.tl.x"].min, c["src.tl.x"].max, c["dst.top_y"].min, c["dst.top_y"].max) == (
+        -1640, 3280, -590, 1180)
+    # the preview: three tiles of the frame's shape (400 px wide, 590/1640 of that high)
+    sheet = cv2.imdecode(np.frombuffer(tuner.preview.value, np.uint8), cv2.IMREAD_COLOR)
+    assert sheet.shape == (144, 1200, 3)
+    assert tuner.birdseye.shape == (590, 1640, 3) and tuner.check.left_fit is not None
+    tuner.controls["top_y"].value = 300.0
+    tuner.picker.value = "00060.jpg"
+    assert tuner.error == "" and tuner.image == "00060.jpg" and tuner.raw.shape == (590, 1640, 3)
+    path = tuner.save(tmp_path / "culane.json")
+    assert json.loads(path.read_text())["perspective"]["size_px"] == [1640, 590]
+    assert load_config(path).perspective == tuner.config.perspective
+    assert [y for _, y in tuner.config.perspective.src_px] == pytest.approx([300.0, 590.0, 590.0, 300.0],
+                                                                            abs=0.05)
+
+
+def test_a_nested_folder_of_clips_opens_labelled_by_path(tmp_path, road_frame):
+    clips = tmp_path / "clips"  # laid out like TuSimple's: clips/<date>/<clip>/<n>.jpg
+    for clip, size in (("0313-1/8260", (1280, 720)), ("0313-1/14900", (1280, 720)), ("0313-2/520", (512, 288))):
+        (clips / clip).mkdir(parents=True)
+        for n in (19, 20):
+            io.write_image(clips / clip / f"{n}.jpg", road_frame(size, n))
+    (clips / ".thumbs").mkdir()
+    io.write_image(clips / ".thumbs" / "20.jpg", road_frame((64, 36)))  # hidden: left out
+    (clips / "0313-1" / "label_data.json").write_text("{}")
+    everything = widgets.PerspectiveTuner(clips)
+    assert list(everything.images) == ["0313-1/8260/19.jpg", "0313-1/8260/20.jpg", "0313-1/14900/19.jpg",
+                                       "0313-1/14900/20.jpg", "0313-2/520/19.jpg", "0313-2/520/20.jpg"]
+    last = widgets.folder_choices(clips, "*/*/20.jpg")
+    assert list(last) == ["0313-1/8260/20.jpg", "0313-1/14900/20.jpg", "0313-2/520/20.jpg"]
+    tuner = widgets.PerspectiveTuner(last)
+    assert tuner.raw.shape == (720, 1280, 3) and tuner.config.perspective == PerspectiveConfig()
+    # a frame of another size: the points are scaled to it and the sliders span it
+    tuner.picker.value = "0313-2/520/20.jpg"
+    assert tuner.raw.shape == (288, 512, 3) and tuner.config.perspective.size_px == (512, 288)
+    assert (tuner.controls["top_y"].max, tuner.controls["centre_x"].max) == (287, 512)
+    assert tuner.error == ""
+    with pytest.raises(InputError, match=r"holds no images or videos matching '\*/\*/21\.jpg'"):
+        widgets.folder_choices(clips, "*/*/21.jpg")
 
 
 def test_four_clicks_place_the_four_corners(tuner):

@@ -93,7 +93,7 @@ class HoughTuner(Tuner):
     shows = ("hough",)
     ROI_KEYS = ("roi.top_y", "roi.top_left", "roi.top_right", "roi.bottom_left", "roi.bottom_right")
 
-    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+    def __init__(self, images: Mapping[str, str | os.PathLike] | str | os.PathLike | None = None,
                  config: PipelineConfig = PipelineConfig(), image: str | None = None,
                  tile_width_px: int | None = None, jpeg_quality: int = 80):
         super().__init__(images if images is not None else hough_image_choices(), config, None,

@@ -388,12 +388,12 @@ class PerspectiveTuner(Tuner):
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
         size = (raw.shape[1], raw.shape[0])
-        if tuple(self.config.perspective.size_px) != size:
-            self._show(replace(self.config, perspective=scaled(self.config.perspective, size)))
         undistorter = self._cached("undistorter", (id(calibration), size),
                                    lambda: Undistorter(calibration, size))
         self._canvas = self._cached("canvas", (id(calibration), size),
                                     lambda: FastBirdseye(undistorter.lens))
+        if tuple(self.config.perspective.size_px) != size:  # after the lens took this size
+            self._show(replace(self.config, perspective=scaled(self.config.perspective, size)))
         self.undistorted = undistorter.undistort(raw)
         self._focal_px = implied_focal_px(self.config.perspective)
         self._small = shrink(self.undistorted, self._tile_size())
@@ -535,8 +535,7 @@ class PerspectiveTuner(Tuner):
         try:
             self.set_points(src, self.config.perspective.dst_px)
         except LaneLibError as e:
-            self.error = f"placed points {src}: {e}"
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(f"placed points {src}: {e}")
 
     # ---- the estimate -----------------------------------------------------------------------
 
@@ -584,8 +583,7 @@ class PerspectiveTuner(Tuner):
         try:
             self.estimate()
         except LaneLibError as e:
-            self.error = str(e)
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(str(e))
         finally:
             self.estimate_button.disabled = False
 
