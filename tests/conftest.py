@@ -1,5 +1,6 @@
-"""Shared test fixtures: where the real data lives (``lanelib.data``), the README's tables, and a
-synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``)."""
+"""Shared test fixtures: where the real data lives (``lanelib.data``), the README's tables, a
+synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``), and a
+folder of synthetic frames laid out like CULane's (``culane_folder``)."""
 from __future__ import annotations
 
 import math
@@ -8,10 +9,12 @@ import subprocess
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import imageio_ffmpeg
+import numpy as np
 import pytest
 
-from lanelib import data, runs
+from lanelib import data, io, runs
 from lanelib.camera import calibrate
 from lanelib.synth import Camera, CurvatureProfile, GroundGrid, video_sets, write_video
 
@@ -123,3 +126,36 @@ def bend_then_straight(tmp_path_factory) -> Path:
     clip = replace(base, name="refine", profile=profile, drift=((0.6, 16.0),))
     return write_video(tmp_path_factory.mktemp("refine") / "clip.mp4", clip, seconds=16.0,
                        grid=GroundGrid.build(REFINE_CAMERA))
+
+
+def _road_frame(size_px: tuple[int, int], seed: int = 0) -> np.ndarray:
+    """A synthetic road frame of ``size_px`` (w, h): grey asphalt, two white lines meeting at a
+    vanishing point 35 % down the frame (RGB uint8)."""
+    w, h = size_px
+    rng = np.random.default_rng(seed)
+    frame = np.clip(rng.normal(90, 6, (h, w, 3)), 0, 255).astype(np.uint8)
+    vx, vy = w // 2 + 4 * seed, round(0.35 * h)
+    for bottom_x in (round(0.15 * w), round(0.85 * w)):
+        far = (round(vx + 0.1 * (bottom_x - vx)), round(vy + 0.1 * (h - vy)))
+        cv2.line(frame, far, (bottom_x, h - 1), (235, 235, 235), max(2, w // 160), cv2.LINE_AA)
+    return frame
+
+
+@pytest.fixture(scope="session")
+def road_frame():
+    """Return a function: a synthetic road frame of a size (w, h), for folders of frames made in a
+    test (grey asphalt, two white lines meeting at a vanishing point 35 % down the frame)."""
+    return _road_frame
+
+
+@pytest.fixture()
+def culane_folder(tmp_path) -> Path:
+    """A folder laid out like a CULane clip: three synthetic 1640x590 ``.jpg`` frames, each with
+    its ``.lines.txt`` labels beside it, and a README that is no image."""
+    folder = tmp_path / "driver_1_90frame" / "06030819_0755.MP4"
+    folder.mkdir(parents=True)
+    for i, stem in enumerate(("00000", "00030", "00060")):
+        io.write_image(folder / f"{stem}.jpg", _road_frame((1640, 590), i))
+        (folder / f"{stem}.lines.txt").write_text("300.5 580 420.2 560 \n1300.1 580 1200.7 560 \n")
+    (folder / "README.txt").write_text("not an image\n")
+    return folder

@@ -15,7 +15,7 @@ import pytest
 
 from lanelib import draw, io, perspective, thresholds, widgets
 from lanelib.config import PipelineConfig, load_config, save_config, to_dict
-from lanelib.errors import ConfigError, InputError
+from lanelib.errors import CalibrationError, ConfigError, InputError
 from lanelib.hough import HoughConfig
 from lanelib.lanes import SearchConfig
 from lanelib.perspective import PerspectiveConfig, implied_focal_px, road_length_m, trapezoid_src
@@ -191,6 +191,23 @@ def test_load_rebuilds_the_birdseye_view_when_the_perspective_changes(road, tmp_
     assert t.config.perspective == pc
     assert not np.array_equal(t.birdseye, bird0)
     assert np.array_equal(t.birdseye, LanePipeline(t.config).birdseye(io.read_image(road[STRAIGHT])))
+
+
+def test_threshold_tuner_opens_a_folder_of_culane_frames(culane_folder):
+    t = widgets.ThresholdTuner(str(culane_folder))  # 1640x590 frames, their .lines.txt beside them
+    assert list(t.images) == ["00000.jpg", "00030.jpg", "00060.jpg"]
+    raw = io.read_image(culane_folder / "00000.jpg")
+    # the bird's-eye view and every mask at the frame's size, as the pipeline makes them for it
+    assert np.array_equal(t.birdseye, LanePipeline(t.config, size=(1640, 590)).birdseye(raw))
+    assert {v.shape[:2] for v in t.render().values() if v is not None} == {(590, 1640)}
+    assert t.counts()["combined"] > 0
+    rows = -(-len(t.render()) // 4)  # four tiles a row, 320 px wide and 590/1640 of that high
+    assert _decode(t.preview.value).shape[:2] == (rows * round(320 * 590 / 1640), 4 * 320)
+    bytes0 = t.preview.value
+    t.controls["white.range1"].value = (250, 255)
+    assert t.preview.value != bytes0 and t.error == ""
+    t.picker.value = "00060.jpg"
+    assert t.image == "00060.jpg" and t.error == "" and t.birdseye.shape == (590, 1640, 3)
 
 
 # --------------------------------------------------------------------------- perspective
@@ -398,6 +415,35 @@ def test_bad_images_raise_clear_errors(road, tmp_path):
         widgets.ThresholdTuner(road, image="nope.jpg")
     with pytest.raises(InputError, match="no images"):
         widgets.ThresholdTuner({})
+
+
+def test_a_folder_that_cannot_be_shown_says_which_and_what_to_do(culane_folder, tmp_path, camera):
+    with pytest.raises(InputError, match=f"{tmp_path / 'nope'}: no such folder; pass a folder of frames"):
+        widgets.ThresholdTuner(tmp_path / "nope")
+    with pytest.raises(InputError, match="00000.lines.txt: not a folder"):
+        widgets.PerspectiveTuner(culane_folder / "00000.lines.txt")
+    labels = tmp_path / "labels"
+    labels.mkdir()
+    (labels / "00000.lines.txt").write_text("1 2 3 4\n")
+    with pytest.raises(InputError, match=f"{labels}: holds no images or videos"):
+        widgets.ThresholdTuner(labels)
+    with pytest.raises(InputError, match=r"VideoTuner: 00000.jpg \(00000.jpg\), 00030.jpg .* not a video"):
+        widgets.VideoTuner(culane_folder)
+    # the bundled camera's calibration cannot take 1640x590 frames: which frame, and the way out
+    with pytest.raises(CalibrationError, match=r"00000.jpg: frame is 1640x590 .*calibration=None"):
+        widgets.PerspectiveTuner(culane_folder, calibration=camera)
+    # an unreadable frame picked: the frame shown stays, picked again, and the readout says why
+    (culane_folder / "00045.jpg").write_bytes(b"not a jpeg")
+    for kind in (widgets.ThresholdTuner, widgets.PerspectiveTuner):
+        t = kind(culane_folder, image="00030.jpg")
+        config, bytes0 = t.config, t.preview.value
+        t.picker.value = "00045.jpg"
+        assert t.image == "00030.jpg" and t.config == config and t.preview.value == bytes0
+        assert "00045.jpg: not a readable image" in t.error and "color:#c00" in t.message.value
+        t.picker.value = "00060.jpg"
+        assert t.error == "" and "color:#c00" not in t.message.value
+    with pytest.raises(InputError, match=r"'01234.jpg' is not among .*00045.jpg, 00060.jpg\); pass one"):
+        widgets.ThresholdTuner(culane_folder, image="01234.jpg")
 
 
 def test_image_choices_lists_bundled_then_udacity(tmp_path):

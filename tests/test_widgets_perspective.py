@@ -1,15 +1,21 @@
 """``PerspectiveTuner``'s four points: per-corner controls, the symmetric shortcut, ``set_points``
-and clicks on the preview (synthetic ``ipyevents`` event dicts, as the browser sends them)."""
+and clicks on the preview (synthetic ``ipyevents`` event dicts, as the browser sends them); folders
+of frames of other sizes (CULane-like 1640x590, a TuSimple-like tree)."""
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
+import cv2
 import ipyevents
+import numpy as np
 import pytest
 
-from lanelib import widgets
-from lanelib.perspective import PerspectiveConfig, trapezoid_src
+from lanelib import io, widgets
+from lanelib.config import PipelineConfig, load_config, save_config
+from lanelib.errors import InputError
+from lanelib.perspective import PerspectiveConfig, scaled
 from lanelib.widgets.perspective import click_to_frame
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,7 +87,8 @@ def test_a_per_corner_control_moves_only_its_corner(tuner):
                                                before.src_px[3])
     # the symmetric sliders follow as the summary
     assert tuner.controls["top_width"].value == pytest.approx(715.7 - 570.0)
-    assert tuner.controls["centre_x"].value == pytest.approx((570.0 + 715.7 + 193.0 + 1087.0) / 4, abs=0.005)
+    # (on the sliders' 0.1 px step)
+    assert tuner.controls["centre_x"].value == pytest.approx((570.0 + 715.7 + 193.0 + 1087.0) / 4, abs=0.05)
     # a dst side moves that side only
     tuner.controls["dst.left_x"].value = 300.0
     assert tuner.config.perspective.dst_px == ((300.0, 0.0), (300.0, 720.0), (960.0, 720.0), (960.0, 0.0))
@@ -90,18 +97,141 @@ def test_a_per_corner_control_moves_only_its_corner(tuner):
     assert tuner.controls["dst_margin"].value == 310.0
 
 
-def test_a_symmetric_slider_rewrites_all_four_corners(tuner):
-    tuner.set_points(PUBLISHED[1][0], _dst(350, 940))
+def _src_controls(tuner) -> tuple:
+    return tuple((tuner.controls[f"src.{c}.x"].value, tuner.controls[f"src.{c}.y"].value)
+                 for c in ("tl", "bl", "br", "tr"))
+
+
+def test_a_symmetric_slider_moves_the_corners_by_its_change_only(tuner):
+    tuner.set_points(PUBLISHED[1][0], _dst(350, 940))  # off-centre: top centre 645, bottom 665
+    set_ = tuner.config.perspective
     tuner.controls["top_y"].value = 470.0
-    src = tuner.config.perspective.src_px
-    assert src == trapezoid_src(470.0, 720.0, 132.0, 924.0, 655.0)
-    for corner, (x, y) in zip(("tl", "bl", "br", "tr"), src):
-        assert (tuner.controls[f"src.{corner}.x"].value, tuner.controls[f"src.{corner}.y"].value) == (x, y)
+    assert tuner.config.perspective.src_px == ((579, 470), (203, 720), (1127, 720), (711, 470))
+    assert _src_controls(tuner) == tuner.config.perspective.src_px
     assert tuner.config.perspective.dst_px == _dst(350, 940)  # a src slider leaves the dst alone
+    tuner.controls["top_width"].value = 142.0
+    tuner.controls["bottom_width"].value = 904.0
+    tuner.controls["centre_x"].value = 650.0
+    assert tuner.config.perspective.src_px == ((569, 470), (208, 720), (1112, 720), (711, 470))
+    assert tuner.error == ""
+    # the other sliders keep their values; the per-corner controls follow
+    assert {k: tuner.controls[k].value for k in ("top_y", "top_width", "bottom_width", "centre_x")} == {
+        "top_y": 470.0, "top_width": 142.0, "bottom_width": 904.0, "centre_x": 650.0}
+    assert _src_controls(tuner) == tuner.config.perspective.src_px
+    # dst_margin moves both dst lines inwards by its change (the margins were 350 and 340)
+    assert tuner.controls["dst_margin"].value == 345.0
     tuner.controls["dst_margin"].value = 320.0
-    assert tuner.config.perspective.dst_px == _dst(320, 960)
-    assert tuner.config.perspective.src_px == src
-    assert (tuner.controls["dst.left_x"].value, tuner.controls["dst.right_x"].value) == (320.0, 960.0)
+    assert tuner.config.perspective.dst_px == _dst(325, 965)
+    assert (tuner.controls["dst.left_x"].value, tuner.controls["dst.right_x"].value) == (325.0, 965.0)
+    # every slider back: the points as they were set, exactly
+    for key, value in (("centre_x", 655.0), ("top_y", 460.0), ("dst_margin", 345.0),
+                       ("bottom_width", 924.0), ("top_width", 132.0)):
+        tuner.controls[key].value = value
+    assert tuner.config.perspective == set_
+
+
+# off-centre, tilted point sets with their own lengths and car lines, as files hold them
+LOADED = {
+    "1280x720": PerspectiveConfig(((601.37, 452.81), (188.05, 717.3), (1121.6, 712.94), (704.19, 455.02)),
+                                  ((333.3, 0.0), (318.7, 720.0), (947.1, 720.0), (951.9, 4.5)),
+                                  (1280, 720), 3.6, 31.234, 651.25),
+    "1640x590": PerspectiveConfig(((771.234, 361.5), (301.2, 588.0), (1452.875, 583.1), (902.6, 360.25)),
+                                  ((430.0, 0.0), (430.0, 590.0), (1190.0, 590.0), (1190.0, 0.0)),
+                                  (1640, 590), 3.75, 27.5),
+}
+
+
+@pytest.mark.parametrize("size", LOADED)
+def test_sliders_moved_away_and_back_restore_the_loaded_points_exactly(size, camera, culane_folder,
+                                                                       tmp_path):
+    if size == "1280x720":
+        tuner = widgets.PerspectiveTuner({STRAIGHT: REPO / "test_images" / STRAIGHT}, calibration=camera)
+    else:
+        tuner = widgets.PerspectiveTuner(culane_folder)
+    loaded = LOADED[size]
+    path = tmp_path / "loaded.json"
+    save_config(PipelineConfig(perspective=loaded), path)
+    tuner.load(path)
+    assert tuner.config.perspective == loaded
+    for key in ("top_y", "top_width", "bottom_width", "centre_x", "dst_margin"):
+        shown = tuner.controls[key].value
+        tuner.controls[key].value = shown + 7.3
+        moved = tuner.config.perspective
+        assert moved != loaded and tuner.error == "", key
+        # only what the slider means changed: the other corners, or the other part, stay exact
+        if key == "top_y":
+            assert [p[0] for p in moved.src_px] == [p[0] for p in loaded.src_px]
+            assert moved.src_px[1:3] == loaded.src_px[1:3]
+        if key == "dst_margin":
+            assert moved.src_px == loaded.src_px and moved.visible_length_m == loaded.visible_length_m
+        else:
+            assert moved.dst_px == loaded.dst_px
+        tuner.controls[key].value = shown
+        assert tuner.config.perspective == loaded, key
+        assert _src_controls(tuner) == loaded.src_px
+    # several sliders away at once, and back in another order
+    values = {k: tuner.controls[k].value for k in ("top_y", "centre_x", "top_width", "dst_margin")}
+    for key, value in values.items():
+        tuner.controls[key].value = value - 4.2
+    for key in reversed(values):
+        tuner.controls[key].value = values[key]
+    assert tuner.config.perspective == loaded
+    assert load_config(tuner.save(tmp_path / "again.json")).perspective == loaded
+
+
+# --------------------------------------------------------------------------- frames of any size
+
+SLIDERS = ("top_y", "centre_x", "top_width", "bottom_width", "dst_margin")
+
+
+def test_a_folder_of_culane_frames_opens_with_the_sliders_spanning_1640x590(culane_folder, tmp_path):
+    tuner = widgets.PerspectiveTuner(culane_folder)  # no calibration: the frames as recorded
+    assert list(tuner.images) == ["00000.jpg", "00030.jpg", "00060.jpg"]  # no .lines.txt, no README
+    assert tuner.raw.shape == (590, 1640, 3)
+    assert tuner.config.perspective == scaled(PerspectiveConfig(), (1640, 590))
+    c = tuner.controls
+    assert {k: c[k].max for k in SLIDERS} == {"top_y": 589, "centre_x": 1640, "top_width": 1640,
+                                              "bottom_width": 3280, "dst_margin": 819}
+    assert all(0 < c[k].value < c[k].max for k in SLIDERS)
+    assert (c["src.tl.x"].min, c["src.tl.x"].max, c["dst.top_y"].min, c["dst.top_y"].max) == (
+        -1640, 3280, -590, 1180)
+    # the preview: three tiles of the frame's shape (400 px wide, 590/1640 of that high)
+    sheet = cv2.imdecode(np.frombuffer(tuner.preview.value, np.uint8), cv2.IMREAD_COLOR)
+    assert sheet.shape == (144, 1200, 3)
+    assert tuner.birdseye.shape == (590, 1640, 3) and tuner.check.left_fit is not None
+    tuner.controls["top_y"].value = 300.0
+    tuner.picker.value = "00060.jpg"
+    assert tuner.error == "" and tuner.image == "00060.jpg" and tuner.raw.shape == (590, 1640, 3)
+    path = tuner.save(tmp_path / "culane.json")
+    assert json.loads(path.read_text())["perspective"]["size_px"] == [1640, 590]
+    assert load_config(path).perspective == tuner.config.perspective
+    assert [y for _, y in tuner.config.perspective.src_px] == pytest.approx([300.0, 590.0, 590.0, 300.0],
+                                                                            abs=0.05)
+
+
+def test_a_nested_folder_of_clips_opens_labelled_by_path(tmp_path, road_frame):
+    clips = tmp_path / "clips"  # laid out like TuSimple's: clips/<date>/<clip>/<n>.jpg
+    for clip, size in (("0313-1/8260", (1280, 720)), ("0313-1/14900", (1280, 720)), ("0313-2/520", (512, 288))):
+        (clips / clip).mkdir(parents=True)
+        for n in (19, 20):
+            io.write_image(clips / clip / f"{n}.jpg", road_frame(size, n))
+    (clips / ".thumbs").mkdir()
+    io.write_image(clips / ".thumbs" / "20.jpg", road_frame((64, 36)))  # hidden: left out
+    (clips / "0313-1" / "label_data.json").write_text("{}")
+    everything = widgets.PerspectiveTuner(clips)
+    assert list(everything.images) == ["0313-1/8260/19.jpg", "0313-1/8260/20.jpg", "0313-1/14900/19.jpg",
+                                       "0313-1/14900/20.jpg", "0313-2/520/19.jpg", "0313-2/520/20.jpg"]
+    last = widgets.folder_choices(clips, "*/*/20.jpg")
+    assert list(last) == ["0313-1/8260/20.jpg", "0313-1/14900/20.jpg", "0313-2/520/20.jpg"]
+    tuner = widgets.PerspectiveTuner(last)
+    assert tuner.raw.shape == (720, 1280, 3) and tuner.config.perspective == PerspectiveConfig()
+    # a frame of another size: the points are scaled to it and the sliders span it
+    tuner.picker.value = "0313-2/520/20.jpg"
+    assert tuner.raw.shape == (288, 512, 3) and tuner.config.perspective.size_px == (512, 288)
+    assert (tuner.controls["top_y"].max, tuner.controls["centre_x"].max) == (287, 512)
+    assert tuner.error == ""
+    with pytest.raises(InputError, match=r"holds no images or videos matching '\*/\*/21\.jpg'"):
+        widgets.folder_choices(clips, "*/*/21.jpg")
 
 
 def test_four_clicks_place_the_four_corners(tuner):

@@ -60,6 +60,15 @@ Any tuner also takes videos among its picker's items (``{"clip": "videos/project
 ``image_choices(videos=True)`` / ``video_choices()`` for the bundled ones as ``"videos/<name>"``):
 picking one shows a frame slider (``tuner.frame_slider``, ``tuner.frame``), and the frame it stops
 on is read by seeking (``io.read_frame``) and tuned like an image.
+
+Any tuner also opens a folder: ``PerspectiveTuner("path/to/frames")`` picks from the folder's
+images and videos at any depth, labelled by their paths inside it (``folder_choices``; other
+files such as CULane's ``*.lines.txt`` labels are left out), and ``folder_choices(folder,
+"*/*/20.jpg")`` picks the last frame of each clip of a TuSimple ``clips/`` tree. Frames of any
+size work (CULane's 1640x590, TuSimple's 1280x720): the perspective's points are scaled to the
+picked image, the perspective tuner's sliders span its size and ``save`` writes its points with
+that size (``size_px``). An item that cannot be shown (unreadable, or a size the calibration
+cannot take) leaves the item picked before and says why in the readout.
 """
 from __future__ import annotations
 
@@ -67,7 +76,8 @@ from __future__ import annotations
 # lanelib.perspective; they are re-exported here for code that imported them from widgets
 from ..draw import sheet, shrink
 from ..perspective import StraightLineCheck, straight_line_check
-from .base import Tuner, image_choices, video_choices
+from .base import Tuner
+from .choices import folder_choices, image_choices, video_choices
 from .fit import FitTuner
 from .hough import HoughTuner, hough_image_choices
 from .perspective import PerspectiveTuner
@@ -75,6 +85,5 @@ from .thresholds import ThresholdTuner
 from .video import TunedVideo, VideoTuner
 
 __all__ = ["ThresholdTuner", "PerspectiveTuner", "FitTuner", "HoughTuner", "VideoTuner", "TunedVideo",
-           "Tuner", "image_choices",
-           "video_choices",
+           "Tuner", "image_choices", "video_choices", "folder_choices",
            "hough_image_choices", "sheet", "shrink", "straight_line_check", "StraightLineCheck"]

@@ -1,5 +1,5 @@
-"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load), the
-image picker's choices and the layout helpers of the controls.
+"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load) and the
+layout helpers of the controls; the picker's choices live in ``widgets/choices.py``.
 
 A tuner shows an image picker, its controls, one persistent ``ipywidgets.Image`` holding JPEG bytes
 of a downscaled ``draw.sheet`` of named views, and a text readout of the numbers that matter.
@@ -12,6 +12,8 @@ picked image (``_prepare``).
 The picker's items may be videos (``io.VIDEO_SUFFIXES``) as well as images: a video shows a frame
 slider (``frame_slider``, ``tuner.frame``) under the picker, and each frame it stops on is read by
 seeking (``io.read_frame``) and goes through the same ``_prepare`` and ``_update`` as an image.
+The items may also be a folder (``folder_choices``: its images and videos at any depth, e.g. a
+CULane folder of 1640x590 frames or a TuSimple tree of clips), of any size.
 
 Every tuner exports what it shows (``export``, the ``export`` button): the preview sheet and the
 picked frame annotated with the tuned config as the command line draws it (``annotated``), as
@@ -33,48 +35,15 @@ import numpy as np
 from .. import io
 from ..camera import Calibration
 from ..config import PipelineConfig, from_dict, load_config, migrate, save_parts, to_dict
-from ..data import UDACITY_ADVANCED, bundled, data_root, repo_root, udacity, udacity_calibration
+from ..data import repo_root, udacity, udacity_calibration
 from ..draw import sheet
-from ..errors import ConfigError, InputError, LaneLibError
+from ..errors import CalibrationError, ConfigError, InputError, LaneLibError
 from ..pipeline import LanePipeline
+from .choices import (UDACITY_PREFIX, VIDEO_PREFIX, folder_choices, image_choices,  # noqa: F401
+                      is_video, picker_items, video_choices)
 
-UDACITY_PREFIX = "udacity/"
-VIDEO_PREFIX = "videos/"
 PARTS = tuple(f.name for f in fields(PipelineConfig))  # the parts of a PipelineConfig file
 T = TypeVar("T")
-
-
-def image_choices(root: str | os.PathLike | None = None,
-                  data: str | os.PathLike | None = None, videos: bool = False) -> dict[str, Path]:
-    """Return the picker's images: label -> path, bundled ``test_images/`` first.
-
-    Bundled images are labelled by file name; the Udacity test images, when ``data`` (default
-    ``data_root()``) holds ``udacity-advanced/test_images``, follow as ``"udacity/<name>"``; with
-    ``videos``, the bundled videos come last as ``"videos/<name>"`` (``video_choices``).
-    """
-    out = {p.name: p for p in io.list_images(bundled("test_images", root))}
-    extra = Path(data if data is not None else data_root()) / UDACITY_ADVANCED / "test_images"
-    if extra.is_dir():
-        out.update({UDACITY_PREFIX + p.name: p for p in io.list_images(extra)})
-    if videos:
-        out.update(video_choices(root))
-    return out
-
-
-def video_choices(root: str | os.PathLike | None = None) -> dict[str, Path]:
-    """Return the bundled videos (``videos/*.mp4``) as picker items: ``"videos/<name>"`` -> path.
-
-    Give them to a tuner with the images (``{**image_choices(), **video_choices()}``, or
-    ``image_choices(videos=True)``): picking one shows a frame slider.
-    """
-    folder = bundled("videos", root)
-    files = sorted(folder.glob("*.mp4")) if folder.is_dir() else []
-    return {VIDEO_PREFIX + p.name: p for p in files}
-
-
-def is_video(path: str | os.PathLike) -> bool:
-    """Return True if ``path`` is named like a video (``io.VIDEO_SUFFIXES``)."""
-    return Path(path).suffix.lower() in io.VIDEO_SUFFIXES
 
 
 class Tuner:
@@ -82,7 +51,9 @@ class Tuner:
 
     Parameters
     ----------
-    images : label -> image or video path for the picker (default: ``image_choices()``). A video
+    images : label -> image or video path for the picker (default: ``image_choices()``), or a
+        folder: its images and videos at any depth (``folder_choices``). Images of any size
+        are shown (the perspective's points are scaled to each). A video
         (``io.VIDEO_SUFFIXES``) shows the frame slider ``frame_slider`` (0 .. n_frames - 1, taken
         when released); the preview follows it. For an image the slider is hidden.
     config : the PipelineConfig to start from.
@@ -132,16 +103,18 @@ class Tuner:
         if not set(cls.parts) <= set(cls.shows):
             raise TypeError(f"{cls.__name__}: shows {cls.shows} must include the parts it tunes {cls.parts}")
 
-    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+    def __init__(self, images: Mapping[str, str | os.PathLike] | str | os.PathLike | None = None,
                  config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
                  image: str | None = None, tile_width_px: int | None = None, jpeg_quality: int = 80):
-        self.images = {k: Path(v) for k, v in (images if images is not None else image_choices()).items()}
+        self.images = picker_items(images, image_choices)
         if not self.images:
             raise InputError("tuner: no images to show; pass images={label: path} or add test_images/")
         image = image if image is not None else next(iter(self.images))
         if image not in self.images:
+            labels = list(self.images)
+            more = f", ... ({len(labels)} in all)" if len(labels) > 10 else ""
             raise InputError(f"tuner: image {image!r} is not among the picker's images "
-                             f"({', '.join(self.images)})")
+                             f"({', '.join(labels[:10])}{more}); pass one of their labels")
         self._config = config
         self._calibrations: dict[str, Calibration | None] = {"bundled": calibration}
         self._cache: dict[str, tuple[object, object]] = {}
@@ -429,8 +402,7 @@ class Tuner:
         try:
             config = self._apply(key)
         except LaneLibError as e:
-            self.error = str(e)
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(str(e))
             return
         self.error = ""
         self._config = config
@@ -442,16 +414,32 @@ class Tuner:
         try:
             written = self.export()
         except LaneLibError as e:
-            self.error = str(e)
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(str(e))
             return
         self.error = ""
         text = "\n".join(filter(None, [self.readout(), "exported: " + ", ".join(
             str(p) for p in written.values())]))
         self.message.value = f'<pre style="margin:0">{html.escape(text)}</pre>'
 
+    def _show_error(self, text: str) -> None:
+        """Show ``text`` in red in the readout and keep it in ``self.error``."""
+        self.error = text
+        self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(text)}</pre>'
+
     def _on_pick(self, change) -> None:
-        self._pick(change["new"])
+        """Show the picked item; one that cannot be shown leaves the item before picked, and why."""
+        if self._syncing:
+            return
+        frame = int(self.frame_slider.value)
+        try:
+            self._pick(change["new"])
+        except LaneLibError as e:
+            with self._quiet():
+                self.picker.value = change["old"]
+            self._pick(change["old"], frame)
+            self._show_error(str(e))
+            return
+        self.error = ""
 
     def _on_frame(self, change) -> None:
         if not self._syncing and self.is_video:
@@ -477,7 +465,11 @@ class Tuner:
         else:
             self._raw = io.read_image(path)
             self.frame_slider.layout.display = "none"
-        self._prepare(self._raw, self._calibration_for(label))
+        try:
+            self._prepare(self._raw, self._calibration_for(label))
+        except CalibrationError as e:
+            raise CalibrationError(f"{path}: {e}; or, for frames of a camera without a calibration "
+                                   "(CULane, TuSimple), make the tuner with calibration=None") from None
         self._update(None)
         self._refresh()
 

@@ -16,7 +16,8 @@ from ..camera import Calibration
 from ..config import PipelineConfig
 from ..data import UDACITY_ADVANCED, UDACITY_P1, bundled, data_root
 from ..draw import shrink
-from .base import UDACITY_PREFIX, Tuner, row, sized
+from .base import Tuner, row, sized
+from .choices import UDACITY_PREFIX
 
 UDACITY_P1_PREFIX = "udacity-p1/"
 _PLAIN_KEYS = ("blur_kernel_px", "rho_px", "theta_deg", "threshold_votes", "min_line_length_px",
@@ -92,7 +93,7 @@ class HoughTuner(Tuner):
     shows = ("hough",)
     ROI_KEYS = ("roi.top_y", "roi.top_left", "roi.top_right", "roi.bottom_left", "roi.bottom_right")
 
-    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+    def __init__(self, images: Mapping[str, str | os.PathLike] | str | os.PathLike | None = None,
                  config: PipelineConfig = PipelineConfig(), image: str | None = None,
                  tile_width_px: int | None = None, jpeg_quality: int = 80):
         super().__init__(images if images is not None else hough_image_choices(), config, None,

@@ -32,6 +32,7 @@ DST_KEYS = ("dst.left_x", "dst.right_x", "dst.top_y", "dst.bottom_y")
 PLACE = "place_points"
 ESTIMATE = "estimate"
 ESTIMATE_LABELS = {False: "estimate from this frame", True: "estimate from this clip"}
+STEP_PX = 0.1  # the symmetric sliders' step
 
 
 def _trapezoid_of(src_px) -> dict[str, float]:
@@ -63,6 +64,26 @@ def _rectangle(left_x: float, right_x: float, top_y: float, bottom_y: float) -> 
     return ((left_x, top_y), (left_x, bottom_y), (right_x, bottom_y), (right_x, top_y))
 
 
+def _slid(base: PerspectiveConfig, shown: dict[str, float], now: dict[str, float]) -> tuple:
+    """Return the src and dst points of ``base`` moved by the symmetric sliders' changes.
+
+    ``shown`` holds the symmetric sliders' values (``KEYS``) when the points were ``base``,
+    ``now`` their values after a move. Each slider moves the corners by its change: ``top_y``
+    the two top corners along y, ``top_width`` and ``bottom_width`` the two corners of their
+    row apart by half of it each, ``centre_x`` all four along x, ``dst_margin`` both dst lines
+    inwards (the symmetric trapezoid's change: ``trapezoid_src`` of the changes). Every corner
+    keeps its offset from the symmetric summary: an off-centre set stays off-centre, and a
+    coordinate no change moves keeps its exact value (a moved one is rounded to 0.01 px).
+    """
+    d = {k: now[k] - shown[k] for k in KEYS}
+    m = d["dst_margin"]
+    moves = (trapezoid_src(d["top_y"], 0.0, d["top_width"], d["bottom_width"], d["centre_x"]),
+             ((m, 0.0), (m, 0.0), (-m, 0.0), (-m, 0.0)))
+    return tuple(tuple((x if dx == 0 else round(x + dx, 2), y if dy == 0 else round(y + dy, 2))
+                       for (x, y), (dx, dy) in zip(points, move))
+                 for points, move in zip((base.src_px, base.dst_px), moves))
+
+
 def _limits(pc: PerspectiveConfig) -> dict[str, float]:
     """Return the largest value of each slider for images of ``pc.size_px``."""
     w, h = pc.size_px
@@ -70,11 +91,15 @@ def _limits(pc: PerspectiveConfig) -> dict[str, float]:
 
 
 def _values(pc: PerspectiveConfig) -> dict[str, float]:
-    """Return the value of every point control (symmetric and per corner) for ``pc``, in px."""
+    """Return the value of every point control (symmetric and per corner) for ``pc``, in px.
+
+    The symmetric sliders' values are the summary rounded to their step (``STEP_PX``), so that
+    a slider moved away and back in the browser returns to the very value it showed.
+    """
     w = pc.size_px[0]
     rect = _rectangle_of(pc.dst_px, w)
-    out = {k: round(v, 2) for k, v in _trapezoid_of(pc.src_px).items() if k in SRC_KEYS}
-    out["dst_margin"] = round(rect["dst_margin"], 2)
+    out = {k: round(v, 1) for k, v in _trapezoid_of(pc.src_px).items() if k in SRC_KEYS}
+    out["dst_margin"] = round(rect["dst_margin"], 1)
     for corner, (x, y) in zip(CORNERS, pc.src_px):
         out[f"src.{corner}.x"], out[f"src.{corner}.y"] = float(x), float(y)
     for side in ("left_x", "right_x", "top_y", "bottom_y"):
@@ -145,10 +170,13 @@ class PerspectiveTuner(Tuner):
     Three ways to set the points, all kept in step:
 
     - the symmetric shortcut, sliders ``top_y``, ``top_width``, ``bottom_width``, ``centre_x``
-      (a symmetric src trapezoid; its bottom row stays where the config has it) and
-      ``dst_margin`` (the dst lines' distance from the left and right edges). Moving a src
-      slider rewrites the four src corners as the symmetric trapezoid the four src sliders
-      show; ``dst_margin`` rewrites the dst lines' x and keeps the dst rows;
+      (the src trapezoid's top row, its two widths and its centre; the bottom row stays) and
+      ``dst_margin`` (the dst lines' distance from the left and right edges). A slider moves
+      the corners by its change only (``top_y`` the top two along y, a width the two corners
+      of its row apart, ``centre_x`` all four along x, ``dst_margin`` the dst lines inwards),
+      so each corner keeps its offset from the symmetric trapezoid: an off-centre point set
+      stays off-centre, and sliders moved away and back leave the perspective exactly as it
+      was last set by any other way (a file, the per-corner controls, clicks, an estimate);
     - the per-corner controls in the "all four points" section: ``src.tl.x``, ``src.tl.y``, ...
       (corners tl, bl, br, tr, the order of ``PerspectiveConfig.src_px``) and ``dst.left_x``,
       ``dst.right_x``, ``dst.top_y``, ``dst.bottom_y``; each moves only its own corner or side.
@@ -172,8 +200,8 @@ class PerspectiveTuner(Tuner):
     Whatever set the points, every control then shows them: the per-corner controls the exact
     points, the symmetric sliders the least-squares symmetric summary of the corners (each
     row's mean y and width, the mean of the two rows' centres, the mean dst margin; the very
-    values for a symmetric config). A config whose points are not symmetric is kept exactly
-    as it is until a symmetric slider moves.
+    values for a symmetric config), rounded to their 0.1 px step. Showing the summary moves
+    no point.
 
     The preview shows the src quadrilateral on the undistorted frame, the bird's-eye view with
     the dst lines, and the bird's-eye lane mask with the straight fits of the straight-line
@@ -314,7 +342,7 @@ class PerspectiveTuner(Tuner):
         values, top = _values(pc), _limits(pc)
         self._pending: list[tuple[float, float]] = []
         sl = lambda key, desc: self._control(key, widgets.FloatSlider(  # noqa: E731
-            value=values[key], min=0.0, max=float(top[key]), step=0.1, description=desc,
+            value=values[key], min=0.0, max=float(top[key]), step=STEP_PX, description=desc,
             readout_format=".1f", **sized(460, 150)))
 
         def box(key: str, desc: str) -> widgets.Widget:
@@ -347,22 +375,25 @@ class PerspectiveTuner(Tuner):
                                               layout=widgets.Layout(width="200px"))
         self.estimate_button.add_class(f"lanelib-control-{ESTIMATE}")
         self.estimate_button.on_click(self._on_estimate)
-        return [row(sl("top_y", "top y (px)"), sl("centre_x", "centre x (px)")),
+        rows = [row(sl("top_y", "top y (px)"), sl("centre_x", "centre x (px)")),
                 row(sl("top_width", "top width (px)"), sl("bottom_width", "bottom width (px)")),
                 row(sl("dst_margin", "dst margin (px)"), self.place, self.estimate_button),
                 points]
+        # the points the symmetric sliders move from, and the values they showed with them
+        self._anchor = (pc, {k: float(self.controls[k].value) for k in KEYS})
+        return rows
 
     def _sync(self) -> None:
         self._set_controls(self.config.perspective, skip=None)
 
     def _prepare(self, raw: np.ndarray, calibration: Calibration | None) -> None:
         size = (raw.shape[1], raw.shape[0])
-        if tuple(self.config.perspective.size_px) != size:
-            self._show(replace(self.config, perspective=scaled(self.config.perspective, size)))
         undistorter = self._cached("undistorter", (id(calibration), size),
                                    lambda: Undistorter(calibration, size))
         self._canvas = self._cached("canvas", (id(calibration), size),
                                     lambda: FastBirdseye(undistorter.lens))
+        if tuple(self.config.perspective.size_px) != size:  # after the lens took this size
+            self._show(replace(self.config, perspective=scaled(self.config.perspective, size)))
         self.undistorted = undistorter.undistort(raw)
         self._focal_px = implied_focal_px(self.config.perspective)
         self._small = shrink(self.undistorted, self._tile_size())
@@ -374,16 +405,13 @@ class PerspectiveTuner(Tuner):
     def _apply(self, key: str) -> PipelineConfig:
         pc = self.config.perspective
         v = {k: float(self.controls[k].value) for k in self.controls}
-        w, _ = pc.size_px
         src, dst = pc.src_px, pc.dst_px
-        if key in SRC_KEYS:
-            bottom_y = _trapezoid_of(pc.src_px)["bottom_y"]
-            src = trapezoid_src(v["top_y"], bottom_y, v["top_width"], v["bottom_width"], v["centre_x"])
-            src = tuple((round(x, 2), round(y, 2)) for x, y in src)
-        elif key == "dst_margin":
-            rect = _rectangle_of(dst, w)
-            dst = _rectangle(v["dst_margin"], w - v["dst_margin"], rect["top_y"], rect["bottom_y"])
-        elif key in SRC_POINT_KEYS:
+        if key in KEYS:  # moved from the points as last set otherwise, and back to them exactly
+            base, shown = self._anchor
+            src, dst = _slid(base, shown, v)
+            length = base.visible_length_m if src == base.src_px else None
+            return replace(self.config, perspective=self._points_config(src, dst, length, base))
+        if key in SRC_POINT_KEYS:
             _, corner, axis = key.split(".")
             i = CORNERS.index(corner)
             point = list(src[i])
@@ -442,9 +470,14 @@ class PerspectiveTuner(Tuner):
 
     # ---- points and clicks ----------------------------------------------------------------
 
-    def _points_config(self, src_px, dst_px, visible_length_m: float | None) -> PerspectiveConfig:
-        """Return the perspective with these points (length None: from the camera); refuse bad ones."""
-        pc = self.config.perspective
+    def _points_config(self, src_px, dst_px, visible_length_m: float | None,
+                       base: PerspectiveConfig | None = None) -> PerspectiveConfig:
+        """Return the perspective with these points (length None: from the camera); refuse bad ones.
+
+        The size, the lane width and the car's centre line (``carried_car_x``) come from
+        ``base`` (default: the tuner's perspective).
+        """
+        pc = base if base is not None else self.config.perspective
         src = tuple((float(x), float(y)) for x, y in src_px)
         dst = tuple((float(x), float(y)) for x, y in dst_px)
         if visible_length_m is None:
@@ -455,8 +488,15 @@ class PerspectiveTuner(Tuner):
         return new if car_x is None else replace(new, car_x_px=car_x)
 
     def _set_controls(self, pc: PerspectiveConfig, skip: str | None) -> None:
-        """Show ``pc`` in every point control but ``skip`` (the one the user moved), quietly."""
+        """Show ``pc`` in every point control but ``skip`` (the one the user moved), quietly.
+
+        After a symmetric slider's move the symmetric sliders keep their values (each moved
+        the summary by its own change only); after anything else they show the summary of
+        ``pc``, which becomes the points the symmetric sliders move from (``_anchor``).
+        """
         values = _values(pc)
+        if skip in KEYS:
+            values = {k: v for k, v in values.items() if k not in KEYS}
         with self._quiet():
             for key, top in _limits(pc).items():
                 self.controls[key].max = float(top)
@@ -465,6 +505,8 @@ class PerspectiveTuner(Tuner):
             for key, value in values.items():
                 if key != skip and abs(float(self.controls[key].value) - value) > 1e-9:
                     self.controls[key].value = value
+        if skip not in KEYS:
+            self._anchor = (pc, {k: float(self.controls[k].value) for k in KEYS})
 
     def _on_place(self, change) -> None:
         self._pending = []
@@ -493,8 +535,7 @@ class PerspectiveTuner(Tuner):
         try:
             self.set_points(src, self.config.perspective.dst_px)
         except LaneLibError as e:
-            self.error = f"placed points {src}: {e}"
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(f"placed points {src}: {e}")
 
     # ---- the estimate -----------------------------------------------------------------------
 
@@ -542,8 +583,7 @@ class PerspectiveTuner(Tuner):
         try:
             self.estimate()
         except LaneLibError as e:
-            self.error = str(e)
-            self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(self.error)}</pre>'
+            self._show_error(str(e))
         finally:
             self.estimate_button.disabled = False
 

@@ -21,7 +21,8 @@ from ..errors import InputError
 from ..pipeline import LanePipeline
 from ..result import FrameResult
 from ..tracking import LaneTracker
-from .base import Tuner, fmt, is_video, row, sized, video_choices
+from .base import Tuner, fmt, row, sized
+from .choices import is_video, picker_items, video_choices
 
 DEFAULT_MAX_FRAMES = 125  # 5 s at 25 fps
 STRIP_SIZE_PX = (1200, 160)  # (w, h) of the strip of confidences and offsets
@@ -98,16 +99,17 @@ class VideoTuner(Tuner):
     parts = ("tracking", "checks")
     shows = ("tracking", "checks")
 
-    def __init__(self, images: Mapping[str, str | os.PathLike] | None = None,
+    def __init__(self, images: Mapping[str, str | os.PathLike] | str | os.PathLike | None = None,
                  config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,
                  image: str | None = None, max_frames: int = DEFAULT_MAX_FRAMES,
                  tile_width_px: int | None = None, jpeg_quality: int = 80):
-        items = dict(images if images is not None else video_choices())
-        not_videos = [f"{k} ({Path(v).name})" for k, v in items.items() if not is_video(v)]
+        items = picker_items(images, video_choices)
+        not_videos = [f"{k} ({v.name})" for k, v in items.items() if not is_video(v)]
         if not_videos:
-            raise InputError(f"VideoTuner: {', '.join(not_videos)} not a video; the tracker needs a "
-                             f"clip: pass video files ({', '.join(io.VIDEO_SUFFIXES)}), e.g. "
-                             "video_choices()")
+            more = f" and {len(not_videos) - 5} more" if len(not_videos) > 5 else ""
+            raise InputError(f"VideoTuner: {', '.join(not_videos[:5])}{more} not a video; the "
+                             f"tracker needs a clip: pass video files ({', '.join(io.VIDEO_SUFFIXES)}), "
+                             "e.g. video_choices()")
         if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
             raise InputError(f"VideoTuner: max_frames={max_frames!r}; pass a whole number of frames >= 1")
         self._max_frames = int(max_frames)
