@@ -43,7 +43,8 @@ def run_centres(binary: np.ndarray, max_width_px: float) -> tuple[np.ndarray, np
 
 
 def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, width: int) -> np.ndarray:
-    """Return the vote table (slope, x0 bin): how many run centres lie on each straight line."""
+    """Return the vote table (slope, x0 bin): how many run centres lie on each straight line
+    beyond the mean of the lines of that slope."""
     n_bins = int(np.ceil(width / bin_px)) + 1
     table = np.zeros((len(slopes), n_bins), np.float32)
     for k, s in enumerate(slopes):
@@ -51,7 +52,10 @@ def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, wid
         ok = (b >= 0) & (b < n_bins)
         table[k] = np.bincount(b[ok], minlength=n_bins)
     # a line straddles two bins: a cell counts its neighbours' votes too
-    return table + np.roll(table, 1, axis=1) * 0.5 + np.roll(table, -1, axis=1) * 0.5
+    table = table + np.roll(table, 1, axis=1) * 0.5 + np.roll(table, -1, axis=1) * 0.5
+    # texture spread over the road votes for every cell alike: a line is what stands above the
+    # mean of its slope's cells
+    return np.maximum(table - table.mean(axis=1, keepdims=True), 0.0)
 
 
 def _common_heading(table: np.ndarray, slopes: np.ndarray, least: float, spread: float) -> np.ndarray:

@@ -135,7 +135,8 @@ def predict(benchmark: str, root: Path, out: Path, *extra: str) -> int:
 
 def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
     out = tmp_path / "pred"
-    assert predict("tusimple", ts_root, out) == 0
+    # the generator's camera, not TuSimple's: the built-in settings (highway), not the tusimple preset
+    assert predict("tusimple", ts_root, out, "--config", "highway") == 0
     text = capsys.readouterr().out
     assert "clips/synth01: road geometry from its frames" in text and "clips/synth02" in text
     assert "4 frames: 4 predicted" in text

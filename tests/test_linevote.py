@@ -1,0 +1,115 @@
+"""Known-answer tests of the vote over straight lines (``linevote``) on drawn lines-view masks,
+and of the benchmark cameras' presets (their bird's-eye points make the label lines parallel)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from lanelib import data
+from lanelib.config import preset
+from lanelib.lanes import LinesConfig
+from lanelib.linevote import run_centres, vote_lines
+from lanelib.perspective import Perspective
+
+XM, YM = 0.02, 0.1          # m per view px across and along
+H, W = 400, 800             # a 40 m x 16 m view
+CFG = LinesConfig(min_span_m=5.0, extend_m=0.0)
+
+
+def paint(mask, x_bottom, slope_px=0.0, rows=None):
+    """Draw a line 8 px wide centred on x = x_bottom + slope_px * (H - 1 - y) on ``rows`` (default:
+    every row); x_bottom is a half pixel (a run of columns x - 3.5 .. x + 3.5)."""
+    for y in (range(H) if rows is None else rows):
+        x = int(np.floor(x_bottom + slope_px * (H - 1 - y)))
+        mask[y, x - 3:x + 5] = 255
+
+
+def xs_at_bottom(lines):
+    return [round(float(line.x_at(H - 1)), 1) for line in lines]
+
+
+def test_run_centres_keep_narrow_runs_only():
+    m = np.zeros((3, 20), np.uint8)
+    m[0, 2:6] = 255      # 4 px: paint
+    m[1, 0:20] = 255     # 20 px: a car, not paint
+    m[2, 10:12] = 255
+    rows, xs = run_centres(m, 5)
+    assert rows.tolist() == [0, 2] and xs.tolist() == [3.5, 10.5]
+
+
+def test_a_line_seen_in_pieces_between_vehicles_is_one_line():
+    m = np.zeros((H, W), np.uint8)
+    pieces = [*range(0, 60), *range(150, 200), *range(330, 400)]   # hidden in between
+    paint(m, 300.5, rows=pieces)
+    m[200:330, 200:420] = 255                                      # a vehicle: wide, votes for nothing
+    lines = vote_lines(m, CFG, XM, YM)
+    assert xs_at_bottom(lines) == [300.5]
+    assert lines[0].y_top_px == 0 and lines[0].y_bottom_px == H - 1
+
+
+def test_parallel_tilted_dashes_share_the_heading_and_a_crossing_streak_does_not_count():
+    m = np.zeros((H, W), np.uint8)
+    dashes = [y for y in range(H) if y % 120 < 30]                  # 3 m dashes, 9 m gaps
+    for x0 in (150.5, 335.5, 520.5):                                # 3.7 m apart
+        paint(m, x0, slope_px=0.5, rows=dashes)                     # heading 0.1 m across per m
+    paint(m, 700.5, slope_px=-0.6, rows=range(250, 400))            # 15 m streak, another heading
+    lines = vote_lines(m, CFG, XM, YM)
+    assert xs_at_bottom(lines) == pytest.approx([150.5, 335.5, 520.5], abs=0.3)
+    assert all(abs(line.coeffs_px[1] + 0.5) < 0.02 for line in lines)  # dx/dy of x = 0.5 * (H - 1 - y)
+
+
+def test_scattered_texture_and_a_short_mark_are_not_lines():
+    rng = np.random.default_rng(0)
+    m = np.zeros((H, W), np.uint8)
+    for y in range(H):                                              # road texture: a random speck a row
+        x = rng.integers(0, W - 4)
+        m[y, x:x + 3] = 255
+    assert vote_lines(m, CFG, XM, YM) == []
+    m[:] = 0
+    paint(m, 600.5, rows=range(360, 400))                           # a 4 m mark: shorter than 5 m
+    assert vote_lines(m, CFG, XM, YM) == []
+
+
+def test_extend_reports_a_line_over_the_whole_view():
+    m = np.zeros((H, W), np.uint8)
+    paint(m, 400.5, rows=range(200, 300))
+    line, = vote_lines(m, LinesConfig(min_span_m=5.0, extend_m=100.0), XM, YM)
+    assert (line.y_top_px, line.y_bottom_px) == (0.0, H - 1.0)
+    line, = vote_lines(m, CFG, XM, YM)
+    assert (line.y_top_px, line.y_bottom_px) == (200.0, 299.0)
+
+
+@pytest.mark.parametrize("name, vp, width_per_row", [("culane", (755, 382), 2.89),
+                                                     ("tusimple", (646, 241), 2.21)])
+def test_benchmark_presets_make_straight_lanes_parallel(name, vp, width_per_row):
+    """Lines through the preset camera's vanishing point, a lane width apart, come out vertical and
+    one lane width apart in its bird's-eye view."""
+    p = preset(name).perspective
+    view = Perspective(p)
+    y0, y1 = p.size_px[1] - 1, vp[1] + 60
+    for k in (-1.5, -0.5, 0.5, 1.5):                                # four lines of a straight road
+        pts = np.array([[vp[0] + k * width_per_row * (y - vp[1]), y] for y in (y0, y1)], float)
+        (xa, _), (xb, _) = view(pts)
+        assert abs(xa - xb) < 2.0, (name, k, xa, xb)
+    left, right = view(np.array([[vp[0] - 0.5 * width_per_row * (y0 - vp[1]), y0],
+                                 [vp[0] + 0.5 * width_per_row * (y0 - vp[1]), y0]], float))[:, 0]
+    assert (right - left) * p.xm_per_px == pytest.approx(p.lane_width_m, rel=0.01)
+
+
+def test_culane_preset_makes_the_dev_labels_parallel():
+    root = data.culane_dev()
+    if root is None:
+        pytest.skip(data.missing_reason("", "culane-dev"))
+    view = Perspective(preset("culane").perspective)
+    slopes = []
+    for labels in sorted(root.glob("driver_*/*/*.lines.txt"))[::6]:
+        for text in labels.read_text().splitlines():
+            pts = np.array(text.split(), float).reshape(-1, 2)
+            pts = pts[pts[:, 1] >= 450]
+            if len(pts) >= 5:
+                v = view(pts)
+                slopes.append(np.polyfit(v[:, 1], v[:, 0], 1)[0])
+    # the labelled lines run along the road in the view: nearly vertical, whatever the traffic
+    assert len(slopes) > 20 and np.median(np.abs(slopes)) < 0.15
