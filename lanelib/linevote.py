@@ -17,11 +17,25 @@ its fit, is not reported.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .lanes import LinesConfig, ViewLine, least_squares_poly
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A straight line the vote weighed: where it lies in the view (``x0_px`` on the bottom row,
+    ``slope`` px across per px along), the metres of paint that voted for it beyond the mean of
+    the lines of its slope (``paint_m``), the line fitted on
+    the runs near it (None with fewer than 3) and why it is not reported ("" when it is)."""
+
+    x0_px: float
+    slope: float
+    paint_m: float
+    line: ViewLine | None
+    refused: str = ""
 
 
 def run_centres(binary: np.ndarray, max_width_px: float) -> tuple[np.ndarray, np.ndarray]:
@@ -96,16 +110,93 @@ def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: flo
     return (a, b, c), scatter
 
 
+def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
+                    ym_per_px: float = 0.1) -> list[Candidate]:
+    """Return every straight line the vote weighs in a bird's-eye lane mask, strongest first, each
+    with its fit and why it is refused ("" for a reported line).
+
+    Each distinct line is weighed once: cells that are the same line as a stronger candidate
+    (``_same_line``) are skipped. The weighing goes down to half of ``min_peak_m`` of paint, so
+    that a line that narrowly misses says so. Refusals: too little paint, more than
+    ``max_lines``, fewer than 3 runs near it, paint spanning less than ``min_span_m``, or runs
+    scattering more than ``max_scatter_m`` around the fit.
+
+    Parameters
+    ----------
+    binary, config, xm_per_px, ym_per_px : as for ``vote_lines``.
+
+    Examples
+    --------
+    >>> m = np.zeros((400, 600), np.uint8)
+    >>> m[:, 110:118] = 255; m[360:, 300:308] = 255            # a 40 m line; a 4 m mark
+    >>> [(round(c.paint_m, 1), c.refused) for c in vote_candidates(m, LinesConfig(min_span_m=5), 0.02, 0.1)]
+    [(38.9, ''), (2.9, 'its paint spans 3.9 m along the road, less than min_span_m 5.0 m')]
+    """
+    h, w = binary.shape[:2]
+    rows, xc = run_centres(binary, config.max_paint_width_m / xm_per_px)
+    if len(rows) < 3:
+        return []
+    t = (h - 1) - rows.astype(np.float64)  # view rows ahead of the bottom row
+    max_slope = config.max_slope * ym_per_px / xm_per_px  # px across per px along
+    tol = config.vote_tolerance_m / xm_per_px
+    slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
+    table = _votes(t, xc, slopes, tol, w)
+    least = config.min_peak_m / ym_per_px
+    table = _common_heading(table, slopes, least, config.heading_spread * ym_per_px / xm_per_px)
+    gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
+    curved = config.curved_span_m / ym_per_px
+    found: list[Candidate] = []
+    reported = 0
+    for flat in np.argsort(-table, axis=None, kind="stable")[: 50 * (config.max_lines + 1)]:
+        k, b = divmod(int(flat), table.shape[1])
+        if table[k, b] < least / 2:
+            break
+        x0, s = b * tol, float(slopes[k])
+        if any(_same_line(x0, s, (c.x0_px, c.slope), h - 1, gap) for c in found):
+            continue
+        near = np.abs(xc - (x0 + s * t)) <= tol
+        fitted = _fit(t, xc, near, h, curved)
+        line = None
+        if fitted is not None:
+            y_near = rows[near]
+            line = ViewLine(fitted[0], float(y_near.min()), float(y_near.max()), int(near.sum()), fitted[1])
+        why = _refusal(float(table[k, b]) * ym_per_px, line, reported, config, xm_per_px, ym_per_px)
+        reported += not why
+        found.append(Candidate(x0, s, float(table[k, b]) * ym_per_px, line, why))
+    return found
+
+
+def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: LinesConfig,
+             xm_per_px: float, ym_per_px: float) -> str:
+    """Return why a weighed line is not reported ("" when it is)."""
+    if paint_m < config.min_peak_m:
+        return f"only {paint_m:.1f} m of paint votes for it, less than min_peak_m {config.min_peak_m:.1f} m"
+    if reported >= config.max_lines:
+        return f"{config.max_lines} stronger lines are reported already (max_lines)"
+    if line is None:
+        return "fewer than 3 runs of paint lie near it"
+    span_m = (line.y_bottom_px - line.y_top_px) * ym_per_px
+    if span_m < config.min_span_m:
+        return f"its paint spans {span_m:.1f} m along the road, less than min_span_m {config.min_span_m:.1f} m"
+    if line.scatter_px * xm_per_px > config.max_scatter_m:
+        return (f"its paint scatters {line.scatter_px * xm_per_px:.2f} m about the fit, more than "
+                f"max_scatter_m {config.max_scatter_m:.2f} m")
+    return ""
+
+
 def vote_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
                ym_per_px: float = 0.1) -> list[ViewLine]:
     """Return every line of a bird's-eye lane mask found by a vote over straight lines, left to right.
+
+    The lines are the candidates of ``vote_candidates`` that are not refused, each taken to go on
+    ``extend_m`` beyond its paint at either end, within the view.
 
     Parameters
     ----------
     binary : the 0/255 lane mask of the lines view (``perspective.LinesView``).
     config : the search in metres (``LinesConfig``: ``max_paint_width_m``, ``vote_tolerance_m``,
-        ``max_slope``, ``min_gap_fraction``, ``min_peak_m``, ``min_span_m``, ``max_scatter_m``,
-        ``curved_span_m``, ``extend_m``).
+        ``max_slope``, ``heading_spread``, ``min_gap_fraction``, ``min_peak_m``, ``min_span_m``,
+        ``max_scatter_m``, ``curved_span_m``, ``max_lines``, ``extend_m``).
     xm_per_px, ym_per_px : metres per view pixel across and along the road.
 
     Examples
@@ -122,42 +213,15 @@ def vote_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
     >>> [round(float(line.x_at(399)), 1) for line in lines]
     [113.5, 484.5]
     """
-    h, w = binary.shape[:2]
-    rows, xc = run_centres(binary, config.max_paint_width_m / xm_per_px)
-    if len(rows) < 3:
-        return []
-    t = (h - 1) - rows.astype(np.float64)  # view rows ahead of the bottom row
-    max_slope = config.max_slope * ym_per_px / xm_per_px  # px across per px along
-    tol = config.vote_tolerance_m / xm_per_px
-    slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
-    table = _votes(t, xc, slopes, tol, w)
-    least = config.min_peak_m / ym_per_px
-    table = _common_heading(table, slopes, least, config.heading_spread * ym_per_px / xm_per_px)
-    gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
-    curved = config.curved_span_m / ym_per_px
-    chosen: list[tuple[float, float]] = []
-    lines: list[ViewLine] = []
-    order = np.argsort(-table, axis=None, kind="stable")
-    for flat in order[: 50 * (config.max_lines + 1)]:
-        k, b = divmod(int(flat), table.shape[1])
-        if table[k, b] < least or len(lines) >= config.max_lines:
-            break
-        x0, s = b * tol, float(slopes[k])
-        if any(_same_line(x0, s, c, h - 1, gap) for c in chosen):
-            continue
-        chosen.append((x0, s))
-        near = np.abs(xc - (x0 + s * t)) <= tol
-        fitted = _fit(t, xc, near, h, curved)
-        if fitted is None:
-            continue
-        coeffs, scatter = fitted
-        y_near = rows[near]
-        span_m = float(np.ptp(y_near)) * ym_per_px
-        if span_m < config.min_span_m or scatter * xm_per_px > config.max_scatter_m:
-            continue
-        lines.append(ViewLine(coeffs, float(y_near.min()), float(y_near.max()), int(near.sum()), scatter))
+    return reported(vote_candidates(binary, config, xm_per_px, ym_per_px), config, binary.shape[0], ym_per_px)
+
+
+def reported(candidates: list[Candidate], config: LinesConfig, height_px: int, ym_per_px: float) -> list[ViewLine]:
+    """Return the lines of the candidates that are not refused, left to right, each taken to go
+    on ``config.extend_m`` beyond its paint at either end within a view ``height_px`` rows high."""
+    lines = [c.line for c in candidates if not c.refused]
     if config.extend_m > 0:
         more = config.extend_m / ym_per_px
         lines = [replace(line, y_top_px=max(0.0, line.y_top_px - more),
-                         y_bottom_px=min(h - 1.0, line.y_bottom_px + more)) for line in lines]
-    return sorted(lines, key=lambda line: float(line.x_at(h - 1)))
+                         y_bottom_px=min(height_px - 1.0, line.y_bottom_px + more)) for line in lines]
+    return sorted(lines, key=lambda line: float(line.x_at(height_px - 1)))

@@ -11,6 +11,7 @@ per-frame engine only: runs over image folders and videos are ``runs.process_ima
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import replace
 
 import cv2
@@ -314,11 +315,17 @@ class LanePipeline:
             mask = cv2.bitwise_or(mask, low)
         wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
         mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
-        find = linevote.vote_lines if config.method == "vote" else lanes.find_lines
-        lines = tuple(image_line(line, self._lines_to_raw, view.car_x_px, view.bottom_px, view.xm_per_px)
-                      for line in find(mask, config, view.xm_per_px, view.ym_per_px))
+        to_raw = functools.partial(image_line, view_to_raw=self._lines_to_raw, car_x_px=view.car_x_px,
+                                   bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
+        refused: tuple = ()
+        if config.method == "vote":
+            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px)
+            found = linevote.reported(weighed, config, mask.shape[0], view.ym_per_px)
+            refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
+        else:
+            found = lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px)
         images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
-        return LinesResult(lines, ego_result, images)
+        return LinesResult(tuple(to_raw(line) for line in found), ego_result, images, refused)
 
     def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
         """Return the first search in a shorter look-ahead whose lane passes the checks, or None.

@@ -164,9 +164,11 @@ class LinesResult:
 
     ``ego`` is the frame's ``FrameResult`` (``detect``): what the overlay, curvature and offset
     use (None when not asked for: ``predict`` needs only the lines); ``lines`` holds every line
-    seen, the ego pair's lines among them.
+    seen, the ego pair's lines among them; ``refused`` the lines the search weighed and did not
+    report, each with why (``LinesConfig.method = "vote"``: ``linevote.vote_candidates``).
     """
 
     lines: tuple[ImageLine, ...]
     ego: FrameResult | None
     images: dict = field(default_factory=dict, repr=False)
+    refused: tuple[tuple[ImageLine, str], ...] = ()
