@@ -1794,6 +1794,14 @@ class LinesConfig:
         (across) a run may lie from a line to vote for it, and how many lines it reports.
     heading_spread : the most (m across per m along) a line's slope in the view may differ from
         the common heading of the lines in it (lane lines are parallel).
+    min_offset_m, near_paint_m : a line nearer than ``min_offset_m`` to the car's centre line on
+        the view's bottom row (0: off) is reported only when its paint reaches within
+        ``near_paint_m`` of that row (``linevote``): a lane line runs under the car only during a
+        lane change, and then its paint is seen beside the car, while the edge of a vehicle ahead
+        looks like a line there in the view but starts where the vehicle is.
+    headings : how many common headings the vote tries (the slopes with the most strong votes,
+        ``heading_spread`` apart); it keeps the one whose reported lines hold the most paint
+        (junk beside the road can outvote the paint for a heading, but not pass as lines).
     """
 
     lane_width_m: float = 3.7
@@ -1824,12 +1832,16 @@ class LinesConfig:
     vote_tolerance_m: float = 0.15
     max_lines: int = 6
     heading_spread: float = 0.02
+    headings: int = 1
+    min_offset_m: float = 0.0
+    near_paint_m: float = 3.0
 
     def __post_init__(self):
         if self.method not in ("trace", "vote"):
             raise ConfigError(f"lines.method: {self.method!r} is not a method; use \"trace\" or \"vote\"")
-        if min(self.max_paint_width_m, self.vote_tolerance_m) <= 0 or self.max_lines < 1:
-            raise ConfigError("lines: max_paint_width_m and vote_tolerance_m must be positive, max_lines 1 or more")
+        if min(self.max_paint_width_m, self.vote_tolerance_m) <= 0 or min(self.max_lines, self.headings) < 1:
+            raise ConfigError("lines: max_paint_width_m and vote_tolerance_m must be positive, max_lines and "
+                              "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,

@@ -18,6 +18,7 @@ its fit, is not reported.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -72,29 +73,27 @@ def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, wid
     return np.maximum(table - table.mean(axis=1, keepdims=True), 0.0)
 
 
-def _common_heading(table: np.ndarray, slopes: np.ndarray, least: float, spread: float) -> np.ndarray:
-    """Return the vote table with the slopes far from the view's common heading cleared.
-
-    Lane lines are parallel, so in one view they share a slope (the car's heading to the road),
-    up to what a bend bends them. The common heading is the slope whose cells above ``least``
-    hold the most votes; slopes more than ``spread`` (px across per px along) from it vote no more.
-    """
+def _headings(table: np.ndarray, slopes: np.ndarray, least: float, spread: float, count: int) -> list[int]:
+    """Return up to ``count`` candidate common headings (slope indices), each more than ``spread``
+    (px across per px along) from the others: the slopes whose cells above ``least`` hold the
+    most votes, strongest first."""
     strong = np.where(table >= least, table, 0.0).sum(axis=1)
-    if not strong.any():
-        return table
-    k = int(np.argmax(strong))
-    far = np.abs(slopes - slopes[k]) > spread
-    out = table.copy()
-    out[far] = 0.0
-    return out
+    chosen: list[int] = []
+    for k in np.argsort(-strong, kind="stable"):
+        if strong[k] <= 0 or len(chosen) >= count:
+            break
+        if all(abs(slopes[k] - slopes[c]) > spread for c in chosen):
+            chosen.append(int(k))
+    return chosen
 
 
-def _same_line(x0: float, s: float, other: tuple[float, float], t_max: float, gap_px: float) -> bool:
-    """Return whether the straight lines (x0, s) and ``other`` come nearer than ``gap_px`` or cross
-    anywhere between the bottom of the view (t=0) and ``t_max``."""
-    d0 = x0 - other[0]
-    d1 = d0 + (s - other[1]) * t_max
-    return min(abs(d0), abs(d1)) < gap_px or d0 * d1 < 0
+def _same_cells(x0s: np.ndarray, slopes: np.ndarray, x0: float, s: float, t_max: float,
+                gap_px: float) -> np.ndarray:
+    """Return which cells of the vote table (slope, x0) are the same line as (x0, s): nearer than
+    ``gap_px`` to it, or crossing it, anywhere between the bottom of the view (t=0) and ``t_max``."""
+    d0 = x0s[None, :] - x0
+    d1 = d0 + (slopes[:, None] - s) * t_max
+    return (np.minimum(np.abs(d0), np.abs(d1)) < gap_px) | (d0 * d1 < 0)
 
 
 def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: float) -> tuple | None:
@@ -111,12 +110,13 @@ def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: flo
 
 
 def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
-                    ym_per_px: float = 0.1) -> list[Candidate]:
+                    ym_per_px: float = 0.1, car_x_px: float | None = None) -> list[Candidate]:
     """Return every straight line the vote weighs in a bird's-eye lane mask, strongest first, each
     with its fit and why it is refused ("" for a reported line).
 
-    Each distinct line is weighed once: cells that are the same line as a stronger candidate
-    (``_same_line``) are skipped. The weighing goes down to half of ``min_peak_m`` of paint, so
+    Each distinct line is weighed once: the strongest cell left is weighed, then the cells that
+    are the same line as it (nearer than ``min_gap_fraction`` of a lane width, or crossing it,
+    within the view) are cleared; at most ``4 * max_lines`` lines are weighed. The weighing goes down to half of ``min_peak_m`` of paint, so
     that a line that narrowly misses says so. Refusals: too little paint, more than
     ``max_lines``, fewer than 3 runs near it, paint spanning less than ``min_span_m``, or runs
     scattering more than ``max_scatter_m`` around the fit.
@@ -124,6 +124,7 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     Parameters
     ----------
     binary, config, xm_per_px, ym_per_px : as for ``vote_lines``.
+    car_x_px : the car's centre line in the view (px); None: the view's middle column.
 
     Examples
     --------
@@ -142,32 +143,62 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
     table = _votes(t, xc, slopes, tol, w)
     least = config.min_peak_m / ym_per_px
-    table = _common_heading(table, slopes, least, config.heading_spread * ym_per_px / xm_per_px)
+    spread = config.heading_spread * ym_per_px / xm_per_px
+    votes = _Votes(rows, t, xc, slopes, np.arange(table.shape[1]) * tol, h, tol,
+                   w / 2.0 if car_x_px is None else float(car_x_px))
+    best: tuple[float, list[Candidate]] = (-1.0, [])
+    for k in _headings(table, slopes, least, spread, config.headings) or [None]:
+        kept = table.copy()
+        if k is not None:  # None: no slope holds a strong cell, every one is weighed
+            kept[np.abs(slopes - slopes[k]) > spread] = 0.0
+        found = _weigh(kept, votes, config, xm_per_px, ym_per_px)
+        paint = sum(c.paint_m for c in found if not c.refused)
+        if paint > best[0]:
+            best = (paint, found)
+    return best[1]
+
+
+class _Votes(NamedTuple):
+    """The run centres (rows, ``t`` ahead of the bottom row, x) and the vote table's axes."""
+    rows: np.ndarray
+    t: np.ndarray
+    xc: np.ndarray
+    slopes: np.ndarray
+    x0s: np.ndarray
+    height: int
+    tol: float
+    car_x: float
+
+
+def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
+           ym_per_px: float) -> list[Candidate]:
+    """Return the lines of a vote table, strongest first, each weighed once with why it is refused."""
+    least = config.min_peak_m / ym_per_px
     gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
     curved = config.curved_span_m / ym_per_px
     found: list[Candidate] = []
     reported = 0
-    for flat in np.argsort(-table, axis=None, kind="stable")[: 50 * (config.max_lines + 1)]:
-        k, b = divmod(int(flat), table.shape[1])
-        if table[k, b] < least / 2:
+    while len(found) < 4 * config.max_lines:
+        k, b = divmod(int(np.argmax(table)), table.shape[1])
+        paint = float(table[k, b])
+        if paint < least / 2:
             break
-        x0, s = b * tol, float(slopes[k])
-        if any(_same_line(x0, s, (c.x0_px, c.slope), h - 1, gap) for c in found):
-            continue
-        near = np.abs(xc - (x0 + s * t)) <= tol
-        fitted = _fit(t, xc, near, h, curved)
+        x0, s = float(v.x0s[b]), float(v.slopes[k])
+        table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap)] = 0.0  # weighed once
+        near = np.abs(v.xc - (x0 + s * v.t)) <= v.tol
+        fitted = _fit(v.t, v.xc, near, v.height, curved)
         line = None
         if fitted is not None:
-            y_near = rows[near]
+            y_near = v.rows[near]
             line = ViewLine(fitted[0], float(y_near.min()), float(y_near.max()), int(near.sum()), fitted[1])
-        why = _refusal(float(table[k, b]) * ym_per_px, line, reported, config, xm_per_px, ym_per_px)
+        why = _refusal(paint * ym_per_px, line, reported, config, xm_per_px, ym_per_px, v)
         reported += not why
-        found.append(Candidate(x0, s, float(table[k, b]) * ym_per_px, line, why))
+        found.append(Candidate(x0, s, paint * ym_per_px, line, why))
     return found
 
 
 def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: LinesConfig,
-             xm_per_px: float, ym_per_px: float) -> str:
+             xm_per_px: float, ym_per_px: float, v: _Votes) -> str:
     """Return why a weighed line is not reported ("" when it is)."""
     if paint_m < config.min_peak_m:
         return f"only {paint_m:.1f} m of paint votes for it, less than min_peak_m {config.min_peak_m:.1f} m"
@@ -181,6 +212,12 @@ def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: Lines
     if line.scatter_px * xm_per_px > config.max_scatter_m:
         return (f"its paint scatters {line.scatter_px * xm_per_px:.2f} m about the fit, more than "
                 f"max_scatter_m {config.max_scatter_m:.2f} m")
+    bottom = v.height - 1.0
+    off_m = (float(line.x_at(bottom)) - v.car_x) * xm_per_px
+    start_m = (bottom - line.y_bottom_px) * ym_per_px
+    if abs(off_m) < config.min_offset_m and start_m > config.near_paint_m:
+        return (f"it runs {abs(off_m):.1f} m from the car's centre line (min_offset_m "
+                f"{config.min_offset_m:.1f} m) but its paint starts {start_m:.1f} m ahead: a vehicle's edge")
     return ""
 
 

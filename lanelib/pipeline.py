@@ -64,6 +64,7 @@ class LanePipeline:
         self.car_x_px = self.perspective.car_x_px
         self._lines_view = None  # (view, remap maps, thresholds), made by the first detect_lines
         self._lines_to_raw = None  # the lines view's transform back to the raw frame, made with it
+        self._lines_seen = None  # the lines view's pixels that see the frame, away from its edge
 
     def __reduce__(self):
         return LanePipeline, (self.config, self.undistorter.calibration, self.size)
@@ -276,15 +277,22 @@ class LanePipeline:
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
         """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
         maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked
-        (with the view's transform back to the raw frame, ``_lines_to_raw``)."""
+        (with the view's transform back to the raw frame, ``_lines_to_raw``, and the view's pixels
+        that see the frame away from its edge, ``_lines_seen``)."""
         if self._lines_view is None:
             lc = self.config.lines
             view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px, lc.view_ahead_m,
                              lc.view_ym_per_px)
             raw_to_view = self.lens.inverse + view
-            self._lines_view = (view, raw_to_view.remap_maps(view.size),
-                                thresholds.scaled(self.config.thresholds, view.scale_from_ego))
+            tconf = thresholds.scaled(self.config.thresholds, view.scale_from_ego)
+            maps = raw_to_view.remap_maps(view.size)
+            self._lines_view = (view, maps, tconf)
             self._lines_to_raw = raw_to_view.inverse
+            # where the view sees the frame, away from its edge: the edge of the frame is no paint
+            seen = cv2.remap(np.full(self.size[::-1], 255, np.uint8), maps[0], maps[1], cv2.INTER_NEAREST,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+            edge = 2 * tconf.line_tophat.width_px + 1
+            self._lines_seen = cv2.erode(seen, np.ones((3, edge), np.uint8))
         return self._lines_view
 
     def detect_lines(self, raw: np.ndarray, config: LinesConfig | None = None,
@@ -292,8 +300,9 @@ class LanePipeline:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
 
         The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
-        looked for in the lines view (``lines_view``: about 28 m across and 150 m ahead), masked
-        by the rule of the thresholds rescaled to it, by ``lanes.find_lines``, and mapped back to
+        looked for in the lines view (``lines_view``: by default 28 m across and 150 m ahead), masked
+        by the rule of the thresholds rescaled to it (not at the edge of the frame), by
+        ``lanes.find_lines`` or ``linevote.vote_lines`` (``LinesConfig.method``), and mapped back to
         the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
         keeps the view ("lines_birdseye") and its mask ("lines_binary"). ``config``: the search's
         parameters (default: ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V``
@@ -315,11 +324,12 @@ class LanePipeline:
             mask = cv2.bitwise_or(mask, low)
         wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
         mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
+        mask = cv2.bitwise_and(mask, self._lines_seen)
         to_raw = functools.partial(image_line, view_to_raw=self._lines_to_raw, car_x_px=view.car_x_px,
                                    bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
         refused: tuple = ()
         if config.method == "vote":
-            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px)
+            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px)
             found = linevote.reported(weighed, config, mask.shape[0], view.ym_per_px)
             refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
         else:

@@ -10,7 +10,7 @@ import pytest
 from lanelib import data
 from lanelib.config import preset
 from lanelib.lanes import LinesConfig
-from lanelib.linevote import run_centres, vote_lines
+from lanelib.linevote import run_centres, vote_candidates, vote_lines
 from lanelib.perspective import Perspective
 
 XM, YM = 0.02, 0.1          # m per view px across and along
@@ -113,3 +113,32 @@ def test_culane_preset_makes_the_dev_labels_parallel():
                 slopes.append(np.polyfit(v[:, 1], v[:, 0], 1)[0])
     # the labelled lines run along the road in the view: nearly vertical, whatever the traffic
     assert len(slopes) > 20 and np.median(np.abs(slopes)) < 0.15
+
+
+def test_junk_that_outvotes_the_paint_for_a_heading_does_not_set_it():
+    """A ragged band of texture along a slanted line (a verge, a truck's side) holds the most
+    votes of any heading but is no clean line; the parallel dashes of the lane at heading 0 are
+    what the vote reports when it tries more than one heading."""
+    rng = np.random.default_rng(1)
+    m = np.zeros((H, W), np.uint8)
+    for x0 in (250.5, 435.5):                                       # the ego lane, 3.7 m
+        paint(m, x0, rows=[y for y in range(H) if y % 90 < 30])
+    for y in range(H):                                              # the band: 1.6 m wide, 6 specks a row
+        for dx in rng.uniform(-40, 40, 6):
+            x = int(650 + 0.25 * (H - 1 - y) + dx)
+            m[y, x:x + 3] = 255
+    kw = dict(min_span_m=5.0, extend_m=0.0, max_slope=0.3, vote_tolerance_m=0.25, max_scatter_m=0.13)
+    assert xs_at_bottom(vote_lines(m, LinesConfig(headings=5, **kw), XM, YM)) == pytest.approx([250.5, 435.5], abs=0.5)
+    assert vote_lines(m, LinesConfig(headings=1, **kw), XM, YM) == []  # the band's heading: nothing
+
+
+def test_a_vehicle_edge_ahead_of_the_car_is_refused_and_a_lane_change_is_not():
+    cfg = LinesConfig(min_span_m=5.0, extend_m=0.0, min_offset_m=1.0, near_paint_m=1.0)
+    car_x = 400.0
+    edge = np.zeros((H, W), np.uint8)
+    paint(edge, car_x + 25.5, rows=range(0, 330))                   # 0.5 m right, from 7 m ahead
+    weighed = vote_candidates(edge, cfg, XM, YM, car_x)
+    assert weighed[0].refused.startswith("it runs 0.5 m from the car's centre line")
+    changing = np.zeros((H, W), np.uint8)
+    paint(changing, car_x + 25.5)                                   # the same line, from the car on
+    assert vote_candidates(changing, cfg, XM, YM, car_x)[0].refused == ""
