@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from . import bench, data, evaluate, geometry, hough, runs, scoreboard, synth
-from .benchmarks import culane, metrics, tusimple
+from .benchmarks import culane, metrics, tusimple, why, why_images
 from .camera import Calibration, calibrate, parse_pattern
 from .config import (PipelineConfig, benchmark_config, load_config_or_preset, override, preset_names,
                      save_parts)
@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_predict(sub)
     _add_synth(sub)
     _add_scoreboard(sub)
+    _add_why(sub)
     return parser
 
 
@@ -787,6 +788,60 @@ def _run_scoreboard(args) -> int:
         if r.error:
             print(f"error: {r.key}: {r.error}", file=sys.stderr)
     return 1 if any(r.error for r in rows) else 0
+
+
+def _add_why(sub) -> None:
+    p = sub.add_parser(
+        "why", help="why each labelled line of a benchmark frame is found, refused or missed",
+        description="Run the benchmark path on labelled frames as `predict` does, match the lines to the "
+                    "labels by the official rule, and give each label line its class: found, reported "
+                    "but off (a reported line on it fails the match), refused (a line the vote weighed "
+                    "and refused lies on it: the reason), missed (no line near it: no paint in the mask "
+                    "along it, a mask as busy beside it, or paint and no candidate); and each line that "
+                    "matches no label: false line. With FRAME: one PNG per frame in -o (labels green, "
+                    "lines red when matched and orange when false, refused lines grey, the lines view's "
+                    "mask as an inset) and each line's class printed. Without: the whole set (the dev "
+                    "set of LANELIB_DATA, or --root), and a table of the classes and reasons.",
+        epilog=_exit_codes())
+    p.add_argument("benchmark", choices=why.BENCHMARKS, help="the frames' benchmark")
+    p.add_argument("frames", nargs="*", metavar="FRAME",
+                   help="frames to draw: paths, or names under the dataset root (e.g. "
+                        "driver_161_90frame/06030819_0755.MP4/00000.jpg, clips/0313-1/6040/20.jpg)")
+    p.add_argument("-o", "--output", type=Path, metavar="DIR",
+                   help="with FRAME: the folder of the PNGs (default out/why; not a frame's folder); "
+                        "without: also write the counts and the frames of each class to "
+                        "DIR/why_BENCHMARK.json")
+    p.add_argument("--root", type=Path, metavar="DATASET_ROOT",
+                   help="the dataset (default: the dev set in LANELIB_DATA: culane-dev, tusimple-dev)")
+    p.add_argument("--list", dest="list_file", type=Path, metavar="FILE",
+                   help="without FRAME: culane: the list of images (default list.txt, else "
+                        "list/test.txt); tusimple: the label file (default label_data_fullres.json, "
+                        "else every label_data*.json)")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="PipelineConfig JSON or a preset's name (default: the preset named like the "
+                        "benchmark)")
+    _set_arg(p)
+    p.set_defaults(func=_run_why)
+
+
+def _run_why(args) -> int:
+    config = _load_config(args, benchmark_config(args.benchmark))
+    if args.frames:
+        out = args.output if args.output is not None else Path("out") / "why"
+        for frame, png in why_images.write_why(args.benchmark, args.frames, out, args.root, config):
+            print(f"{frame.name}: {png}")
+            for line in frame.summary():
+                print(f"  {line}")
+        return 0
+    target = args.output / f"why_{args.benchmark}.json" if args.output is not None else None
+    if target is not None:
+        check_output(target)
+    result = why.explain_set(args.benchmark, args.root, config, args.list_file)
+    print(result.table())
+    if target is not None:
+        write_json(target, result.to_dict())
+        print(f"classes and their frames written to {target}")
+    return 0
 
 
 def _add_bench(sub) -> None:

@@ -36,7 +36,6 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Callable, NamedTuple, Sequence
 
-import cv2
 import numpy as np
 
 from . import data, evaluate, io, runs
@@ -53,7 +52,7 @@ DEFAULT_OUT = Path("out") / "scoreboard"
 PLAUSIBLE_WIDTH_M = (3.0, 4.5)  # a plausible lane's width (US lanes are about 3.7 m)
 PLAUSIBLE_OFFSET_M = 0.6        # a plausible car's |offset| from the lane's centre is below this
 SYNTH_FRAMES = 10               # frames of each synthetic benchmark sample (one sequence)
-TUSIMPLE_SIZE = (1280, 720)     # (width, height) of TuSimple's frames and official label rows
+TUSIMPLE_SIZE = tusimple.IMAGE_SIZE  # (width, height) of TuSimple's frames and official label rows
 TUSIMPLE_CACHE = "tusimple-dev-1280x720"  # under ``out``: the upscaled frames and their labels
 P1_VIDEOS = {"p1-white": "test_videos/solidWhiteRight.mp4", "p1-yellow": "test_videos/solidYellowLeft.mp4"}
 
@@ -265,7 +264,7 @@ def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:
 
     Each frame of ``root``'s full-resolution labels (``data.TUSIMPLE_DEV_FULLRES``: TuSimple's
     official 1280x720 rows, whose frames ``root`` holds downscaled) is resized to
-    ``TUSIMPLE_SIZE`` (bicubic) and written as PNG (lossless) to the same path under ``cache``
+    ``TUSIMPLE_SIZE`` (``tusimple.full_size``: bicubic) and written as PNG (lossless) to the same path under ``cache``
     with the suffix ``.png``, once: a frame already there is kept (remove ``cache`` to write them
     again). The labels are written to ``cache/label_data_fullres.json`` with their images named
     so. Every file is written atomically; nothing is written under ``root``.
@@ -278,7 +277,7 @@ def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:
         target = cache.joinpath(*name.parts)
         if not target.is_file():
             image = root.joinpath(*PurePosixPath(rec.raw_file.lstrip("/")).parts)
-            big = cv2.resize(io.read_image(image), TUSIMPLE_SIZE, interpolation=cv2.INTER_CUBIC)
+            big = tusimple.full_size(io.read_image(image))
             io.write_image(target, big, inputs=[image])
         records.append(dataclasses.replace(rec, raw_file=str(name)))
     return tusimple.write_labels(cache / data.TUSIMPLE_DEV_FULLRES, records, inputs=[source])

@@ -170,7 +170,7 @@ LAYERS = [
     {"lanelib.config"},                     # nests every stage's config
     {"lanelib.pipeline"},
     {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
-     "lanelib.benchmarks"},
+     "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: runs' frames explained
     {"lanelib.scoreboard"},                 # measures with runs, evaluate and the benchmarks
     {"lanelib.widgets"},
     {"lanelib.cli", "lanelib.__main__", "lanelib"},

@@ -359,21 +359,38 @@ def iou_matrix(gt_lanes: Sequence[np.ndarray], pred_lanes: Sequence[np.ndarray],
     return out
 
 
+def matched_pair_indices(ious: np.ndarray, iou_threshold: float = CULANE_IOU) -> list[tuple[int, int]]:
+    """Return the (truth, predicted) index pairs of one image that are true positives: the
+    Hungarian pairs of the largest total IoU whose IoU is above the threshold.
+
+    Parameters
+    ----------
+    ious : (truth lanes, predicted lanes) IoU (``iou_matrix``).
+    iou_threshold : a pair counts when its IoU is strictly above this (CULane: 0.5).
+
+    Examples
+    --------
+    >>> matched_pair_indices(np.array([[0.2, 0.8], [0.7, 0.6], [0.0, 0.1]]))
+    [(0, 1), (1, 0)]
+    """
+    if ious.size == 0:
+        return []
+    # imported here, not at the top: scipy.optimize takes about 1 s to import and only the CULane
+    # score needs it; every other command starts without it (tests/test_imports.py)
+    from scipy.optimize import linear_sum_assignment
+    rows, cols = linear_sum_assignment(1.0 - ious)
+    return [(int(i), int(j)) for i, j in zip(rows, cols) if ious[i, j] > iou_threshold]
+
+
 def matched_pairs(ious: np.ndarray, iou_threshold: float = CULANE_IOU) -> int:
-    """Return the true positives of one image: Hungarian pairs whose IoU is above the threshold.
+    """Return the true positives of one image: how many ``matched_pair_indices`` there are.
 
     Parameters
     ----------
     ious : (truth lanes, predicted lanes) IoU (``iou_matrix``).
     iou_threshold : a pair counts when its IoU is strictly above this (CULane: 0.5).
     """
-    if ious.size == 0:
-        return 0
-    # imported here, not at the top: scipy.optimize takes about 1 s to import and only the CULane
-    # score needs it; every other command starts without it (tests/test_imports.py)
-    from scipy.optimize import linear_sum_assignment
-    rows, cols = linear_sum_assignment(1.0 - ious)
-    return int(np.count_nonzero(ious[rows, cols] > iou_threshold))
+    return len(matched_pair_indices(ious, iou_threshold))
 
 
 @dataclass(frozen=True)

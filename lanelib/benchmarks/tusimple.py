@@ -19,6 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
+import cv2
+import numpy as np
+
 from .. import cluster
 from ..errors import InputError
 from ..io import write_text
@@ -26,6 +29,21 @@ from .metrics import TuSimpleImage, TuSimpleScore, tusimple_image, tusimple_scor
 
 NO_POINT = -2  # the x TuSimple writes where a lane has no point
 H_SAMPLES_PX = tuple(range(160, 720, 10))  # the rows of most TuSimple labels (1280x720; some from 240)
+IMAGE_SIZE = (1280, 720)  # (width, height) px of TuSimple's frames, the size its official rows are at
+
+
+def full_size(rgb: np.ndarray) -> np.ndarray:
+    """Return a TuSimple frame at ``IMAGE_SIZE``, where the official label rows lie: resized
+    (bicubic) when it is stored smaller (a downscaled copy), else the frame itself.
+
+    Examples
+    --------
+    >>> full_size(np.zeros((288, 512, 3), np.uint8)).shape
+    (720, 1280, 3)
+    """
+    if (rgb.shape[1], rgb.shape[0]) == IMAGE_SIZE:
+        return rgb
+    return cv2.resize(rgb, IMAGE_SIZE, interpolation=cv2.INTER_CUBIC)
 
 
 @dataclass(frozen=True)
