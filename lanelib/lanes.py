@@ -1799,6 +1799,9 @@ class LinesConfig:
         ``near_paint_m`` of that row (``linevote``): a lane line runs under the car only during a
         lane change, and then its paint is seen beside the car, while the edge of a vehicle ahead
         looks like a line there in the view but starts where the vehicle is.
+    follow_bends : a voted line is also traced by windows (``window_m``, ``max_empty_windows``)
+        from its paint near the car, and the traced paint is kept where it fits tighter
+        (``linevote``): a bend of the road or the lens bends a line away from a straight one.
     headings : how many common headings the vote tries (the slopes with the most strong votes,
         ``heading_spread`` apart); it keeps the one whose reported lines hold the most paint
         (junk beside the road can outvote the paint for a heading, but not pass as lines).
@@ -1833,6 +1836,7 @@ class LinesConfig:
     max_lines: int = 6
     heading_spread: float = 0.02
     headings: int = 1
+    follow_bends: bool = False
     min_offset_m: float = 0.0
     near_paint_m: float = 3.0
 
@@ -1882,11 +1886,26 @@ def _peaks(hist: np.ndarray, min_gap_px: float, least: float) -> np.ndarray:
     return np.asarray(chosen, int)
 
 
-def _trace(ys: np.ndarray, xs: np.ndarray, x0: float, y0: float, height: int, win: int,
-           margin: float, grow: float, max_empty: int, minpix: int, max_slope: float) -> np.ndarray:
+def trace_line(ys: np.ndarray, xs: np.ndarray, x0: float, y0: float, height: int, win: int,
+               margin: float, grow: float, max_empty: int, minpix: int, max_slope: float,
+               slope: float = 0.0) -> np.ndarray:
     """Return the indices of the pixels of the line through (x0, y0), traced up and down by
     windows that follow the line's slope: a straight fit of the last window centres, once they
-    span a window's height, its slope at most ``max_slope`` (px across per px along)."""
+    span a window's height, its slope at most ``max_slope`` (px across per px along).
+
+    ``ys``/``xs`` are the pixels (ascending ``ys``), ``win`` the windows' height, ``margin``
+    their half width, grown by ``grow`` after each empty window; a trace stops after
+    ``max_empty`` empty windows in a row, and a window recentres on ``minpix`` pixels or more.
+    ``slope`` (dx/dy) is followed until the trace's own windows span enough rows for a slope.
+
+    Examples
+    --------
+    >>> ys = np.arange(100.0); xs = 50 + 0.2 * ys                   # a slanted line
+    >>> ys = np.append(ys, [10.0, 60.0]); xs = np.append(xs, [90.0, 10.0])  # two specks
+    >>> order = np.argsort(ys, kind="stable")
+    >>> len(trace_line(ys[order], xs[order], 60.0, 50.0, 100, 10, 5.0, 1.0, 2, 3, 1.0))
+    100
+    """
     picked = []
     for step in (-1, 1):  # up, then down
         centres: list[tuple[float, float]] = []
@@ -1897,12 +1916,12 @@ def _trace(ys: np.ndarray, xs: np.ndarray, x0: float, y0: float, height: int, wi
             if hi_y <= 0 or lo_y >= height:
                 break
             yc = (lo_y + hi_y) / 2
-            if len(centres) >= 2:
-                cy, cx = np.asarray(centres[-4:]).T
-                if np.ptp(cy) >= win:
-                    slope, _ = np.polyfit(cy, cx, 1)
-                    slope = float(np.clip(slope, -max_slope, max_slope))
-                    x = centres[-1][1] + slope * (yc - centres[-1][0])
+            cy, cx = np.asarray(centres[-4:]).T if centres else (np.array([y0]), np.array([x0]))
+            if len(centres) >= 2 and np.ptp(cy) >= win:
+                fitted, _ = np.polyfit(cy, cx, 1)
+                x = cx[-1] + float(np.clip(fitted, -max_slope, max_slope)) * (yc - cy[-1])
+            else:  # too few windows for a slope of its own yet: the one given
+                x = cx[-1] + slope * (yc - cy[-1])
             lo, hi = np.searchsorted(ys, [lo_y, hi_y])
             inside = np.flatnonzero(np.abs(xs[lo:hi] - x) < m) + lo
             if len(inside) >= minpix:
@@ -1997,7 +2016,7 @@ def find_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
             if any(line.y_top_px - band <= yc <= line.y_bottom_px + band and abs(line.x_at(yc) - x0) < gap
                    for line, _ in found):
                 continue
-            idx = _trace(ys, xs, float(x0), yc, h, win, margin, grow, config.max_empty_windows,
+            idx = trace_line(ys, xs, float(x0), yc, h, win, margin, grow, config.max_empty_windows,
                          config.min_window_pixels, config.max_slope * ym_per_px / xm_per_px)
             fitted = _fit_view_line(ys, xs, idx, h, curved, margin)
             if fitted is not None:

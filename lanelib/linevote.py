@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .lanes import LinesConfig, ViewLine, least_squares_poly
+from .lanes import LinesConfig, ViewLine, least_squares_poly, trace_line
 
 
 @dataclass(frozen=True)
@@ -186,6 +186,8 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
         x0, s = float(v.x0s[b]), float(v.slopes[k])
         table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap)] = 0.0  # weighed once
         near = np.abs(v.xc - (x0 + s * v.t)) <= v.tol
+        if config.follow_bends:
+            near = _followed(v, near, s, config, xm_per_px, ym_per_px)
         fitted = _fit(v.t, v.xc, near, v.height, curved)
         line = None
         if fitted is not None:
@@ -195,6 +197,38 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
         reported += not why
         found.append(Candidate(x0, s, paint * ym_per_px, line, why))
     return found
+
+
+def _followed(v: _Votes, near: np.ndarray, s: float, config: LinesConfig, xm_per_px: float,
+              ym_per_px: float) -> np.ndarray:
+    """Return the run centres of a voted line, followed where it bends.
+
+    A line bends away from the straight line the vote found (a curve of the road, the lens): it
+    is traced by windows (``lanes.trace_line``) from its paint in the near half of the view. The
+    traced runs replace the voted ones when their fit scatters less, over at least the same span
+    of the road, and they hold at least half of the voted runs of the near half (the trace has
+    not wandered off to other paint).
+    """
+    lower = near & (v.t < v.height / 2)
+    if np.count_nonzero(lower) < 3:
+        return near
+    curved = config.curved_span_m / ym_per_px
+    start = np.flatnonzero(lower)[np.count_nonzero(lower) // 2]  # a run of its paint midway up
+    y0 = float(v.rows[start])
+    win = max(2, int(round(config.window_m / ym_per_px)))
+    idx = trace_line(v.rows.astype(np.float64), v.xc, float(v.xc[start]), y0, v.height, win,
+                     v.tol, config.grow_margin_m / xm_per_px, config.max_empty_windows,
+                     max(3, config.min_window_pixels // 3),
+                     config.max_slope * ym_per_px / xm_per_px + 0.5, slope=-s)
+    traced = np.zeros_like(near)
+    traced[idx] = True
+    voted, followed = _fit(v.t, v.xc, near, v.height, curved), _fit(v.t, v.xc, traced, v.height, curved)
+    if followed is None or voted is None:
+        return near
+    tighter = followed[1] < voted[1]
+    as_long = np.ptp(v.rows[traced]) >= np.ptp(v.rows[near])
+    same_paint = np.count_nonzero(traced & lower) >= np.count_nonzero(lower) / 2
+    return traced if tighter and as_long and same_paint else near
 
 
 def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: LinesConfig,

@@ -142,3 +142,20 @@ def test_a_vehicle_edge_ahead_of_the_car_is_refused_and_a_lane_change_is_not():
     changing = np.zeros((H, W), np.uint8)
     paint(changing, car_x + 25.5)                                   # the same line, from the car on
     assert vote_candidates(changing, cfg, XM, YM, car_x)[0].refused == ""
+
+
+def test_a_line_that_bends_away_from_the_straight_vote_is_followed():
+    """A dashed line on a 270 m bend drifts 3 m off its straight start over 40 m; followed, its fit
+    stays on the paint from the car to the far end of the view; without following, the runs
+    near the straight line the vote found scatter about their fit, and the line is refused."""
+    m = np.zeros((H, W), np.uint8)
+    truth = lambda y: 300.5 + 150.0 * ((H - 1 - y) / (H - 1)) ** 2   # x (px) along the bend
+    for y in range(H):
+        if y % 60 < 40:
+            x = int(np.floor(truth(y)))
+            m[y, x - 3:x + 5] = 255
+    kw = dict(min_span_m=5.0, extend_m=100.0, vote_tolerance_m=0.25, max_scatter_m=0.13)
+    followed, = vote_lines(m, LinesConfig(follow_bends=True, **kw), XM, YM)
+    assert abs(followed.x_at(0) - truth(0)) < 2.0 and abs(followed.x_at(H - 1) - truth(H - 1)) < 2.0
+    straight, = vote_candidates(m, LinesConfig(follow_bends=False, **kw), XM, YM)
+    assert straight.refused.startswith("its paint scatters")
