@@ -1259,6 +1259,46 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     return ""
 
 
+def pitched_pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float,
+                         ym_per_px: float, checks: LaneChecks = LaneChecks(), top_px: int = 0,
+                         max_change: float = 0.5) -> str:
+    """Return why two found lines are not a lane even in a pitched flat view ("" when they are).
+
+    The bird's-eye view is flat at the pitch its points were chosen for. Where the camera looks
+    at the road ahead at another pitch (a grade, the car's load, another mount), the flat view
+    scales the road across by a factor that changes linearly with the distance ahead: the
+    lines of a lane then converge or diverge at a constant rate, which ``pair_problem`` refuses
+    as not parallel. Here the width's straight-line trend over the check rows (a least-squares
+    line in the row) is taken as the view's pitch when it changes the width by at most
+    ``max_change`` of its width at the car over the whole view (its share of that over a
+    shorter look-ahead, ``top_px``); the pair then passes ``pair_problem`` with that trend as
+    its width reference: width at the car, parallel about the trend, equal curvatures.
+
+    Examples
+    --------
+    Straight lines 3.5 m apart at the car and 2.25 m at the view's top:
+
+    >>> left, right = LineFit((0.0, -0.3, 650.0)), LineFit((0.0, 0.0, 1040.0))
+    >>> pair_problem(left, right, 720, 0.00578, 0.0326)
+    'lines not parallel (width varies by 1.25 m, limit 0.7 m)'
+    >>> pitched_pair_problem(left, right, 720, 0.00578, 0.0326)
+    ''
+    >>> pitched_pair_problem(left, right, 720, 0.00578, 0.0326, max_change=0.3)
+    'lines not parallel even in a pitched view (their width changes by 36% of its width at the car, limit 30%)'
+    """
+    rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
+    width = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
+    trend = np.polyval(np.polyfit(rows, width, 1), rows)
+    share = (height_px - 1.0 - top_px) / (height_px - 1.0)
+    if trend[-1] <= 0:
+        return pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px)
+    change, limit = abs(trend[0] - trend[-1]) / trend[-1], max_change * share
+    if change > limit:
+        return (f"lines not parallel even in a pitched view (their width changes by {change:.0%} of "
+                f"its width at the car, limit {limit:.0%})")
+    return pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px, width_reference_px=trend)
+
+
 @dataclass(frozen=True)
 class LaneCheck:
     """Why the fits of one search are not a plausible lane: per line and for the pair ("" = passes).
