@@ -188,6 +188,11 @@ class LaneChecks:
         stripes keep about their width / sqrt(12) (0.4-0.6 on the synthetic country clips
         where the rule decides, in bands of 60-180 px).
     check_rows : rows (evenly spaced, top to bottom) on which widths and shapes are compared.
+    max_turn_back_m : largest distance (m, across) a line's fit may come back, beyond its pixels,
+        from a row where its x turns around within the look-ahead (``turn_back_m``): a second-order
+        fit extrapolated from pixels on part of the view (a stub of paint, a blob beside it) may
+        hook sideways above them, and a lane drawn so leaves the road. Where the pixels
+        themselves turn (a car heading across a bend) the fit rests on them.
     """
 
     min_width_m: float = 3.0
@@ -197,6 +202,7 @@ class LaneChecks:
     max_band_fill: float = 0.6
     max_band_scatter: float = 0.7
     check_rows: int = 8
+    max_turn_back_m: float = 0.3
 
     def __post_init__(self):
         if not 0 < self.min_width_m < self.max_width_m:
@@ -204,9 +210,9 @@ class LaneChecks:
         if self.check_rows < 2:
             raise ConfigError("checks: check_rows must be at least 2")
         if min(self.max_width_spread_m, self.max_curvature_diff_per_m, self.max_band_fill,
-               self.max_band_scatter) <= 0:
-            raise ConfigError("checks: max_width_spread_m, max_curvature_diff_per_m, max_band_fill "
-                              "and max_band_scatter must be positive")
+               self.max_band_scatter, self.max_turn_back_m) <= 0:
+            raise ConfigError("checks: max_width_spread_m, max_curvature_diff_per_m, max_band_fill, "
+                              "max_band_scatter and max_turn_back_m must be positive")
 
 
 @dataclass(frozen=True)
@@ -1197,6 +1203,56 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
             f"an even spread over its search band, limit {checks.max_band_scatter:.0%}{two})")
 
 
+def turn_back_m(fit: LineFit, height_px: int, xm_per_px: float, top_px: int = 0,
+                width_px: int | None = None) -> float:
+    """Return how far (m, across) a line's fit comes back, above its pixels, from the row where
+    its x turns around within the look-ahead (rows ``top_px`` to the bottom); 0 when it does not
+    turn there, or turns only where its pixels are (``LineFit.gap_px`` and ``span_px`` give their
+    rows; a fit without pixels, span 0, rests on none). With ``width_px`` (the view's width) only
+    the part inside the view's columns counts: a tight bend's line leaves the view sideways, and
+    its fit's turn out there is not drawn.
+
+    Examples
+    --------
+    A parabola turning on row 300, fitted to pixels on rows 400-719 only, comes back 300**2 * a
+    px between row 300 and the view's top:
+
+    >>> a = 0.5 / 0.00578 / 300**2
+    >>> fit = LineFit((a, -2 * a * 300, 600.0), 2000, 319.0)
+    >>> round(turn_back_m(fit, 720, 0.00578), 2)
+    0.5
+    >>> round(turn_back_m(replace(fit, span_px=719.0), 720, 0.00578), 2)  # seen on every row
+    0.0
+    """
+    a, b, _ = fit.coeffs_px
+    if a == 0:
+        return 0.0
+    turn = -b / (2 * a)
+    if not top_px < turn < height_px - 1.0:
+        return 0.0
+    end = min(turn, height_px - 1.0 - fit.gap_px - fit.span_px)  # above the turn and the pixels
+    if end <= top_px:
+        return 0.0
+    xs = np.polyval(fit.coeffs_px, np.linspace(float(top_px), end, 16))
+    if width_px is not None:
+        xs = xs[(xs >= 0) & (xs < width_px)]
+    return float(np.ptp(xs)) * xm_per_px if len(xs) > 1 else 0.0
+
+
+def turn_back_problem(fit: LineFit, height_px: int, xm_per_px: float, checks: LaneChecks = LaneChecks(),
+                      top_px: int = 0, side: str = "left", width_px: int | None = None) -> str:
+    """Return why a found line's fit hooks sideways within the look-ahead ("" when it does not,
+    or is not found): it comes back more than ``max_turn_back_m`` beyond its pixels from where
+    its x turns around (``turn_back_m``; with ``width_px``, inside the view's columns)."""
+    if not fit.found:
+        return ""
+    back = turn_back_m(fit, height_px, xm_per_px, top_px, width_px)
+    if back <= checks.max_turn_back_m:
+        return ""
+    return (f"{side} line hooks back {back:.2f} m beyond its pixels within the view (its x turns "
+            f"around; limit {checks.max_turn_back_m} m)")
+
+
 def gap_problem(fit: LineFit, ym_per_px: float, max_gap_m: float, side: str = "left") -> str:
     """Return why a line is not seen at the car: its pixels stop more than ``max_gap_m`` (m of
     road) short of the view's bottom row (``LineFit.gap_px``), so its position there is an
@@ -1214,7 +1270,8 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
                  width_reference_px: np.ndarray | None = None) -> str:
     """Return why two found lines are not a plausible lane ("" when they are).
 
-    The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; over
+    The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; the lines
+    may not cross (or touch) on any of ``4 * check_rows`` rows of the look-ahead; over
     ``check_rows`` rows from the look-ahead's top row (``top_px``, 0: the view's) to the bottom
     it may vary by at most ``max_width_spread_m`` times the share of the view's height those rows
     cover (parallel lines: the same divergence per metre); the two curvatures on the
@@ -1243,6 +1300,12 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     if not checks.min_width_m <= width[-1] <= checks.max_width_m:
         return (f"lane width {width[-1]:.2f} m at the car outside {checks.min_width_m}-"
                 f"{checks.max_width_m} m")
+    dense = np.linspace(float(top_px), height_px - 1.0, 4 * checks.check_rows)
+    apart = np.polyval(right.coeffs_px, dense) - np.polyval(left.coeffs_px, dense)
+    if (apart <= 0).any():
+        j = int(np.flatnonzero(apart <= 0)[-1])  # the crossing nearest the car: between j and j + 1
+        row = dense[j] + (dense[j + 1] - dense[j]) * -apart[j] / (apart[j + 1] - apart[j])
+        return f"lines cross {(height_px - 1.0 - row) * ym_per_px:.1f} m ahead of the view's bottom row"
     spread = float(spread_of.max() - spread_of.min())
     share = (height_px - 1.0 - top_px) / (height_px - 1.0)  # the look-ahead's share of the view
     limit = checks.max_width_spread_m * share
@@ -1257,6 +1320,46 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
         return (f"curvatures differ by {abs(kl - kr):.4f} 1/m "
                 f"(limit {round(k_limit, 4)} 1/m)")
     return ""
+
+
+def pitched_pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float,
+                         ym_per_px: float, checks: LaneChecks = LaneChecks(), top_px: int = 0,
+                         max_change: float = 0.5) -> str:
+    """Return why two found lines are not a lane even in a pitched flat view ("" when they are).
+
+    The bird's-eye view is flat at the pitch its points were chosen for. Where the camera looks
+    at the road ahead at another pitch (a grade, the car's load, another mount), the flat view
+    scales the road across by a factor that changes linearly with the distance ahead: the
+    lines of a lane then converge or diverge at a constant rate, which ``pair_problem`` refuses
+    as not parallel. Here the width's straight-line trend over the check rows (a least-squares
+    line in the row) is taken as the view's pitch when it changes the width by at most
+    ``max_change`` of its width at the car over the whole view (its share of that over a
+    shorter look-ahead, ``top_px``); the pair then passes ``pair_problem`` with that trend as
+    its width reference: width at the car, parallel about the trend, equal curvatures.
+
+    Examples
+    --------
+    Straight lines 3.5 m apart at the car and 2.25 m at the view's top:
+
+    >>> left, right = LineFit((0.0, -0.3, 650.0)), LineFit((0.0, 0.0, 1040.0))
+    >>> pair_problem(left, right, 720, 0.00578, 0.0326)
+    'lines not parallel (width varies by 1.25 m, limit 0.7 m)'
+    >>> pitched_pair_problem(left, right, 720, 0.00578, 0.0326)
+    ''
+    >>> pitched_pair_problem(left, right, 720, 0.00578, 0.0326, max_change=0.3)
+    'lines not parallel even in a pitched view (their width changes by 36% of its width at the car, limit 30%)'
+    """
+    rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
+    width = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
+    trend = np.polyval(np.polyfit(rows, width, 1), rows)
+    share = (height_px - 1.0 - top_px) / (height_px - 1.0)
+    if trend[-1] <= 0:
+        return pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px)
+    change, limit = abs(trend[0] - trend[-1]) / trend[-1], max_change * share
+    if change > limit:
+        return (f"lines not parallel even in a pitched view (their width changes by {change:.0%} of "
+                f"its width at the car, limit {limit:.0%})")
+    return pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px, width_reference_px=trend)
 
 
 @dataclass(frozen=True)
@@ -1284,8 +1387,9 @@ class LaneCheck:
 
 def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], height_px: int,
                xm_per_px: float, ym_per_px: float, checks: LaneChecks = LaneChecks(),
-               top_px: int = 0) -> LaneCheck:
-    """Return the plausibility checks of two fits: ``line_problem`` of each, then ``pair_problem``.
+               top_px: int = 0, width_px: int | None = None) -> LaneCheck:
+    """Return the plausibility checks of two fits: ``line_problem`` (and, given ``width_px``,
+    ``turn_back_problem``) of each, then ``pair_problem``.
 
     Parameters
     ----------
@@ -1295,9 +1399,14 @@ def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], hei
     xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
     checks : the limits.
     top_px : the first row of the look-ahead the fits were made in (``LaneSearch.top_px``).
+    width_px : width of the bird's-eye view, to check each line's turn back inside it (None:
+        not checked; the tracker's searches leave it to their checks against the track).
     """
     lp = line_problem(left, bands_px[0], checks, xm_per_px, "left")
     rp = line_problem(right, bands_px[1], checks, xm_per_px, "right")
+    if width_px is not None:
+        lp = lp or turn_back_problem(left, height_px, xm_per_px, checks, top_px, "left", width_px)
+        rp = rp or turn_back_problem(right, height_px, xm_per_px, checks, top_px, "right", width_px)
     pp = ""
     if left.found and right.found and not (lp or rp):
         pp = pair_problem(left, right, height_px, xm_per_px, ym_per_px, checks, top_px)

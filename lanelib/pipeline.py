@@ -232,12 +232,13 @@ class LanePipeline:
         mask = self.binary(bird)
         return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
 
-    def check(self, search: LaneSearch) -> LaneCheck:
-        """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's fits."""
+    def check(self, search: LaneSearch, turn_back: bool = False) -> LaneCheck:
+        """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's
+        fits; with ``turn_back``, each line's hook beyond its pixels too (``lanes.turn_back_problem``)."""
         p = self.perspective
         return lanes.check_lane(search.left, search.right, self.search_bands_px(search),
                                 self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks,
-                                search.top_px)
+                                search.top_px, self.size[0] if turn_back else None)
 
     def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                keep_images: bool = False) -> FrameResult:

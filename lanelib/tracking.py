@@ -333,6 +333,20 @@ class TrackerConfig:
         points (frames 167-192 under the overpass). The same rule keeps a frame whose line is
         so extrapolated out of the width seen at the car (step 3, ``seen_width_m``; ``country``
         1.4 -> 1.2 % false lines).
+    pitched_start_frames : 0 (off), or the frames in a row, without a track, whose pair is refused
+        only as not parallel but is a lane in a pitched flat view (``lanes.pitched_pair_problem``:
+        its width changes linearly along the view by at most ``max_pitch_change``, and is
+        parallel about that trend) and agrees with the previous frame's such pair (each line
+        within ``max_jump_m`` at the car and ``max_bend_m`` in shape) that start the track with
+        that pair (step 5). Where the camera looks at the road at another pitch than the
+        bird's-eye points were chosen for, every pair of the flat view converges or diverges,
+        and no lane would start; once started, the pair's checks compare the width with the
+        tracked width (step 2), which carries the pitch. One frame alone starts nothing: a
+        wrong pair (a seam, a barrier's foot) rarely keeps one trend while the car moves.
+    max_pitch_change : the largest change of the lane's width over the whole view, as a share of
+        its width at the car, that a pitched start takes for the view's pitch (0.5: with the
+        default view, 23.5 m of road beyond 4.8 m ahead, a camera 1.4 m above a road pitched
+        about 1.5 degrees from the points' plane narrows the lane at the view's top by half).
     near_gap_bend_m : the least bend (m) of the tracked line over a line's gap (|a| * gap**2 in
         the view, a the tracked line's second-order coefficient) for ``near_gap_m`` to apply:
         below it the curvature moves the extrapolation by less than that, and the line is
@@ -370,6 +384,8 @@ class TrackerConfig:
     return_gap_m: float = 2.0
     near_gap_m: float = 1.0
     near_gap_bend_m: float = 0.05
+    pitched_start_frames: int = 3
+    max_pitch_change: float = 0.5
 
     def __post_init__(self):
         if self.smooth_frames < 1 or self.hold_frames < 0:
@@ -399,6 +415,9 @@ class TrackerConfig:
         if self.return_gap_m < 0 or self.near_gap_m < 0 or self.near_gap_bend_m < 0:
             raise ConfigError("tracking: return_gap_m >= 0, near_gap_m >= 0 (0: off) and "
                               "near_gap_bend_m >= 0")
+        if self.pitched_start_frames < 0 or not 0 < self.max_pitch_change < 1:
+            raise ConfigError("tracking: pitched_start_frames >= 0 (0: off) and max_pitch_change "
+                              "in (0, 1)")
 
 
 @dataclass(frozen=True)
@@ -466,6 +485,9 @@ class LaneTracker:
         # (side, pixel coefficients) of the lines that could restart the lane in the previous
         # frame and in this one, each waiting for the next frame to confirm it (step 5)
         self._restart_candidates: tuple[list, list] = ([], [])
+        # (frames in a row, left and right pixel coefficients) of the pitched pairs of the previous
+        # frame and of this one (``TrackerConfig.pitched_start_frames``)
+        self._pitched: tuple[list, list] = ([], [])
         self._frame = 0  # the number of the frame being tracked (1 for the first)
         self.retries: tuple[str, ...] = ()
         self._base_history: deque[tuple[float, float]] = deque(maxlen=self.config.base_history_frames)
@@ -604,7 +626,8 @@ class LaneTracker:
                  self._edge, [list(d) for d in self._shoulders], self._faded_run, self._inferred_run,
                  self._lost_track,
                  self._restart_width,
-                 [(side, c.tobytes()) for side, c in self._restart_candidates[1]])
+                 [(side, c.tobytes()) for side, c in self._restart_candidates[1]],
+                 [(run, l.tobytes(), r.tobytes()) for run, l, r in self._pitched[1]])
         return hashlib.sha256(repr(state).encode()).digest()
 
     # ---- one frame ------------------------------------------------------------------------
@@ -620,6 +643,7 @@ class LaneTracker:
         index = self._frame if index is None else index
         self._frame += 1
         self._restart_candidates = (self._restart_candidates[1], [])
+        self._pitched = (self._pitched[1], [])
         track = self.predicted_lane()
         prior = None
         top = 0 if track is None else self.lookahead_top_px(track)
@@ -1112,9 +1136,16 @@ class LaneTracker:
             why.append("both lines bent away from the track together and pass the pair checks: "
                        "the road changed, the track lags")
         if kept["left"] is not None and kept["right"] is not None:
+            reference = self._width_reference(track, rows)
             problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
                                          self._xm, self._ym, self.checks, top_px,
-                                         width_reference_px=self._width_reference(track, rows))
+                                         width_reference_px=reference)
+            if track is not None and reference is None and problem and not distant and not self._pair_alone(
+                    kept["left"], kept["right"], top_px):
+                # checked on its own (a line inferred), both lines seen at the car: a pitched flat
+                # view's lane is a lane (a line joined to an inference is not seen at the car)
+                why.append(f"{problem}, but a lane in a pitched flat view (its width changes linearly)")
+                problem = ""
             graded_check = self.config.grade_pair_check and track is not None
             if graded_check and problem.startswith("lines not parallel"):
                 graded = self._graded_reference(kept["left"], kept["right"], rows, top_px, mask)
@@ -1128,6 +1159,8 @@ class LaneTracker:
                 why.append(problem)
                 failed = True
                 if track is None:
+                    if candidates is not None and self._pitched_start(kept, problem, top_px, why):
+                        return kept["left"], kept["right"], why, False
                     return self._restart(kept, why, failed, candidates)
                 lc, rc = (self._conf_of(kept[s]) for s in ("left", "right"))
                 drop = "right" if lc >= rc else "left"
@@ -1202,6 +1235,36 @@ class LaneTracker:
                    f"{agree}")
         return (fit if side == "left" else None, fit if side == "right" else None, why, failed)
 
+    def _pitched_start(self, kept: dict, problem: str, top_px: int, why: list[str]) -> bool:
+        """Return whether a pair refused without a track as not parallel starts the track as a
+        lane in a pitched flat view (``TrackerConfig.pitched_start_frames``), noting why in
+        ``why``; remembers it for the next frame when it is such a lane."""
+        cfg = self.config
+        if not cfg.pitched_start_frames or not problem.startswith("lines not parallel"):
+            return False
+        left, right = kept["left"], kept["right"]
+        if lanes.pitched_pair_problem(left, right, self.pipeline.size[1], self._xm, self._ym, self.checks,
+                                      top_px, cfg.max_pitch_change):
+            return False
+        pair = (np.array(left.coeffs_px, float), np.array(right.coeffs_px, float))
+        run = 1 + max((n for n, *previous in self._pitched[0] if self._agree(pair, previous)), default=0)
+        self._pitched[1].append((run, *pair))
+        if run < cfg.pitched_start_frames:
+            return False
+        why[-1] = (f"{problem}, but a lane in a pitched flat view (its width changes linearly, within "
+                   f"{cfg.max_pitch_change:.0%} of its width at the car) {run} frames in a row: the "
+                   "track starts")
+        return True
+
+    def _agree(self, pair, previous) -> bool:
+        """Return whether each line of ``pair`` lies within ``max_jump_m`` at the car and
+        ``max_bend_m`` in shape of the same side's line of ``previous`` (pixel coefficients)."""
+        for now, before in zip(pair, previous):
+            dx = (np.polyval(now, self._rows) - np.polyval(before, self._rows)) * self._xm
+            if abs(dx[-1]) > self.config.max_jump_m or dx.max() - dx.min() > self.config.max_bend_m:
+                return False
+        return True
+
     def _confirmed_restart(self, side: str, fit: LineFit) -> str | None:
         """Return how a line that could restart the lane agrees with one the previous frame
         could have restarted it from on the same side, or None when none agrees: within
@@ -1252,7 +1315,7 @@ class LaneTracker:
 
         When both lines of a frame bend away from the track the same way, the road's curve
         changed faster than the smoothed track follows (a bend tightening over a crest); they
-        are kept when they are a lane on their own (the pair's checks, ``lanes.pair_problem``)
+        are kept when they are a lane on their own (the pair's checks, ``_pair_alone``)
         and bend alike (their bends from the track differ by at most ``max_bend_m``). The jump
         check still holds: a line is never taken that moved at the car.
         """
@@ -1260,8 +1323,19 @@ class LaneTracker:
         dr = np.polyval(bent["right"].coeffs_px, rows) - np.polyval(track[1], rows)
         if float(np.abs(dl - dr).max()) * self._xm > self.config.max_bend_m:
             return False
-        return not lanes.pair_problem(bent["left"], bent["right"], self.pipeline.size[1], self._xm,
-                                      self._ym, self.checks, top_px)
+        return not self._pair_alone(bent["left"], bent["right"], top_px)
+
+    def _pair_alone(self, left: LineFit, right: LineFit, top_px: int) -> str:
+        """Return why two lines checked on their own, not against the tracked width, are no lane
+        (``lanes.pair_problem``): with ``pitched_start_frames`` on, lines refused only as not
+        parallel are a lane when they are one in a pitched flat view (``lanes.pitched_pair_problem``):
+        the track that checks their positions was measured in the same view."""
+        h = self.pipeline.size[1]
+        problem = lanes.pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px)
+        if problem.startswith("lines not parallel") and self.config.pitched_start_frames:
+            return lanes.pitched_pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px,
+                                              self.config.max_pitch_change)
+        return problem
 
     def _confirms_track(self, fit: LineFit, tracked: np.ndarray, top_px: int, side: int) -> bool:
         """Return whether a line seen only far ahead (``lanes.gap_problem``) lies along its

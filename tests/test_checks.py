@@ -83,13 +83,45 @@ def test_converging_lines_are_not_parallel():
     assert number_after(check.pair, "width varies by ") == pytest.approx(2.5, abs=0.05)
 
 
-def test_crossing_lines_are_not_parallel():
-    # 3.7 m apart at the car, crossing in the middle of the view
+def test_crossing_lines_are_refused_where_they_cross():
+    # 3.7 m apart at the car, crossing in the middle of the view (row 359.5)
     lean = (3.7 / XM) / (H - 1)
     left = LineFit((0.0, -lean, 320.0 + lean * (H - 1)), 5000, 700.0)
     right = LineFit((0.0, lean, 960.0 - lean * (H - 1)), 5000, 700.0)
     problem = lanes.pair_problem(left, right, H, XM, YM)
-    assert problem == "lines not parallel (width varies by 7.40 m, limit 0.7 m)"
+    assert problem.startswith("lines cross ") and problem.endswith(" m ahead of the view's bottom row")
+    assert number_after(problem, "lines cross ") == pytest.approx((H - 1 - 359.5) * YM, abs=0.05)
+    # beyond a shorter look-ahead they do not cross there: only not parallel
+    assert lanes.pair_problem(left, right, H, XM, YM, top_px=400).startswith("lines not parallel")
+
+
+def test_curved_lines_that_cross_ahead_are_refused():
+    # 3.4 m apart at the car, the right line bending across the left one: the width is
+    # 3.7 * ((y - y0) / (15 m))**2 - 0.3 m, with y0 15 m ahead, zero 15 * (1 - sqrt(0.3 / 3.7)) m ahead
+    y0 = H - 1 - 15.0 / YM
+    a = (3.7 / XM) / (H - 1 - y0) ** 2
+    left = LineFit((0.0, 0.0, 320.0), 5000, 700.0)
+    right = LineFit((a, -2 * a * y0, 320.0 + a * y0 ** 2 - 0.3 / XM), 5000, 700.0)
+    problem = lanes.pair_problem(left, right, H, XM, YM)
+    assert number_after(problem, "lines cross ") == pytest.approx(15.0 * (1 - math.sqrt(0.3 / 3.7)), abs=0.05)
+
+
+def test_a_fit_that_hooks_back_beyond_its_pixels_is_refused_and_a_curve_passes():
+    # a left line seen on the lower 300 rows whose fit turns around on row 300 and comes back
+    # 0.8 m by the view's top: refused, naming it; the same fit seen on every row passes, and so
+    # does a 300 m bend (it turns nowhere in the view)
+    a = 0.8 / XM / 300.0 ** 2
+    hooked = LineFit((a, -2 * a * 300, 400.0), 3000, 300.0)
+    right = LineFit((a, -2 * a * 300, 400.0 + 3.6 / XM), 3000, 700.0)
+    check = lanes.check_lane(hooked, right, (160.0, 160.0), H, XM, YM, width_px=W)
+    assert check.left.startswith("left line hooks back ")
+    assert number_after(check.left, "hooks back ") == pytest.approx(0.8, abs=0.01)
+    assert check.right == ""
+    assert lanes.check_lane(hooked, right, (160.0, 160.0), H, XM, YM).ok  # not asked for
+    assert lanes.check_lane(replace(hooked, span_px=719.0), right, (160.0, 160.0), H, XM, YM, width_px=W).ok
+    a_px = YM ** 2 / (2 * 300.0) / XM  # x = y**2 / (2 R) in metres, straight ahead at the top row
+    curve = (LineFit((a_px, 0.0, 400.0), 3000, 300.0), LineFit((a_px, 0.0, 400.0 + 3.6 / XM), 3000, 300.0))
+    assert lanes.check_lane(*curve, (160.0, 160.0), H, XM, YM, width_px=W).ok
 
 
 def test_lines_of_different_curvature_fail_even_when_nearly_parallel():

@@ -929,3 +929,67 @@ def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(pipe
     straight = np.array([0.0, 0.0, 320.0])
     assert tracker._in_view_top_px(straight, 0) == 0.0
     assert tracker._stripe_spread(_double_line_mask(straight, 1.3, 420), straight, 0) is None
+
+
+@pytest.mark.parametrize("top_m, starts", [(-1.5, True), (1.2, True), (-2.2, False)])
+def test_a_pitched_views_lane_starts_the_track_on_its_third_frame(pipe, top_m, starts):
+    """Known answer: a lane 3.7 m wide at the car whose right line leans ``top_m`` by the view's
+    top row (the flat view of a road pitched from the bird's-eye points' plane: 41 % narrower,
+    32 % wider) is refused as not parallel on its own; the same pair in three frames in a row
+    starts the track on the third (``pitched_start_frames``), and the next frame checks it
+    against the tracked width. A lean of 59 % is beyond ``max_pitch_change`` and never starts."""
+    tracker = LaneTracker(pipe)
+    image = frame(pipe, right_top_x=RIGHT_X + top_m / XM)
+    results = [tracker.update(image) for _ in range(4)]
+    assert all(not r.found and "lines not parallel" in r.reason for r in results[:2])
+    if not starts:
+        assert not any(r.found for r in results)
+        assert "even in a pitched view" not in results[-1].reason  # tried only on the flat check's word
+        assert lanes.pitched_pair_problem(results[-1].rejected.left, results[-1].rejected.right, H, XM,
+                                          PerspectiveConfig().ym_per_px).startswith(
+            "lines not parallel even in a pitched view")
+        return
+    assert results[2].found and "a lane in a pitched flat view" in results[2].reason
+    assert results[2].sources == ("seen", "seen")
+    assert results[3].found and results[3].reason == ""
+    assert results[3].lane_width_m == pytest.approx(3.7, abs=0.05)
+    off = LaneTracker(pipe, replace(pipe.config.tracking, pitched_start_frames=0))
+    assert not any(off.update(image).found for _ in range(4))
+
+
+def test_a_pitched_start_needs_the_same_pair_in_a_row(pipe):
+    """Two pitched frames whose right lines lie 0.6 m apart at the car (beyond ``max_jump_m``)
+    do not confirm each other: the run starts again, and the track starts two frames later."""
+    lean = -1.5 / XM
+    images = [frame(pipe, right_top_x=RIGHT_X + lean),
+              frame(pipe, right_x=RIGHT_X + 0.6 / XM, right_top_x=RIGHT_X + 0.6 / XM + lean)]
+    tracker = LaneTracker(pipe)
+    found = [tracker.update(images[k]).found for k in (0, 0, 1, 1, 1)]
+    assert found == [False, False, False, False, True]
+
+
+def test_pitched_start_is_validated():
+    with pytest.raises(ConfigError, match="max_pitch_change"):
+        TrackerConfig(max_pitch_change=1.0)
+    with pytest.raises(ConfigError, match="pitched_start_frames"):
+        TrackerConfig(pitched_start_frames=-1)
+
+
+@pytest.mark.slow
+@pytest.mark.udacity
+def test_the_challenge_video_lane_is_found_from_its_first_frames(udacity_calibration):
+    """The Udacity challenge video (the highway camera, its flat view pitched: every lane
+    narrows ahead by about 40 % there) acquires the lane by its third frame, on the yellow line
+    and the white dashes (about 3.5 m wide at the car), and holds it."""
+    from lanelib import data
+    from lanelib.io import VideoReader
+
+    path = data.challenge_video()
+    if path is None:
+        pytest.skip(data.missing_reason(data.CHALLENGE_VIDEO))
+    tracker = LaneTracker(LanePipeline(PipelineConfig(), udacity_calibration))
+    with VideoReader(path) as reader:
+        results = [tracker.update(image) for _, image in zip(range(8), reader)]
+    assert all(r.found for r in results[2:])
+    for r in results[2:]:
+        assert 3.2 <= r.lane_width_m <= 3.8 and abs(r.offset_m) < 0.6
