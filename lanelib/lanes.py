@@ -1911,6 +1911,10 @@ class LinesConfig:
     follow_bends : a voted line is also traced by windows (``window_m``, ``max_empty_windows``)
         from its paint near the car, and the traced paint is kept where it fits tighter
         (``linevote``): a bend of the road or the lens bends a line away from a straight one.
+    row_weight_power, row_weight_full : how much a row of the lines view counts in the vote
+        (``LanePipeline.lines_row_weights``; power 0: every row alike): the raw frame's rows it
+        sees over ``row_weight_full``, at most 1, to this power. Far rows are stretched from a
+        fraction of a raw row, where vehicles and their shadows crowd the road.
     headings : how many common headings the vote tries (the slopes with the most strong votes,
         ``heading_spread`` apart); it keeps the one whose reported lines hold the most paint
         (junk beside the road can outvote the paint for a heading, but not pass as lines).
@@ -1945,11 +1949,15 @@ class LinesConfig:
     max_lines: int = 6
     heading_spread: float = 0.02
     headings: int = 1
+    row_weight_power: float = 0.0
+    row_weight_full: float = 0.5
     follow_bends: bool = False
     min_offset_m: float = 0.0
     near_paint_m: float = 3.0
 
     def __post_init__(self):
+        if self.row_weight_power < 0 or self.row_weight_full <= 0:
+            raise ConfigError("lines: row_weight_power must be 0 or more and row_weight_full positive")
         if self.method not in ("trace", "vote"):
             raise ConfigError(f"lines.method: {self.method!r} is not a method; use \"trace\" or \"vote\"")
         if min(self.max_paint_width_m, self.vote_tolerance_m) <= 0 or min(self.max_lines, self.headings) < 1:

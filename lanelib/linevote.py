@@ -57,7 +57,8 @@ def run_centres(binary: np.ndarray, max_width_px: float) -> tuple[np.ndarray, np
     return rs[narrow], (starts[narrow] + ends[narrow] - 1) / 2.0
 
 
-def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, width: int) -> np.ndarray:
+def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, width: int,
+           weights: np.ndarray | None = None) -> np.ndarray:
     """Return the vote table (slope, x0 bin): how many run centres lie on each straight line
     beyond the mean of the lines of that slope."""
     n_bins = int(np.ceil(width / bin_px)) + 1
@@ -65,7 +66,7 @@ def _votes(t: np.ndarray, xc: np.ndarray, slopes: np.ndarray, bin_px: float, wid
     for k, s in enumerate(slopes):
         b = np.rint((xc - s * t) / bin_px).astype(np.int64)
         ok = (b >= 0) & (b < n_bins)
-        table[k] = np.bincount(b[ok], minlength=n_bins)
+        table[k] = np.bincount(b[ok], None if weights is None else weights[ok], minlength=n_bins)
     # a line straddles two bins: a cell counts its neighbours' votes too
     table = table + np.roll(table, 1, axis=1) * 0.5 + np.roll(table, -1, axis=1) * 0.5
     # texture spread over the road votes for every cell alike: a line is what stands above the
@@ -110,7 +111,8 @@ def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: flo
 
 
 def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
-                    ym_per_px: float = 0.1, car_x_px: float | None = None) -> list[Candidate]:
+                    ym_per_px: float = 0.1, car_x_px: float | None = None,
+                    row_weights: np.ndarray | None = None) -> list[Candidate]:
     """Return every straight line the vote weighs in a bird's-eye lane mask, strongest first, each
     with its fit and why it is refused ("" for a reported line).
 
@@ -141,7 +143,7 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     max_slope = config.max_slope * ym_per_px / xm_per_px  # px across per px along
     tol = config.vote_tolerance_m / xm_per_px
     slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
-    table = _votes(t, xc, slopes, tol, w)
+    table = _votes(t, xc, slopes, tol, w, None if row_weights is None else row_weights[rows])
     least = config.min_peak_m / ym_per_px
     spread = config.heading_spread * ym_per_px / xm_per_px
     votes = _Votes(rows, t, xc, slopes, np.arange(table.shape[1]) * tol, h, tol,

@@ -65,6 +65,7 @@ class LanePipeline:
         self._lines_view = None  # (view, remap maps, thresholds), made by the first detect_lines
         self._lines_to_raw = None  # the lines view's transform back to the raw frame, made with it
         self._lines_seen = None  # the lines view's pixels that see the frame, away from its edge
+        self._lines_weights = None  # how much each row of the lines view counts in the vote
 
     def __reduce__(self):
         return LanePipeline, (self.config, self.undistorter.calibration, self.size)
@@ -296,6 +297,21 @@ class LanePipeline:
             self._lines_seen = cv2.erode(seen, np.ones((3, edge), np.uint8))
         return self._lines_view
 
+    def lines_row_weights(self) -> np.ndarray:
+        """Return how much each row of the lines view counts in the vote (``LinesConfig``:
+        ``row_weight_full``, ``row_weight_power``): the raw frame's rows it sees, over
+        ``row_weight_full`` and at most 1, to the power ``row_weight_power``. A far row of the
+        view is stretched from a fraction of one raw row, so a speck there would otherwise vote
+        along metres of road. Made once, with the view."""
+        if self._lines_weights is None:
+            view, _, _ = self.lines_view()
+            lc = self.config.lines
+            rows = np.arange(view.size[1], dtype=np.float64)
+            pts, ok = self._lines_to_raw.checked(np.column_stack([np.full(len(rows), view.car_x_px), rows]))
+            seen = np.where(ok, np.abs(np.gradient(pts[:, 1])), 0.0)
+            self._lines_weights = np.clip(seen / lc.row_weight_full, 0.0, 1.0) ** lc.row_weight_power
+        return self._lines_weights
+
     def detect_lines(self, raw: np.ndarray, config: LinesConfig | None = None,
                      keep_images: bool = False, ego: bool = True) -> LinesResult:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
@@ -330,7 +346,8 @@ class LanePipeline:
                                    bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
         refused: tuple = ()
         if config.method == "vote":
-            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px)
+            weights = self.lines_row_weights() if config.row_weight_power > 0 else None
+            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
             found = linevote.reported(weighed, config, mask.shape[0], view.ym_per_px)
             refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
         else:

@@ -10,7 +10,7 @@ import pytest
 from lanelib import data
 from lanelib.config import preset
 from lanelib.lanes import LinesConfig
-from lanelib.linevote import run_centres, vote_candidates, vote_lines
+from lanelib.linevote import reported, run_centres, vote_candidates, vote_lines
 from lanelib.perspective import Perspective
 
 XM, YM = 0.02, 0.1          # m per view px across and along
@@ -159,3 +159,25 @@ def test_a_line_that_bends_away_from_the_straight_vote_is_followed():
     assert abs(followed.x_at(0) - truth(0)) < 2.0 and abs(followed.x_at(H - 1) - truth(H - 1)) < 2.0
     straight, = vote_candidates(m, LinesConfig(follow_bends=False, **kw), XM, YM)
     assert straight.refused.startswith("its paint scatters")
+
+
+def test_row_weights_count_far_rows_less():
+    """The same 8 m stroke of paint is a line near the car and too little paint far away, where
+    each view row sees a fraction of a raw frame's row."""
+    weights = np.where(np.arange(H) < H // 2, 0.1, 1.0)            # far half: a tenth of a row each
+    cfg = LinesConfig(min_span_m=5.0, extend_m=0.0, min_peak_m=3.0)
+    near, far = np.zeros((H, W), np.uint8), np.zeros((H, W), np.uint8)
+    paint(near, 300.5, rows=range(300, 380))
+    paint(far, 300.5, rows=range(20, 100))
+    assert xs_at_bottom(vote_lines(near, cfg, XM, YM)) == [300.5]
+    assert len(vote_lines(far, cfg, XM, YM)) == 1                          # unweighted: a line
+    assert vote_candidates(far, cfg, XM, YM, row_weights=weights) == []     # 8 m x 0.1: too little
+    assert xs_at_bottom(reported(vote_candidates(near, cfg, XM, YM, row_weights=weights), cfg, H, YM)) == [300.5]
+
+
+@pytest.mark.parametrize("name, size", [("culane", (1640, 590)), ("tusimple", (1280, 720))])
+def test_the_presets_count_far_rows_of_the_lines_view_less(name, size):
+    from lanelib.pipeline import LanePipeline
+    weights = LanePipeline(preset(name), None, size=size).lines_row_weights()
+    assert weights[-1] == 1.0 and weights[0] < 0.5                  # the car's end counts fully
+    assert np.all(np.diff(weights[weights > 0]) >= -1e-9)          # and nothing counts more further out
