@@ -4,16 +4,26 @@ On real roads a line is seen in pieces: dashes, the gaps between vehicles that h
 paint. Tracing it window by window stops at the first long gap; a vote does not. In the
 bird's-eye lines view every lane line runs nearly along the road, so each is close to a straight
 line ``x = x0 + s * t`` (``t`` the distance ahead of the view's bottom row, ``s`` its slope
-across the road, set by the car's heading). Each row's narrow runs of paint vote, by their
-centres, for the ``(x0, s)`` cells they lie on; a cell's votes are the metres of road along
-which the line has paint. The strongest cells that are not the same line as a stronger one
-(nearer than ``min_gap_fraction`` of a lane width somewhere in the view, or crossing it there)
-become lines, fitted on the run centres near them (a parabola when they span far enough).
+across the road, set by the car's heading). The search, in the order it runs:
 
-A run wider than ``max_paint_width_m`` is not paint (a car, a shadow's edge, a verge), so it
-casts no vote; a line whose paint spans less than ``min_span_m`` along the road, or that has less
-than ``min_peak_m`` of paint, or whose run centres scatter more than ``max_scatter_m`` around
-its fit, is not reported.
+1. **Runs.** Each row's runs of mask pixels no wider than ``max_paint_width_m`` are paint; a
+   wider run (a car, a shadow's edge, a verge) casts no vote (``run_centres``).
+2. **Vote.** Each run's centre votes for the ``(x0, s)`` cells it lies on, within
+   ``vote_tolerance_m``; a cell's votes are the metres of road along which the line has paint,
+   a far row counting less when ``row_weights`` say it sees less of the frame; a cell keeps
+   what stands above the mean of its slope's cells (texture votes everywhere alike).
+3. **Heading.** Lane lines are parallel: only slopes within ``heading_spread`` of a common
+   heading count. The ``headings`` slopes with the most strong votes are tried, and the one whose
+   reported lines hold the most paint is kept (junk beside the road can outvote the paint for a
+   heading, but it does not pass as lines).
+4. **Lines.** The strongest cell left is weighed, then every cell that is the same line as it
+   (nearer than ``min_gap_fraction`` of a lane width, or crossing it, within the view) is
+   cleared. Its runs are fitted (a parabola when they span ``curved_span_m``); with
+   ``follow_bends`` they are followed by windows where the line bends away from the straight one.
+5. **Checks.** A line is refused, saying why (``Candidate.refused``), with less than
+   ``min_peak_m`` of paint, paint spanning less than ``min_span_m``, runs scattering more than
+   ``max_scatter_m`` about the fit, or when it runs under the car (``min_offset_m``) while its
+   paint starts more than ``near_paint_m`` ahead (a vehicle's edge).
 """
 from __future__ import annotations
 
