@@ -128,15 +128,17 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
 
     Each distinct line is weighed once: the strongest cell left is weighed, then the cells that
     are the same line as it (nearer than ``min_gap_fraction`` of a lane width, or crossing it,
-    within the view) are cleared; at most ``4 * max_lines`` lines are weighed. The weighing goes down to half of ``min_peak_m`` of paint, so
-    that a line that narrowly misses says so. Refusals: too little paint, more than
-    ``max_lines``, fewer than 3 runs near it, paint spanning less than ``min_span_m``, or runs
-    scattering more than ``max_scatter_m`` around the fit.
+    within the view) are cleared; at most ``4 * max_lines`` lines are weighed. The weighing goes
+    down to half of ``min_peak_m`` of paint, so that a line that narrowly misses says so.
+    Refusals: too little paint, more than ``max_lines``, fewer than 3 runs near it, paint
+    spanning less than ``min_span_m``, runs scattering more than ``max_scatter_m`` around the
+    fit, or a line under the car whose paint starts ahead (``min_offset_m``, ``near_paint_m``).
 
     Parameters
     ----------
     binary, config, xm_per_px, ym_per_px : as for ``vote_lines``.
     car_x_px : the car's centre line in the view (px); None: the view's middle column.
+    row_weights : how much each row of the view counts in the vote (None: every row alike).
 
     Examples
     --------
@@ -198,9 +200,9 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
         x0, s = float(v.x0s[b]), float(v.slopes[k])
         table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap)] = 0.0  # weighed once
         near = np.abs(v.xc - (x0 + s * v.t)) <= v.tol
-        if config.follow_bends:
-            near = _followed(v, near, s, config, xm_per_px, ym_per_px)
         fitted = _fit(v.t, v.xc, near, v.height, curved)
+        if config.follow_bends and fitted is not None:
+            near, fitted = _followed(v, near, fitted, s, config, xm_per_px, ym_per_px)
         line = None
         if fitted is not None:
             y_near = v.rows[near]
@@ -211,9 +213,10 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
     return found
 
 
-def _followed(v: _Votes, near: np.ndarray, s: float, config: LinesConfig, xm_per_px: float,
-              ym_per_px: float) -> np.ndarray:
-    """Return the run centres of a voted line, followed where it bends.
+def _followed(v: _Votes, near: np.ndarray, voted: tuple, s: float, config: LinesConfig, xm_per_px: float,
+              ym_per_px: float) -> tuple[np.ndarray, tuple]:
+    """Return the run centres of a voted line (``near``, fitted as ``voted``), followed where it
+    bends, with their fit.
 
     A line bends away from the straight line the vote found (a curve of the road, the lens): it
     is traced by windows (``lanes.trace_line``) from its paint in the near half of the view. The
@@ -223,24 +226,24 @@ def _followed(v: _Votes, near: np.ndarray, s: float, config: LinesConfig, xm_per
     """
     lower = near & (v.t < v.height / 2)
     if np.count_nonzero(lower) < 3:
-        return near
+        return near, voted
     curved = config.curved_span_m / ym_per_px
     start = np.flatnonzero(lower)[np.count_nonzero(lower) // 2]  # a run of its paint midway up
     y0 = float(v.rows[start])
     win = max(2, int(round(config.window_m / ym_per_px)))
-    idx = trace_line(v.rows.astype(np.float64), v.xc, float(v.xc[start]), y0, v.height, win,
+    idx = trace_line((v.height - 1) - v.t, v.xc, float(v.xc[start]), y0, v.height, win,
                      v.tol, config.grow_margin_m / xm_per_px, config.max_empty_windows,
                      max(3, config.min_window_pixels // 3),
                      config.max_slope * ym_per_px / xm_per_px + 0.5, slope=-s)
     traced = np.zeros_like(near)
     traced[idx] = True
-    voted, followed = _fit(v.t, v.xc, near, v.height, curved), _fit(v.t, v.xc, traced, v.height, curved)
-    if followed is None or voted is None:
-        return near
+    followed = _fit(v.t, v.xc, traced, v.height, curved)
+    if followed is None:
+        return near, voted
     tighter = followed[1] < voted[1]
     as_long = np.ptp(v.rows[traced]) >= np.ptp(v.rows[near])
     same_paint = np.count_nonzero(traced & lower) >= np.count_nonzero(lower) / 2
-    return traced if tighter and as_long and same_paint else near
+    return (traced, followed) if tighter and as_long and same_paint else (near, voted)
 
 
 def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: LinesConfig,
