@@ -42,7 +42,7 @@ PACKAGE_REPO = Path(__file__).resolve().parents[1]
 BUNDLED = ("camera_cal", "test_images", "videos")
 HOW_TO_POINT = (f"set {ENV} to the folder holding {UDACITY_ADVANCED}/ and {UDACITY_P1}/ (Udacity data), "
                 f"{CULANE_DEV}/ and {TUSIMPLE_DEV}/ (real benchmark frames); default: ../shared/data "
-                "beside the repository (see the README, 'The Udacity dataset')")
+                "beside the repository (see docs/guide.md)")
 
 
 def repo_root(start: str | os.PathLike | None = None) -> Path:

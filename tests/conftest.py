@@ -1,4 +1,4 @@
-"""Shared test fixtures: where the real data lives (``lanelib.data``), the README's tables, a
+"""Shared test fixtures: where the real data lives (``lanelib.data``), the results tables, a
 synthetic clip whose vanishing point the geometry watch refines (``bend_then_straight``), and a
 folder of synthetic frames laid out like CULane's (``culane_folder``)."""
 from __future__ import annotations
@@ -57,7 +57,7 @@ def faststart(tmp_path_factory) -> Path:
     return out
 
 
-README = REPO / "README.md"
+RESULTS = REPO / "docs" / "results.md"  # the results tables the real-data tests recompute
 
 
 def _cells(line: str) -> list[str]:
@@ -67,18 +67,19 @@ def _cells(line: str) -> list[str]:
 
 @pytest.fixture(scope="session")
 def readme_table():
-    """Return a function: the first Markdown table after a README heading, as a list of row dicts.
+    """Return a function: the first Markdown table after a heading of ``docs/results.md``, as a
+    list of row dicts.
 
-    The tests that guard the README's figures read them from the README itself, so the README
-    cannot drift from what the code measures.
+    The tests that guard the published figures read them from the page itself, so it cannot
+    drift from what the code measures.
     """
 
     def table(heading: str) -> list[dict]:
-        lines = README.read_text(encoding="utf-8").splitlines()
+        lines = RESULTS.read_text(encoding="utf-8").splitlines()
         try:
             start = next(i for i, line in enumerate(lines) if line.startswith("#") and heading in line)
         except StopIteration:
-            raise AssertionError(f"README.md has no heading with {heading!r}") from None
+            raise AssertionError(f"docs/results.md has no heading with {heading!r}") from None
         block = []
         for line in lines[start + 1:]:
             if line.startswith("#"):
@@ -87,7 +88,7 @@ def readme_table():
                 block.append(line)
             elif block:
                 break
-        assert len(block) >= 3, f"README.md: no table under {heading!r}"
+        assert len(block) >= 3, f"docs/results.md: no table under {heading!r}"
         head = _cells(block[0])
         return [dict(zip(head, _cells(line))) for line in block[2:]]
 

@@ -210,13 +210,13 @@ def first_long_left_curve(curvature: np.ndarray, min_frames: int = 100) -> tuple
 
 
 def check_readme_video_row(readme_table, clip: str, rows: list[dict]) -> None:
-    """Compare a video's per-frame log with its row of the README's 'Real video' table.
+    """Compare a video's per-frame log with its row of the 'Real video' table of docs/results.md.
 
     Percentages to the 0.1 point they are written with (a whole percent where written so), widths
     within 0.05 m and the largest |offset| within 0.03 m.
     """
     row = next((r for r in readme_table("Real video") if r["clip"].split()[-1] == clip), None)
-    assert row is not None, f"README.md: no row for {clip} in the 'Real video' table"
+    assert row is not None, f"docs/results.md: no row for {clip} in the 'Real video' table"
     found = column(rows, "found") > 0
     width = column(rows, "lane_width_m")
     offset = column(rows, "offset_m")

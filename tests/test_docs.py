@@ -1,0 +1,62 @@
+"""The README stays short and the docs hold together: the README's length, every relative link and
+file path named in the README and docs exists, and every ``python -m lanelib`` command the README
+shows parses."""
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from lanelib.cli import build_parser
+
+REPO = Path(__file__).resolve().parents[1]
+PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+MAX_README_LINES = 250
+# paths the pages name that are not in a clone: a file the e2e test writes, a video of the real
+# Udacity data (under LANELIB_DATA)
+NOT_IN_A_CLONE = {"tests/e2e/output/latency.txt", "videos/project_video.mp4", "videos/challenge_video.mp4"}
+
+
+def test_the_readme_is_short():
+    lines = (REPO / "README.md").read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= MAX_README_LINES, f"README.md has {len(lines)} lines; move reference material to docs/"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_relative_link_resolves(page):
+    text = page.read_text(encoding="utf-8")
+    for target in re.findall(r"\]\(([^)\s]+)\)", text):
+        if re.match(r"[a-z]+:", target) or target.startswith("#"):
+            continue
+        path = (page.parent / target.split("#")[0]).resolve()
+        assert path.exists(), f"{page.name}: the link {target} leads nowhere ({path})"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_repository_path_named_exists(page):
+    """Code spans that name a file or folder of the repository (``tests/...``, ``bench/x.py``) exist."""
+    text = page.read_text(encoding="utf-8")
+    for span in re.findall(r"`((?:lanelib|tests|bench|notebooks|docs|videos|test_images|camera_cal)/[\w./-]*)`", text):
+        if any(c in span for c in "*…") or span in NOT_IN_A_CLONE:
+            continue
+        assert (REPO / span.rstrip("/")).exists(), f"{page.name}: `{span}` is not in the repository"
+
+
+def readme_commands() -> list[str]:
+    text = (REPO / "README.md").read_text(encoding="utf-8").replace("\\\n", " ")
+    return [m.split("#")[0].strip() for m in re.findall(r"python -m lanelib [^`\n]+", text)]
+
+
+@pytest.mark.parametrize("command", readme_commands())
+def test_every_readme_command_parses(command):
+    """A shown alternative ``a|b`` is tried as ``a``; an optional ``[...]`` is left out."""
+    text = re.sub(r"\[[^\]]*\]", "", command)
+    words = [w.split("|")[0] for w in shlex.split(text)[3:]]
+    if not words or words[0] == "COMMAND":
+        pytest.skip("a placeholder, not a command")
+    try:
+        build_parser().parse_args(words)
+    except SystemExit as e:
+        pytest.fail(f"README command does not parse: {command} (exit {e.code})")
