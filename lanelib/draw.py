@@ -44,9 +44,9 @@ class DrawConfig:
     video_undistorted: bool = False
 
 
-def line_points(coeffs, height_px: int, samples: int = 48) -> np.ndarray:
-    """Return (samples, 2) bird's-eye points (x, y) of x = f(y) from the top row to the bottom."""
-    ys = np.linspace(0, height_px - 1, samples)
+def line_points(coeffs, height_px: int, samples: int = 48, top_px: float = 0) -> np.ndarray:
+    """Return (samples, 2) bird's-eye points (x, y) of x = f(y) from row ``top_px`` to the bottom."""
+    ys = np.linspace(top_px, height_px - 1, samples)
     return np.column_stack([np.polyval(coeffs, ys), ys])
 
 
@@ -57,7 +57,7 @@ def _to_int(pts: np.ndarray) -> np.ndarray:
 def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
                  to_image: Callable[[np.ndarray], np.ndarray] | None,
                  config: DrawConfig = DrawConfig(), height_px: int | None = None,
-                 held: bool = False) -> np.ndarray:
+                 held: bool = False, top_px: float = 0) -> np.ndarray:
     """Return ``image`` with the lane area and lines drawn, the fits mapped by ``to_image``.
 
     Parameters
@@ -72,6 +72,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
     config : colours, opacity, line width, samples per line.
     height_px : height of the bird's-eye view (default: the image's).
     held : the lane is held from earlier frames: area and lines in ``config.held_color``.
+    top_px : the bird's-eye row the lane is drawn from (``lanes.holds_from_px``: where it holds).
     """
     if isinstance(to_image, np.ndarray):
         raise InputError("lane_overlay: to_image is a transform of points, not a matrix; pass "
@@ -82,7 +83,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
     for side, coeffs in (("left", left_coeffs), ("right", right_coeffs)):
         if coeffs is None:
             continue
-        pts = line_points(coeffs, h, config.samples)
+        pts = line_points(coeffs, h, config.samples, top_px)
         mapped[side] = to_image(pts) if to_image is not None else pts
     if len(mapped) == 2:
         poly = _to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))

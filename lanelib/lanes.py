@@ -1253,6 +1253,49 @@ def turn_back_problem(fit: LineFit, height_px: int, xm_per_px: float, checks: La
             f"around; limit {checks.max_turn_back_m} m)")
 
 
+def holds_from_px(left: LineFit, right: LineFit, height_px: int, width_px: int, xm_per_px: float,
+                  checks: LaneChecks = LaneChecks(), top_px: int = 0) -> int:
+    """Return the first row (from the view's top) from which a lane's found lines hold down to
+    the car: above it a line leaves the view's columns (where the road is not imaged), hooks
+    back beyond its pixels (``turn_back_m`` over ``max_turn_back_m``: from its turning row), or
+    the two lines touch or cross. A lane is drawn, and an inferred line reported, only below it:
+    a second-order fit extrapolated beyond its paint may otherwise swing across the road.
+
+    Examples
+    --------
+    A straight pair holds over the whole view; a line that leaves a 1280 px view on row 200 is
+    drawn from row 201; a fit on rows 400-719 that turns on row 300 is drawn from its turn:
+
+    >>> left, right = LineFit((0.0, 0.0, 400.0)), LineFit((0.0, 0.0, 880.0))
+    >>> holds_from_px(left, right, 720, 1280, 0.00578)
+    0
+    >>> holds_from_px(left, LineFit((0.0, -1.0, 1480.0)), 720, 1280, 0.00578)
+    201
+    >>> a = 0.5 / 0.00578 / 300**2
+    >>> holds_from_px(LineFit((a, -2 * a * 300, 400.0), 2000, 319.0), right, 720, 1280, 0.00578)
+    300
+    """
+    rows = np.arange(float(top_px), float(height_px))
+    top = top_px
+    xs = {}
+    for i, fit in enumerate((left, right)):
+        if not fit.found:
+            continue
+        x = np.polyval(fit.coeffs_px, rows)
+        xs[i] = x
+        out = np.flatnonzero((x < 0) | (x >= width_px))
+        if len(out):
+            top = max(top, int(rows[out[-1]]) + 1)
+        if turn_back_m(fit, height_px, xm_per_px, top_px, width_px) > checks.max_turn_back_m:
+            a, b, _ = fit.coeffs_px
+            top = max(top, int(math.ceil(-b / (2 * a))))
+    if left.found and right.found:
+        touch = np.flatnonzero(xs[1] - xs[0] <= 0)
+        if len(touch):
+            top = max(top, int(rows[touch[-1]]) + 1)
+    return min(top, height_px - 1)
+
+
 def gap_problem(fit: LineFit, ym_per_px: float, max_gap_m: float, side: str = "left") -> str:
     """Return why a line is not seen at the car: its pixels stop more than ``max_gap_m`` (m of
     road) short of the view's bottom row (``LineFit.gap_px``), so its position there is an

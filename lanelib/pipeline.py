@@ -496,12 +496,16 @@ class LanePipeline:
         """Return the frame with the lane, the lines and the measurements drawn.
 
         ``frame`` is the undistorted frame, or with ``raw`` the RAW frame: the lane is then mapped
-        through the lens model onto it (no full-frame undistortion needed).
+        through the lens model onto it (no full-frame undistortion needed). The lines are drawn
+        only from the row where they hold (``lanes.holds_from_px``): not where a fit leaves the
+        view, hooks back beyond its paint or meets the other line.
         """
         to_frame = self.birdseye_to_raw if raw else self.perspective.inverse
         held = result.method == "hold"  # held from earlier frames: drawn in the held colour
+        top = lanes.holds_from_px(result.left, result.right, self.size[1], self.size[0],
+                                  self.perspective.xm_per_px, self.config.checks)
         out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px, to_frame,
-                                self.config.draw, self.size[1], held=held)
+                                self.config.draw, self.size[1], held=held, top_px=top)
         edges = tuple(side for side, src in zip(("left", "right"), result.sources) if src == "edge")
         return draw.put_lines(out, draw.measurement_lines(result.radius_m, result.offset_m,
                                                           result.lane_width_m, result.found,

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import draw
+from lanelib import draw, lanes
 from lanelib.camera import Calibration, distort_points
 from lanelib.errors import InputError
 from lanelib.lanes import LineFit
@@ -187,11 +187,36 @@ def test_the_overlay_through_transform_objects_is_the_old_drawing(fits):
     result = FrameResult(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits),
                          pipe.measure(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits)),
                          "windows", 1.0, 1.0)
+    top = lanes.holds_from_px(result.left, result.right, 720, 1280, pipe.perspective.xm_per_px)
+    assert top == (0 if fits is not FITS[3] else 719)  # lines 3000 px beside the view hold nowhere
     for raw, (to_image, _) in zip((False, True), cases):
-        expected = draw.lane_overlay(image, *fits, to_image, cfg, 720)
+        expected = draw.lane_overlay(image, *fits, to_image, cfg, 720, top_px=top)
         drawn = pipe.annotate(image, result, raw=raw)
         below_text = slice(200, None)  # the measurements are written at the top
         assert np.array_equal(drawn[below_text], expected[below_text])
+
+
+def test_a_lane_is_drawn_only_below_the_row_where_it_holds():
+    pipe = LanePipeline(calibration=Calibration(K, DIST, (1280, 720)))
+    black = np.zeros((720, 1280, 3), np.uint8)
+    xm, cfg = pipe.perspective.xm_per_px, pipe.config.draw
+    a = 1.0 / xm / 300**2  # x turns on row 300 and comes back 1 m above it
+    cases = {"straight": ((0, 0, 320.0), 719.0, (0, 0, 960.0), 0),
+             "right leaves the view": ((0, 0, 320.0), 719.0, (0, -1.0, 1480.0), 201),
+             "left hooks back above its pixels": ((a, -600 * a, 320.0), 319.0, (0, 0, 960.0), 300),
+             "left turns where its pixels are": ((a, -600 * a, 320.0), 719.0, (0, 0, 960.0), 0),
+             "lines cross": ((0, -1.0, 1040.0), 719.0, (0, 0, 960.0), 81)}
+    for name, (lc, span, rc, top) in cases.items():
+        left, right = LineFit(np.array(lc, float), 1000, span), LineFit(np.array(rc, float), 1000, 719.0)
+        assert lanes.holds_from_px(left, right, 720, 1280, xm) == top, name
+        bird = draw.lane_overlay(black, left.coeffs_px, right.coeffs_px, None, cfg, 720, top_px=top)
+        drawn = np.flatnonzero(bird.any(axis=(1, 2)))
+        assert top - cfg.line_thickness_px <= drawn.min() <= top + 1, name
+        # annotate draws the same rows on the frame
+        result = FrameResult(left, right, pipe.measure(left, right), "windows", 1.0, 1.0)
+        expected = draw.lane_overlay(black, left.coeffs_px, right.coeffs_px, pipe.perspective.inverse,
+                                     cfg, 720, top_px=top)
+        assert np.array_equal(pipe.annotate(black, result)[200:], expected[200:]), name
 
 
 def test_the_overlay_wants_a_transform_not_a_matrix():
