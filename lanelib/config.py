@@ -1,10 +1,10 @@
 """``PipelineConfig``: every tunable parameter of the pipelines, nested, saved and loaded as JSON.
 
-Each stage owns its parameter record (``PerspectiveConfig`` in perspective, ``ThresholdConfig``
-in thresholds, ...); this module nests them and converts the nest to and from JSON. Loading is
-strict: an unknown key or a value of the wrong type raises ``ConfigError`` naming the key by its
-dotted path (e.g. ``thresholds.white.low``). A JSON file may hold only some keys; the others keep
-their defaults.
+Every stage's parameter record lives in ``params`` (``PerspectiveConfig``, ``ThresholdConfig``,
+...; each stage module imports its own and names it too); this module nests them, converts the
+nest to and from JSON and reads the bundled presets. Loading is strict: an unknown key or a value
+of the wrong type raises ``ConfigError`` naming the key by its dotted path (e.g.
+``thresholds.white.low``). A JSON file may hold only some keys; the others keep their defaults.
 """
 from __future__ import annotations
 
@@ -17,13 +17,9 @@ from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
 
 from . import io
-from .draw import DrawConfig
 from .errors import ConfigError
-from .hough import HoughConfig
-from .lanes import EdgeConfig, LaneChecks, LinesConfig, SearchConfig
-from .perspective import PerspectiveConfig
-from .thresholds import ThresholdConfig
-from .tracking import TrackerConfig
+from .params import (DrawConfig, EdgeConfig, HoughConfig, LaneChecks, LinesConfig, PerspectiveConfig,
+                     SearchConfig, ThresholdConfig, TrackerConfig)
 
 
 @dataclass(frozen=True)

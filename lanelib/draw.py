@@ -11,37 +11,13 @@ and, as ``composite``, the pipeline's 2x2 debug view.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Callable, Mapping, Sequence
 
 import cv2
 import numpy as np
 
 from .errors import InputError
-
-Color = tuple[int, int, int]
-
-
-@dataclass(frozen=True)
-class DrawConfig:
-    """Colours (RGB), opacity and text size of the overlays.
-
-    ``video_undistorted``: the ``video`` command draws on the RAW frame by default, the lane
-    mapped through the lens model (what the camera saw, and one full-frame remap per frame
-    cheaper); true draws on the undistorted frame, as the ``images`` command does.
-    ``held_color``: the lane area and both lines of a lane held from earlier frames (not seen in
-    this one), so it never looks like a lane seen now.
-    """
-
-    lane_color: Color = (0, 200, 90)
-    held_color: Color = (255, 170, 0)
-    left_color: Color = (255, 60, 40)
-    right_color: Color = (40, 110, 255)
-    lane_alpha: float = 0.3
-    line_thickness_px: int = 12
-    font_scale: float = 1.0
-    samples: int = 48
-    video_undistorted: bool = False
+from .params.stages import Color, DrawConfig
 
 
 def line_points(coeffs, height_px: int, samples: int = 48, top_px: float = 0) -> np.ndarray:

@@ -25,81 +25,10 @@ import cv2
 import numpy as np
 
 from . import io
-from .errors import ConfigError
-
-Triple = tuple[int, int, int]
+from .params.stages import HoughConfig, Triple
 
 LEFT_COLOR_RGB: Triple = (255, 40, 40)
 RIGHT_COLOR_RGB: Triple = (40, 120, 255)
-
-
-@dataclass(frozen=True)
-class HoughConfig:
-    """Parameters of the basic Canny + region of interest + Hough pipeline.
-
-    Parameters
-    ----------
-    white_hls_lo, white_hls_hi : inclusive (H, L, S) bounds of white paint, OpenCV 8-bit units
-        (H in 0..179 = degrees / 2, L and S in 0..255).
-    yellow_hls_lo, yellow_hls_hi : the same for yellow paint.
-    blur_kernel_px : side of the Gaussian blur kernel (odd, >= 1; 1 means no blur).
-    canny_low, canny_high : Canny hysteresis thresholds on the gradient (grey levels per pixel).
-    roi_frac : the region of interest, a polygon of (x / width, y / height) vertices in 0..1;
-        (0, 0) is the top-left pixel and (1, 1) the bottom-right one.
-    rho_px : distance resolution of the Hough accumulator (px, >= 0.5).
-    theta_deg : angle resolution of the Hough accumulator (degrees, 0.1..90).
-    threshold_votes : accumulator votes a line needs.
-    min_line_length_px : shortest segment kept (px).
-    max_line_gap_px : largest gap between collinear points joined into one segment (px).
-    min_abs_slope : smallest |dy/dx| of a segment counted as a lane line (flatter ones are dropped).
-    smoothing_alpha : weight of the new frame in the exponential smoothing of line endpoints
-        across video frames, in (0, 1]; 1 means no smoothing.
-    hold_frames : frames a lost line is held at its last position in video before it is dropped.
-    """
-
-    white_hls_lo: Triple = (0, 200, 0)
-    white_hls_hi: Triple = (179, 255, 255)
-    yellow_hls_lo: Triple = (10, 0, 100)
-    yellow_hls_hi: Triple = (40, 255, 255)
-    blur_kernel_px: int = 5
-    canny_low: int = 50
-    canny_high: int = 150
-    roi_frac: tuple[tuple[float, float], ...] = ((0.06, 1.0), (0.44, 0.60), (0.56, 0.60), (0.97, 1.0))
-    rho_px: float = 1.0
-    theta_deg: float = 1.0
-    threshold_votes: int = 25
-    min_line_length_px: int = 20
-    max_line_gap_px: int = 150
-    min_abs_slope: float = 0.5
-    smoothing_alpha: float = 0.3
-    hold_frames: int = 10
-
-    def __post_init__(self):
-        # JSON gives lists; store tuples so the config stays hashable and comparable
-        for name in ("white_hls_lo", "white_hls_hi", "yellow_hls_lo", "yellow_hls_hi"):
-            value = tuple(getattr(self, name))
-            if len(value) != 3:
-                raise ConfigError(f"hough.{name}: needs three values (H, L, S), got {value!r}")
-            object.__setattr__(self, name, value)
-        roi = tuple(tuple(p) for p in self.roi_frac)
-        if len(roi) < 3 or any(len(p) != 2 or not all(0.0 <= v <= 1.0 for v in p) for p in roi):
-            raise ConfigError(f"hough.roi_frac: needs three or more (x, y) fractions in 0..1, got {roi!r}")
-        object.__setattr__(self, "roi_frac", roi)
-        if self.blur_kernel_px < 1 or self.blur_kernel_px % 2 == 0:
-            raise ConfigError(f"hough.blur_kernel_px: must be odd and >= 1, got {self.blur_kernel_px}")
-        if not 0 <= self.canny_low <= self.canny_high:
-            raise ConfigError(f"hough.canny_low, canny_high: need 0 <= low <= high, "
-                              f"got {self.canny_low}, {self.canny_high}")
-        # finer steps make the Hough accumulator huge (over 40 MB at 960x540) for no gain
-        if not (self.rho_px >= 0.5 and 0.1 <= self.theta_deg <= 90 and self.threshold_votes >= 1):
-            raise ConfigError(f"hough.rho_px >= 0.5, theta_deg in 0.1..90 and threshold_votes >= 1 "
-                              f"are needed, got {self.rho_px}, {self.theta_deg}, {self.threshold_votes}")
-        if self.min_line_length_px < 0 or self.max_line_gap_px < 0 or self.min_abs_slope < 0:
-            raise ConfigError("hough.min_line_length_px, max_line_gap_px and min_abs_slope "
-                              "must not be negative")
-        if not 0.0 < self.smoothing_alpha <= 1.0 or self.hold_frames < 0:
-            raise ConfigError(f"hough.smoothing_alpha must be in (0, 1] and hold_frames >= 0, "
-                              f"got {self.smoothing_alpha}, {self.hold_frames}")
 
 
 @dataclass(frozen=True)

@@ -32,63 +32,9 @@ import numpy as np
 from . import io
 from .errors import ConfigError
 from .lanes import SearchConfig, sliding_windows
-
-Point = tuple[float, float]
-
-# src: top-left, bottom-left, bottom-right, top-right (undistorted 1280x720 image)
-DEFAULT_SRC_1280x720: tuple[Point, ...] = ((564.3, 470.0), (193.0, 720.0), (1087.0, 720.0), (715.7, 470.0))
-# dst: the same corners in the bird's-eye view (1280x720)
-DEFAULT_DST_1280x720: tuple[Point, ...] = ((320.0, 0.0), (320.0, 720.0), (960.0, 720.0), (960.0, 0.0))
-DEFAULT_LANE_WIDTH_M = 3.7
-DEFAULT_VISIBLE_LENGTH_M = 23.5
-
-
-@dataclass(frozen=True)
-class PerspectiveConfig:
-    """Source and destination points of the bird's-eye transform and the metric scale they carry.
-
-    Parameters
-    ----------
-    src_px : four (x, y) points in the undistorted image: top-left, bottom-left, bottom-right,
-        top-right of a stretch of straight lane.
-    dst_px : the same four points in the bird's-eye image (a rectangle).
-    size_px : (width, height) of the images the points belong to; the bird's-eye view has this size.
-    lane_width_m : the real distance between the dst left and right lines (US lane: 3.7 m).
-    visible_length_m : the real road length between the dst top and bottom rows.
-    car_x_px : x (px) of the car's centre line in the bird's-eye view, from which the offset is
-        measured and the search splits left from right; None (the default): where the bottom
-        row's centre pixel of the image lands, right for a camera that looks straight ahead.
-        ``geometry.RoadGeometry`` sets it (a turned camera's image centre is not the car's).
-    """
-
-    src_px: tuple[Point, ...] = DEFAULT_SRC_1280x720
-    dst_px: tuple[Point, ...] = DEFAULT_DST_1280x720
-    size_px: tuple[int, int] = (1280, 720)
-    lane_width_m: float = DEFAULT_LANE_WIDTH_M
-    visible_length_m: float = DEFAULT_VISIBLE_LENGTH_M
-    car_x_px: float | None = None
-
-    def __post_init__(self):
-        for name in ("src_px", "dst_px"):
-            pts = getattr(self, name)
-            if len(pts) != 4 or any(len(p) != 2 for p in pts):
-                raise ConfigError(f"perspective.{name}: needs four (x, y) points, got {pts!r}")
-        if self.lane_width_m <= 0 or self.visible_length_m <= 0:
-            raise ConfigError("perspective.lane_width_m and visible_length_m must be positive")
-
-    @property
-    def xm_per_px(self) -> float:
-        """Metres per bird's-eye pixel across the road."""
-        d = np.asarray(self.dst_px, dtype=float)
-        width_px = abs((d[2, 0] + d[3, 0]) / 2 - (d[0, 0] + d[1, 0]) / 2)
-        return self.lane_width_m / width_px
-
-    @property
-    def ym_per_px(self) -> float:
-        """Metres per bird's-eye pixel along the road."""
-        d = np.asarray(self.dst_px, dtype=float)
-        length_px = abs((d[1, 1] + d[2, 1]) / 2 - (d[0, 1] + d[3, 1]) / 2)
-        return self.visible_length_m / length_px
+# the default points and scale are perspective's public names too (geometry, runs, synth use them)
+from .params.stages import (DEFAULT_DST_1280x720, DEFAULT_LANE_WIDTH_M, DEFAULT_SRC_1280x720,
+                             DEFAULT_VISIBLE_LENGTH_M, PerspectiveConfig, Point)
 
 
 def trapezoid_src(top_y: float, bottom_y: float, top_width: float, bottom_width: float,

@@ -1,11 +1,11 @@
 """lanelib's import graph, read from the source with ``ast``: no cycles, no late imports, layers.
 
-The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; io; the stages
-on arrays (thresholds, lanes, linevote, result, draw); geometry (camera, perspective, geometry); data;
-the basic pipeline and the tracker; config; the one-frame engine (pipeline); runs, evaluate,
-bench, synth, benchmarks; the scoreboard; widgets; cli. A module imports only from its own layer or below,
-never from above, and every import is at module level (a function-level
-import hides a cycle instead of removing it).
+The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; params (every
+parameter record); io; the stages on arrays (thresholds, lanes, linevote, result, draw); geometry
+(camera, perspective, geometry); data; config; the one-frame engines (pipeline, the basic hough
+pipeline); the tracker; runs, evaluate, bench, synth, benchmarks; the scoreboard; widgets; cli.
+A module imports only from its own layer or below, never from above, and every import is at
+module level (a function-level import hides a cycle instead of removing it).
 """
 from __future__ import annotations
 
@@ -162,13 +162,14 @@ def test_lanelib_has_no_function_level_imports():
 
 LAYERS = [
     {"lanelib.errors"},
+    {"lanelib.params"},                     # every parameter record (imports only errors)
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.lanes", "lanelib.linevote", "lanelib.result", "lanelib.draw"},  # stages
     {"lanelib.camera", "lanelib.perspective", "lanelib.geometry"},
     {"lanelib.data"},
-    {"lanelib.hough", "lanelib.tracking"},  # the basic pipeline; the tracker (takes a pipeline object)
-    {"lanelib.config"},                     # nests every stage's config
-    {"lanelib.pipeline"},
+    {"lanelib.config"},                     # nests the records of params; JSON and presets
+    {"lanelib.pipeline", "lanelib.hough"},  # the one-frame engines: advanced, basic
+    {"lanelib.tracking"},                   # the tracker loop over a LanePipeline
     {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
      "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: runs' frames explained
     {"lanelib.scoreboard"},                 # measures with runs, evaluate and the benchmarks

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from lanelib import lanes
+from lanelib.errors import ConfigError
 from lanelib.lanes import LineFit, SearchConfig
 
 H, W = 720, 1280
@@ -479,7 +480,7 @@ def test_a_single_line_or_a_double_line_blurred_at_the_car_is_left_whole():
 
 
 def test_double_line_spacing_is_validated():
-    with pytest.raises(lanes.ConfigError, match="double_line_px"):
+    with pytest.raises(ConfigError, match="double_line_px"):
         SearchConfig(double_line_px=-1)
 
 
