@@ -206,17 +206,14 @@ from __future__ import annotations
 import hashlib
 from collections import deque
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import lanes
 from .lanes import LaneChecks, LaneSearch, LineFit
 from .params.roads import TrackerConfig
+from .pipeline import LanePipeline
 from .result import FrameResult, Rejected
-
-if TYPE_CHECKING:  # for annotations only: pipeline imports config, which imports this module
-    from .pipeline import LanePipeline
 
 
 @dataclass(frozen=True)
