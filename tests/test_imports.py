@@ -5,7 +5,9 @@ parameter record); io; the stages on arrays (thresholds, lanes, linevote, result
 (camera, perspective, geometry); data; config; the one-frame engines (pipeline, the basic hough
 pipeline); the tracker; runs, evaluate, bench, synth, benchmarks; the scoreboard; widgets; cli.
 A module imports only from its own layer or below, never from above, and every import is at
-module level (a function-level import hides a cycle instead of removing it).
+module level (a function-level import hides a cycle instead of removing it). An import under
+``if TYPE_CHECKING:`` is an edge like any other: a cycle that only type checkers follow is still
+a cycle of the design.
 """
 from __future__ import annotations
 
@@ -20,8 +22,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "lanelib"
 
 
-def module_name(path: Path) -> str:
-    rel = path.relative_to(PACKAGE.parent).with_suffix("")
+def module_name(path: Path, package: Path = PACKAGE) -> str:
+    rel = path.relative_to(package.parent).with_suffix("")
     parts = list(rel.parts)
     if parts[-1] == "__init__":
         parts.pop()
@@ -36,16 +38,20 @@ def resolve(node: ast.ImportFrom, current: str, is_package: bool) -> list[str]:
         prefix = ".".join(base + ([node.module] if node.module else []))
     else:
         prefix = node.module or ""
-    if not prefix.startswith("lanelib"):
+    root = prefix.split(".")[0]
+    if not prefix or root != current.split(".")[0]:
         return []
-    # the bare package (``from . import io`` names lanelib itself) is imported first in any case
-    return [f"{prefix}.{a.name}" for a in node.names] + ([prefix] if prefix != "lanelib" else [])
+    # the bare package (``from . import io`` names the package itself) is imported first in any case
+    return [f"{prefix}.{a.name}" for a in node.names] + ([prefix] if prefix != root else [])
 
 
-@functools.lru_cache(maxsize=1)
-def graph() -> tuple[dict[str, set[str]], list[str]]:
-    """Return {module: lanelib modules it imports at module level} and the late imports found."""
-    files = {module_name(p): p for p in PACKAGE.rglob("*.py")}
+def read_graph(package: Path) -> tuple[dict[str, set[str]], list[str]]:
+    """Return {module: modules of ``package`` it imports at module level} and the late imports.
+
+    An import under ``if TYPE_CHECKING:`` at module level counts as an edge: it is there for
+    the type checkers only, but a cycle through it is a cycle of the design all the same.
+    """
+    files = {module_name(p, package): p for p in package.rglob("*.py")}
     edges: dict[str, set[str]] = {m: set() for m in files}
     late = []
     for mod, path in files.items():
@@ -56,43 +62,39 @@ def graph() -> tuple[dict[str, set[str]], list[str]]:
             if isinstance(node, ast.ImportFrom):
                 targets = resolve(node, mod, is_package)
             elif isinstance(node, ast.Import):
-                targets = [a.name for a in node.names if a.name.startswith("lanelib")]
+                targets = [a.name for a in node.names if a.name.split(".")[0] == package.name]
             else:
                 continue
             targets = [t for t in targets if t in files]
             if not targets:
                 continue
             if id(node) not in toplevel:
-                if not _under_type_checking(tree, node):
-                    late.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} imports "
-                                f"{', '.join(sorted(set(targets)))} inside a function")
+                late.append(f"{path.relative_to(package.parent)}:{node.lineno} imports "
+                            f"{', '.join(sorted(set(targets)))} inside a function")
                 continue
             edges[mod].update(t for t in targets if t != mod)
     return edges, late
 
 
+@functools.lru_cache(maxsize=1)
+def graph() -> tuple[dict[str, set[str]], list[str]]:
+    """Return lanelib's import graph and its late imports (``read_graph``)."""
+    return read_graph(PACKAGE)
+
+
 def _module_level(body: list[ast.stmt]):
-    """Yield the import statements run when the module is imported (not inside a function)."""
+    """Yield the import statements at module level (not inside a function), those under
+    ``if TYPE_CHECKING:`` included."""
     for node in body:
         if isinstance(node, (ast.Import, ast.ImportFrom)):
             yield node
         elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
             continue
-        elif isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            continue  # only for type checkers: not an import at run time
         else:
             for field in ("body", "orelse", "finalbody", "handlers"):
                 inner = getattr(node, field, None)
                 if isinstance(inner, list):
                     yield from _module_level([n for n in inner if isinstance(n, ast.AST)])
-
-
-def _under_type_checking(tree: ast.Module, target: ast.AST) -> bool:
-    for node in tree.body:
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            if any(n is target for n in ast.walk(node)):
-                return True
-    return False
 
 
 def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
@@ -135,6 +137,20 @@ def test_resolve_relative_imports():
     assert {"lanelib.io", "lanelib.draw"} <= set(resolve(node, "lanelib.pipeline", False))
     node = ast.parse("from .base import Tuner").body[0]
     assert "lanelib.widgets.base" in resolve(node, "lanelib.widgets", True)
+
+
+def test_the_graph_counts_type_checking_imports_and_finds_their_cycle(tmp_path):
+    pkg = tmp_path / "toy"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("from . import b\n")
+    (pkg / "b.py").write_text("from typing import TYPE_CHECKING\n"
+                              "if TYPE_CHECKING:\n    from .a import Thing\n")
+    (pkg / "c.py").write_text("def f():\n    from . import a\n")
+    edges, late = read_graph(pkg)
+    assert edges == {"toy": set(), "toy.a": {"toy.b"}, "toy.b": {"toy.a"}, "toy.c": set()}
+    assert find_cycle(edges) == ["toy.a", "toy.b", "toy.a"]
+    assert late == ["toy/c.py:2 imports toy.a inside a function"]
 
 
 def test_lanelib_has_no_import_cycle():
