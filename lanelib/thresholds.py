@@ -29,7 +29,8 @@ from .params.masks import (SPACE_CHANNELS, ChannelMask, ColorRange, SobelMask, T
 _CONVERSIONS = {"rgb": None, "hls": cv2.COLOR_RGB2HLS, "hsv": cv2.COLOR_RGB2HSV, "luv": cv2.COLOR_RGB2Luv,
                 "lab": cv2.COLOR_RGB2Lab, "gray": cv2.COLOR_RGB2GRAY}
 # colour space -> (its conversion, the letters of its channels)
-SPACES: dict[str, tuple[int | None, str]] = {s: (_CONVERSIONS[s], letters) for s, letters in SPACE_CHANNELS.items()}
+SPACES: dict[str, tuple[int | None, str]] = {s: (_CONVERSIONS[s], letters)
+                                             for s, letters in SPACE_CHANNELS.items()}
 
 
 def make_clahe(config: ThresholdConfig, size: tuple[int, int]) -> cv2.CLAHE | None:

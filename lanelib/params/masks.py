@@ -19,7 +19,7 @@ SPACE_CHANNELS: dict[str, str] = {"rgb": "rgb", "hls": "hls", "hsv": "hsv", "luv
 
 
 def check_channel(space: str, channel: str, where: str) -> None:
-    """Raise ``ConfigError`` (naming ``where``) unless ``space`` is a colour space with channel ``channel``."""
+    """Raise ``ConfigError`` (naming ``where``) unless colour space ``space`` has ``channel``."""
     if space not in SPACE_CHANNELS:
         raise ConfigError(f"{where}: unknown colour space {space!r}; use one of {', '.join(SPACE_CHANNELS)}")
     if channel not in SPACE_CHANNELS[space]:

@@ -1,4 +1,4 @@
-"""The parameter records of the roads beyond one clean frame: the asphalt edge, every line in view, the tracker.
+"""The parameter records beyond one clean frame: the asphalt edge, every line in view, the tracker.
 
 ``EdgeConfig`` (``lanes.road_edge``), ``LinesConfig`` (``lanes.find_lines``,
 ``linevote.vote_lines``, ``pipeline.LanePipeline.detect_lines``) and ``TrackerConfig``
