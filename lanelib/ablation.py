@@ -115,7 +115,8 @@ class Ablation:
 
     def effects(self, name: str) -> dict[str, float | None]:
         """Return, per row, how much the part raises the row's headline figure (percentage
-        points, positive: it helps); None where a row was skipped or failed in either run."""
+        points, positive: it helps); None where a row was skipped, failed or ran over
+        TuSimple's time limit in either run."""
         base = {r.key: _headline(r) for r in self.baseline}
         sign = 1.0 if self.part(name).default else -1.0
         out = {}
@@ -152,7 +153,9 @@ class Ablation:
 
 
 def _headline(row: Row) -> float | None:
-    if row.skipped or row.error:
+    """Return the row's headline figure; None when it was skipped, failed, or had frames over
+    TuSimple's time limit (scored 0 for the time alone: the machine's load, not the part)."""
+    if row.skipped or row.error or row.figures.get("over_200ms"):
         return None
     return row.figures.get(HEADLINE[row.key])
 

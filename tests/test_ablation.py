@@ -48,6 +48,14 @@ def test_verdicts_within_the_rounding_and_without_real_rows():
     assert ab.verdict(ON.name) == "not measured"
 
 
+def test_a_tusimple_row_with_frames_over_its_time_limit_is_not_compared():
+    slow = rows(57.5, 100.0, 99.0)
+    slow[1] = Row("tusimple", "TuSimple dev", figures={"accuracy_pct": 72.0, "over_200ms": 1})
+    ab = Ablation(rows(57.5, 100.0, 99.0), {ON.name: slow}, (ON,))
+    assert ab.effects(ON.name)["tusimple"] is None
+    assert ab.verdict(ON.name) == "no effect on the real rows"
+
+
 def test_the_ablation_reads_back_from_its_json(tmp_path):
     ab = Ablation(rows(57.5, 100.0, 99.0), {ON.name: rows(55.0, 100.0, 99.5)}, (ON,))
     path = tmp_path / "ablation.json"
