@@ -46,7 +46,8 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from . import data, geometry, io, thresholds
+from . import autogeometry as geometry
+from . import data, io, thresholds
 from .camera import Calibration
 from .config import PipelineConfig
 from .errors import InputError, LaneLibError

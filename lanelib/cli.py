@@ -16,7 +16,8 @@ import os
 import sys
 from pathlib import Path
 
-from . import bench, data, evaluate, geometry, hough, runs, scoreboard, synth
+from . import autogeometry as geometry
+from . import bench, data, evaluate, hough, runs, scoreboard, synth
 from .benchmarks import culane, metrics, tusimple, why, why_images
 from .camera import Calibration, calibrate, parse_pattern
 from .config import (PipelineConfig, benchmark_config, load_config_or_preset, override, preset_names,
@@ -315,7 +316,7 @@ def _add_geometry(sub) -> None:
                     "already a config, e.g. one a tuner saved; else the whole config of --config or "
                     "the defaults) and prints the figures, the confidence and every assumption. "
                     "Frames with no consistent vanishing point, or an estimate below the confidence "
-                    "limit, stop with the reason (exit 2). See lanelib/geometry.py for the method.",
+                    "limit, stop with the reason (exit 2). See lanelib/autogeometry/ for the method.",
         epilog=_exit_codes())
     p.add_argument("input", type=Path, metavar="VIDEO_OR_FOLDER",
                    help="a video of the camera (a straight stretch helps) or a folder of its images")

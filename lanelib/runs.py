@@ -47,13 +47,14 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from . import cluster, geometry, hough, io
+from . import autogeometry as geometry
+from . import cluster, hough, io
 from .benchmarks import culane, tusimple
 from .camera import Calibration
 from .config import PipelineConfig, benchmark_config, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
-from .geometry import RoadGeometry
+from .autogeometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
 from .result import FrameResult, LinesResult

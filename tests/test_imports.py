@@ -1,7 +1,7 @@
 """lanelib's import graph, read from the source with ``ast``: no cycles, no late imports, layers.
 
 The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; io; the stages
-on arrays (thresholds, lanes, linevote, result, draw); geometry (camera, perspective, geometry); data;
+on arrays (thresholds, lanes, linevote, result, draw); geometry (camera, perspective, autogeometry); data;
 the basic pipeline and the tracker; config; the one-frame engine (pipeline); runs, evaluate,
 bench, synth, benchmarks; the scoreboard; widgets; cli. A module imports only from its own layer or below,
 never from above, and every import is at module level (a function-level
@@ -164,7 +164,7 @@ LAYERS = [
     {"lanelib.errors"},
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.lanes", "lanelib.linevote", "lanelib.result", "lanelib.draw"},  # stages
-    {"lanelib.camera", "lanelib.perspective", "lanelib.geometry"},
+    {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry"},
     {"lanelib.data"},
     {"lanelib.hough", "lanelib.tracking"},  # the basic pipeline; the tracker (takes a pipeline object)
     {"lanelib.config"},                     # nests every stage's config
