@@ -190,7 +190,7 @@ def _shifted(frame: np.ndarray, dy: float) -> np.ndarray:
 def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     cal, geo = estimate
     frames = runs.sample_frames(CLIP, 6.0, 25)
-    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok]
+    straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok]
     assert len(straight) >= 6
     options = runs.GeometryOptions(check_every_s=0.04)  # every frame; 5 in a row (the default)
     watch = runs.GeometryWatch(geo, cal, options, fps=25.0)
@@ -213,7 +213,7 @@ def test_the_watch_pickles_without_its_maps_and_goes_on_the_same(estimate):
     and the copy checks the next frames as the original does, a new estimate included."""
     cal, geo = estimate
     frames = runs.sample_frames(CLIP, 6.0, 25)
-    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
+    straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
     watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04), fps=25.0)
     assert watch.check(straight[0], 0, 0.0) is None  # the finder is built
     assert len(pickle.dumps(watch)) < 20_000 < 100 * 20_000 < len(pickle.dumps(watch.finder))

@@ -23,8 +23,9 @@ does not import it. The modules, in the order the estimate runs:
 - ``lens``: the lens's radial distortion from the bend of straight lines (``estimate_lens``);
 - ``road``: what the frames tell together (the frames used, the vanishing point, the roll,
   the ego lane, the hood row);
-- ``estimate``: the focal length, scale, bird's-eye points and confidence
-  (``estimate_geometry``);
+- ``view``: the bird's-eye points, and whether the ego lane runs parallel through them;
+- ``estimate``: the focal length, the scale along the road, the camera's pose and the
+  confidence (``estimate_geometry``);
 - ``roadgeometry``: the result (``RoadGeometry``) and ``refined_geometry``.
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:

@@ -208,12 +208,7 @@ def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
     hi = c_range[1] / period_m
     if hi <= lo:
         return None, 0.0
-    # nearer the horizon than this, a gap spans under 3 px for the smallest C searched
-    v_resolved = math.sqrt(3.0 * c_range[0] / gap_m)
-    runs = []
-    for key, centre, length in dashes.runs:
-        keep = (length <= 0.6 / lo) & (1.0 / centre >= v_resolved)
-        runs.append((key, centre[keep], length[keep]))
+    runs = _short_runs(dashes, lo, c_range[0], gap_m)
     if not runs:
         return None, 0.0
     model = _dash_length_model(np.concatenate([r[1] for r in runs]), np.concatenate([r[2] for r in runs]))
@@ -225,20 +220,12 @@ def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
     hi = min(hi, c_len * DASH_LENGTH_UP / period_m)
     if hi <= lo:
         return None, 0.0
-    dashes = []
-    for key, centre, length in runs:
-        # runs much shorter or longer than a dash there, less its blur, are not dashes; and,
-        # with C known roughly, runs nearer the horizon than where a gap spans 6 px
-        own = length - b_q * centre ** 2
-        ok = ((own >= DASH_LENGTH_WINDOW[0] * a_q) & (own <= DASH_LENGTH_WINDOW[1] * a_q)
-              & (centre <= 1.0 / math.sqrt(6.0 * c_len / gap_m)))
-        if ok.sum() >= 2:
-            dashes.append((key, centre[ok]))
+    found = _dashes_of(runs, a_q, b_q, c_len, gap_m)
     step = 1.0 / (40 * span)
     nu = np.arange(lo, hi + step, step)
     if len(nu) < 3:
         return None, 0.0
-    pairs = _dash_pairs([c for _, c in dashes])
+    pairs = _dash_pairs([c for _, c in found])
     if pairs.shape[1] < DASH_MIN_PAIRS:
         return None, 0.0
     fit = _dash_fit_curve(pairs, nu)
@@ -248,18 +235,52 @@ def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
     c0, c1, c2 = fit[b - 1], fit[b], fit[b + 1]
     den = c0 - 2 * c1 + c2
     f = nu[b] + (0.5 * (c0 - c2) / den * step if den < 0 else 0.0)
-    # consistency: the period holds without any one frame (from one frame: without any one line)
+    holds, worst = _period_holds(pairs, [key for key, _ in found], nu, b, f, float(c1))
+    return (float(f * period_m), float(c1)) if holds else (None, worst)
+
+
+def _short_runs(dashes: _DashRuns, lo: float, c_low: float, gap_m: float) -> list:
+    """Return the runs that may be dashes: no longer than a dash of the shortest period searched
+    (1 / ``lo``), and far enough below the horizon for a gap to span 3 px at the smallest C
+    searched (``c_low``)."""
+    v_resolved = math.sqrt(3.0 * c_low / gap_m)
+    runs = []
+    for key, centre, length in dashes.runs:
+        keep = (length <= 0.6 / lo) & (1.0 / centre >= v_resolved)
+        runs.append((key, centre[keep], length[keep]))
+    return runs
+
+
+def _dashes_of(runs: list, a_q: float, b_q: float, c_len: float, gap_m: float) -> list:
+    """Return (key, centres) of the runs that are dashes, for the lines with two or more: a run
+    whose length less its blur (b q^2) is within DASH_LENGTH_WINDOW of a dash's (a), and, with
+    C known roughly (``c_len``), below where a gap spans 6 px."""
+    out = []
+    for key, centre, length in runs:
+        own = length - b_q * centre ** 2
+        ok = ((own >= DASH_LENGTH_WINDOW[0] * a_q) & (own <= DASH_LENGTH_WINDOW[1] * a_q)
+              & (centre <= 1.0 / math.sqrt(6.0 * c_len / gap_m)))
+        if ok.sum() >= 2:
+            out.append((key, centre[ok]))
+    return out
+
+
+def _period_holds(pairs: np.ndarray, keys: list, nu: np.ndarray, b: int, f: float, fit: float) -> tuple[bool, float]:
+    """Return (whether the period 1 / ``f`` holds without any one frame (or, from one frame,
+    without any one line), the worst fit at ``nu[b]`` of those sub-samples): each sub-sample's
+    best period within DASH_CONSISTENCY of it and its fit there from DASH_MIN_FIT. ``keys``:
+    each line's (frame, line); ``fit``: the fit of all the pairs."""
     line = pairs[2].astype(int)
-    frames = np.array([key[0] for key, _ in dashes])[line]
+    frames = np.array([key[0] for key in keys])[line]
     group = frames if len(np.unique(frames)) > 1 else line
     if len(np.unique(group)) < 2:
-        return None, float(c1)
-    worst = float(c1)
+        return False, fit
+    worst = fit
     for g in np.unique(group):
         keep = group != g
         sub = _dash_fit_curve(pairs[:, keep], nu)
         sb = int(np.argmax(sub))
         worst = min(worst, float(sub[b]))
         if sub[b] < DASH_MIN_FIT or abs(nu[sb] / f - 1) > DASH_CONSISTENCY:
-            return None, worst
-    return float(f * period_m), float(c1)
+            return False, worst
+    return True, worst

@@ -3,18 +3,8 @@
 All in the undistorted image (frames are undistorted first when a ``camera.Lens`` or
 ``camera.Calibration`` is given, or a lens measured from the road's lines, ``lens``):
 
-- **Bird's-eye points.** In coordinates about the vanishing point turned by the roll (u along
-  the horizon, v its distance below it), a road line at lateral offset t is u = k v with
-  k = t cos(pitch) / (H cos(yaw)) + tan(yaw) sin(pitch); the ego lane's lines give
-  r = k_right - k_left. The src trapezoid is centred on the camera's own line
-  (k = tan(yaw) sin(pitch); 0 when the focal length is unknown: the camera is assumed on the
-  car's centre line) and r/2 wide on each side; its bottom edge lies parallel to the horizon
-  just above the hood (1 % of the height above it, and raised until its corners are inside the
-  frame), its top edge parallel to the horizon where the road is ``look_ahead_m`` ahead of the
-  camera (pulled in, and said so, when that is within 5 % of the height of the horizon). Edges
-  parallel to the horizon make the warp an affine rectification of the road: lane lines become
-  vertical and the scale is the same all over the view. dst is the rectangle of columns w/4
-  and 3w/4 over the whole height.
+- **Bird's-eye points** (``view``): the ego lane's width about the camera's own line, from just
+  above the hood to ``look_ahead_m`` ahead, edges parallel to the horizon.
 - **Metric scale.** Across the road: the src sides are one lane width apart (``lane_width_m``,
   3.7 m by default), so xm_per_px = lane_width_m / (w/2). Along the road: the distance ahead
   of a point v px below the horizon is s = C / v + s0 (a pinhole over a flat road; s0 =
@@ -35,7 +25,7 @@ All in the undistorted image (frames are undistorted first when a ``camera.Lens`
   (``CAMERA_HEIGHT_RANGE_M``, 0.7-4 m: the lines were paired wrongly; the assumptions say so),
   and 0.4 again when the ego lane's lines, carried into the bird's-eye view, are not parallel:
   its width at the top differs from that at the bottom by more than LANE_PARALLEL_TOLERANCE
-  (2.5 %; frames' median; ``_view_widening``): a lens that distorts and was not given (a
+  (2.5 %; frames' median; ``view._view_widening``): a lens that distorts and was not given (a
   straight line's image bends), or a road that is not flat. Below ``LOW_CONFIDENCE`` a pipeline
   should refuse the result unless told to use it.
 - **An estimated lens** (``_with_estimated_lens``). Undistortion with the frame's own camera
@@ -48,7 +38,7 @@ All in the undistorted image (frames are undistorted first when a ``camera.Lens`
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Iterable
 
 import cv2
@@ -58,11 +48,11 @@ from ..camera import Calibration, Lens
 from ..errors import GeometryError, InputError
 from ..perspective import DEFAULT_LANE_WIDTH_M
 from .dashes import DASH_DISAGREEMENT, _dash_scale
-from .horizon import _Basis
 from .lens import LensEstimate, estimate_lens
 from .road import _analyse_road, _look, _Look, _Road
 from .roadgeometry import RoadGeometry
 from .vanishing import _check_frame
+from .view import IMPLAUSIBLE_CONFIDENCE, _parallel_confidence, _view
 
 DEFAULT_LOOK_AHEAD_M = 25.0
 DEFAULT_DASH_M = 3.0
@@ -74,11 +64,8 @@ FOCAL_RANGE_W = (0.3, 3.5)     # else focal lengths from 0.3 to 3.5 image widths
 # A camera this high above the road or more, or this low or less, is no road camera (a car's
 # dashcam sits 1.0-1.6 m up, a truck's 2-3 m): the lane width was measured between the wrong lines
 CAMERA_HEIGHT_RANGE_M = (0.7, 4.0)
-# the ego lane may widen or narrow by this fraction from the bottom third of the bird's-eye view to
-# its top third (frames' median) before the view is taken as wrong: a lens not given, a road not flat
-LANE_PARALLEL_TOLERANCE = 0.025
-IMPLAUSIBLE_CONFIDENCE = 0.4   # the confidence is multiplied by this then (below LOW_CONFIDENCE)
-FOCAL_CONFIDENCE = 0.9         # ... by this when the scale along the road is a focal length's, not dashes'
+FOCAL_CONFIDENCE = 0.9         # the confidence is multiplied by this when the scale along the road is a
+                               # focal length's, not dashes'
 LENS_CANVAS_PAD = 0.1           # undistorted frames on a canvas this much of the frame larger each side, for dashes
 RAW_DASH_CONFIDENCE = 0.6       # the confidence is multiplied by this when the scale is the raw frames' dashes'
 
@@ -154,10 +141,35 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
         If no road is seen above the hood, or the look-ahead is nearer than the road seen.
     """
     w, h = road.look.size
-    calibration, analyses = road.look.calibration, road.look.analyses
-    used, ego, roll, basis, r_k, hood = road.used, road.ego, road.roll, road.basis, road.r_k, road.hood
+    used, roll, r_k = road.used, road.roll, road.r_k
     assumptions = list(road.assumptions)
-    # the focal length
+    fx, fy, focal_source = _focal(road.look.calibration, focal_px)
+    scale = _scale(road, fx, fy, focal_source, lane_width_m, dash_m, gap_m, focal_confidence, assumptions)
+    fx, focal_source, C = scale.fx, scale.focal_source, scale.c
+    assumptions.append(f"lanes {lane_width_m:g} m wide; a flat road")
+    pose = _pose(road.pp_uv, fx, scale.fy, focal_source, r_k, lane_width_m, assumptions)
+    view = _view(road, C, pose.k_c, pose.s0, look_ahead_m, assumptions)
+    xm, ym = lane_width_m / (w / 2), view.visible_m / h
+    parallel_conf = _parallel_confidence(road, view, assumptions)
+    conf = _confidence(road, scale.confidence, bool(pose.implausible), parallel_conf)
+    return RoadGeometry(
+        size_px=(w, h), vanishing_point_px=(float(road.vp[0]), float(road.vp[1])),
+        horizon_row_px=road.horizon_row,
+        horizon_slope=road.horizon_slope, roll_deg=roll, roll_source=road.roll_source, pitch_deg=pose.pitch_deg,
+        yaw_deg=pose.yaw_deg, camera_height_m=pose.height_m, focal_px=fx,
+        focal_source=focal_source if fx is not None else "unknown",
+        hood_row_px=road.hood_row, hood_source=road.hood_source, src_px=view.src, dst_px=view.dst,
+        lane_width_m=float(lane_width_m), look_ahead_m=float(view.look_ahead_m), near_m=float(view.near_m),
+        visible_length_m=float(view.visible_m), xm_per_px=xm, ym_per_px=ym, scale_source=scale.source,
+        inverse_depth_scale_px_m=float(C), lane_width_ratio=r_k, dash_fit=float(scale.dash_fit),
+        confidence=float(round(conf, 4)),
+        assumptions=tuple(assumptions), frames_used=used, frames_rejected=road.rejected,
+        frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, road.vps)))
+
+
+def _focal(calibration: Calibration | None, focal_px: float | None) -> tuple[float | None, float | None, str]:
+    """Return (fx, fy, their source): ``focal_px`` when given (fy scaled with it), else a measured
+    calibration's, else (None, None, "unknown")."""
     if calibration is not None and not calibration.estimated:
         K = calibration.camera_matrix
         fx, fy = float(K[0, 0]), float(K[1, 1])
@@ -169,35 +181,49 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
         fy = float(focal_px) if fx is None else fy * float(focal_px) / fx
         fx = float(focal_px)
         focal_source = "given"
-    pp_u, pp_v = road.pp_uv
+    return fx, fy, focal_source
 
-    def angles(f_x: float, f_y: float) -> tuple[float, float]:
-        """Return (pitch, yaw) in radians for focal lengths f_x, f_y."""
-        theta = math.atan2(pp_v, f_y)
-        psi = math.atan(pp_u * math.cos(theta) / f_x)
-        return theta, psi
 
-    def c_from_focal(f_x: float, f_y: float) -> float:
-        theta, psi = angles(f_x, f_y)
-        return f_x * lane_width_m / (r_k * math.cos(theta) * math.cos(psi) ** 2)
+def _angles(pp_uv: np.ndarray, f_x: float, f_y: float) -> tuple[float, float]:
+    """Return (pitch, yaw) in radians of a camera whose principal point lies at ``pp_uv`` about
+    the vanishing point, for focal lengths f_x, f_y."""
+    pp_u, pp_v = pp_uv
+    theta = math.atan2(pp_v, f_y)
+    psi = math.atan(pp_u * math.cos(theta) / f_x)
+    return theta, psi
 
-    # dash period -> C
-    c_focal = c_from_focal(fx, fy) if fx is not None else None
-    if c_focal is not None:
-        c_range = (c_focal / DASH_FOCAL_RANGE, c_focal * DASH_FOCAL_RANGE)
-    else:
-        c_range = tuple(f * w * lane_width_m / r_k for f in FOCAL_RANGE_W)
-    c_dash, dash_fit = _dash_scale(road.dashes, dash_m, gap_m, c_range)
+
+def _c_from_focal(road: _Road, lane_width_m: float, f_x: float, f_y: float) -> float:
+    """Return C (s = C / v + s0) from focal lengths and the lane width: f w / (r cos(pitch) cos^2(yaw))."""
+    theta, psi = _angles(road.pp_uv, f_x, f_y)
+    return f_x * lane_width_m / (road.r_k * math.cos(theta) * math.cos(psi) ** 2)
+
+
+@dataclass(frozen=True)
+class _Scale:
+    """The scale along the road (``_scale``): C in s = C / v + s0, where it comes from and how
+    far to trust it (a factor of the confidence), how well the dashes fit, and the focal lengths
+    it leaves (None: unknown) with their source."""
+
+    c: float
+    source: str
+    confidence: float
+    dash_fit: float
+    fx: float | None
+    fy: float | None
+    focal_source: str
+
+
+def _scale(road: _Road, fx: float | None, fy: float | None, focal_source: str, lane_width_m: float,
+           dash_m: float, gap_m: float, focal_confidence: float, assumptions: list[str]) -> _Scale:
+    """Return the scale along the road, from the dash period where dashed lines are seen, else the
+    focal length and the lane width, else an assumed focal length (ASSUMED_HFOV_DEG). A dash
+    period that disagrees with a known focal length by more than DASH_DISAGREEMENT yields to it;
+    one with no known focal length gives the focal length. What it assumed joins ``assumptions``."""
+    w = road.look.size[0]
+    c_focal = _c_from_focal(road, lane_width_m, fx, fy) if fx is not None else None
+    c_dash, dash_fit, f_dash = _dash_c(road, c_focal, lane_width_m, dash_m, gap_m, assumptions)
     scale_conf = 1.0
-    if c_dash is not None:
-        f_dash = c_dash * r_k / lane_width_m
-        for _ in range(4):  # the angles depend on the focal length
-            theta, psi = angles(f_dash, f_dash)
-            f_dash = c_dash * r_k * math.cos(theta) * math.cos(psi) ** 2 / lane_width_m
-        if not 0.2 * w <= f_dash <= 6 * w:
-            assumptions.append(f"a dash period was found but implies a focal length of {f_dash:.0f} px, "
-                               "out of reach for a road camera: not used")
-            c_dash = None
     if c_dash is not None:
         C = c_dash
         scale_source = f"dash period ({dash_m:g} m dash + {gap_m:g} m gap, dash pairs fit {dash_fit:.2f})"
@@ -220,19 +246,65 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
         scale_conf = focal_confidence
     else:
         fa = w / 2 / math.tan(math.radians(ASSUMED_HFOV_DEG / 2))
-        C = c_from_focal(fa, fa)
+        C = _c_from_focal(road, lane_width_m, fa, fa)
         scale_source = f"assumed focal length {fa:.0f} px ({ASSUMED_HFOV_DEG:g} deg field of view)"
         assumptions.append(f"no dashed lines and no focal length: a focal length of {fa:.0f} px "
                            f"({ASSUMED_HFOV_DEG:g} deg horizontal field of view) is assumed; the scale "
                            "along the road may be off by tens of percent")
         scale_conf = 0.4
-    assumptions.append(f"lanes {lane_width_m:g} m wide; a flat road")
+    return _Scale(C, scale_source, scale_conf, dash_fit, fx, fy, focal_source)
 
+
+def _dash_c(road: _Road, c_focal: float | None, lane_width_m: float, dash_m: float, gap_m: float,
+            assumptions: list[str]) -> tuple[float | None, float, float | None]:
+    """Return (C from the dash period, how well the dashes fit it, the focal length it implies),
+    C None without a period or when its focal length is out of reach for a road camera (0.2-6
+    image widths; said in ``assumptions``). C is searched within DASH_FOCAL_RANGE of ``c_focal``,
+    or, with no focal length known, over the focal lengths of FOCAL_RANGE_W."""
+    w = road.look.size[0]
+    r_k = road.r_k
+    if c_focal is not None:
+        c_range = (c_focal / DASH_FOCAL_RANGE, c_focal * DASH_FOCAL_RANGE)
+    else:
+        c_range = tuple(f * w * lane_width_m / r_k for f in FOCAL_RANGE_W)
+    c_dash, dash_fit = _dash_scale(road.dashes, dash_m, gap_m, c_range)
+    f_dash = None
+    if c_dash is not None:
+        f_dash = c_dash * r_k / lane_width_m
+        for _ in range(4):  # the angles depend on the focal length
+            theta, psi = _angles(road.pp_uv, f_dash, f_dash)
+            f_dash = c_dash * r_k * math.cos(theta) * math.cos(psi) ** 2 / lane_width_m
+        if not 0.2 * w <= f_dash <= 6 * w:
+            assumptions.append(f"a dash period was found but implies a focal length of {f_dash:.0f} px, "
+                               "out of reach for a road camera: not used")
+            c_dash = None
+    return c_dash, dash_fit, f_dash
+
+
+@dataclass(frozen=True)
+class _Pose:
+    """The camera's pitch, yaw and height (None without a focal length), its own line's slope
+    ``k_c`` and the offset ``s0`` in s = C / v + s0 (0 without one), and why its height is
+    implausible ('' when it is not)."""
+
+    pitch_deg: float | None
+    yaw_deg: float | None
+    height_m: float | None
+    k_c: float
+    s0: float
+    implausible: str
+
+
+def _pose(pp_uv: np.ndarray, fx: float | None, fy: float | None, focal_source: str, r_k: float,
+          lane_width_m: float, assumptions: list[str]) -> _Pose:
+    """Return the camera's pose from its focal lengths and the ego lane's width r; a height outside
+    CAMERA_HEIGHT_RANGE_M, or no focal length (the camera on the car's centre line), joins
+    ``assumptions``."""
     pitch = yaw = height = None
     implausible = ""
     k_c, s0 = 0.0, 0.0
     if fx is not None:
-        theta, psi = angles(fx, fy)
+        theta, psi = _angles(pp_uv, fx, fy)
         pitch, yaw = math.degrees(theta), math.degrees(psi)
         height = fx * lane_width_m * math.cos(theta) / (fy * r_k * math.cos(psi))
         k_c = (fx / fy) * math.tan(psi) * math.sin(theta)
@@ -245,45 +317,12 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
             assumptions.append(implausible)
     else:
         assumptions.append("the camera sits on the car's centre line")
+    return _Pose(pitch, yaw, height, k_c, s0, implausible)
 
-    # bird's-eye points
-    half = r_k / 2
-    margin = max(2.0, 0.01 * h)
-    v_bottom = _bottom_v(basis, (k_c - half, k_c + half), hood, margin, (w, h))
-    if v_bottom is None:
-        raise GeometryError("no road is seen above the hood between the lane lines; give "
-                            "hood_row_px, or frames where the road is seen below the horizon")
-    near_m = C / v_bottom + s0
-    v_min = max(8.0, 0.05 * h)
-    if look_ahead_m - s0 <= 0 or C / (look_ahead_m - s0) > v_bottom - 0.1 * h:
-        raise GeometryError(f"look-ahead {look_ahead_m:g} m: the nearest road seen above the hood is "
-                            f"{near_m:.1f} m ahead; choose a look-ahead of at least {near_m + 5:.0f} m")
-    v_top = C / (look_ahead_m - s0)
-    if v_top < v_min:
-        v_top = v_min
-        new = C / v_top + s0
-        assumptions.append(f"look-ahead cut from {look_ahead_m:g} m to {new:.1f} m: farther rows lie within "
-                           f"{v_min:.0f} px of the horizon, where a pixel is metres of road")
-        look_ahead_m = new
-    corners = [(k_c - half, v_top), (k_c - half, v_bottom), (k_c + half, v_bottom), (k_c + half, v_top)]
-    src = tuple(tuple(float(c) for c in basis.to_xy(k * v, v)) for k, v in corners)
-    dst = ((w / 4, 0.0), (w / 4, float(h)), (3 * w / 4, float(h)), (3 * w / 4, 0.0))
-    visible = C / v_top - C / v_bottom
-    xm, ym = lane_width_m / (w / 2), visible / h
-    widening = _view_widening([(analyses[i].mask, [analyses[i].line_fits[j] for j in ego[i][:2]]) for i in ego],
-                              src, dst, (w, h))
-    if widening is not None and abs(widening - 1) > LANE_PARALLEL_TOLERANCE:
-        parallel_conf = IMPLAUSIBLE_CONFIDENCE
-        assumptions.append(
-            f"the ego lane {'widens' if widening > 1 else 'narrows'} by {100 * abs(widening - 1):.1f} % from the "
-            "bottom third of the bird's-eye view to the top third (frames' median): "
-            + ("a lens that distorts (give --calibration)" if calibration is None else "")
-            + (" or " if calibration is None else "") + "a road that is not flat; the scale is not to be trusted")
-    else:
-        parallel_conf = 1.0
 
-    # confidence
-    n_used = len(used)
+def _confidence(road: _Road, scale_conf: float, implausible: bool, parallel_conf: float) -> float:
+    """Return the estimate's confidence (0-1): the product of the factors the module docstring lists."""
+    n_used = len(road.used)
     conf = min(1.0, n_used / MIN_GOOD_FRAMES)
     # how well the frames pin the vanishing point: the standard error of their mean row (a car
     # that pitches over bumps scatters each frame's point by a few px; many frames still pin it)
@@ -291,24 +330,13 @@ def _solve(road: _Road, focal_px: float | None, lane_width_m: float, look_ahead_
     if n_used > 1 and std_err_y > 1.0:
         conf *= math.exp(-((std_err_y - 1.0) / 3.0) ** 2)
     conf *= scale_conf
-    conf *= min(1.0, len(ego) / MIN_GOOD_FRAMES)
+    conf *= min(1.0, len(road.ego) / MIN_GOOD_FRAMES)
     if road.hood_source.startswith("not detected"):
         conf *= 0.9
     if implausible:
         conf *= IMPLAUSIBLE_CONFIDENCE
     conf *= parallel_conf
-    return RoadGeometry(
-        size_px=(w, h), vanishing_point_px=(float(road.vp[0]), float(road.vp[1])),
-        horizon_row_px=road.horizon_row,
-        horizon_slope=road.horizon_slope, roll_deg=roll, roll_source=road.roll_source, pitch_deg=pitch, yaw_deg=yaw,
-        camera_height_m=height, focal_px=fx, focal_source=focal_source if fx is not None else "unknown",
-        hood_row_px=road.hood_row, hood_source=road.hood_source, src_px=src, dst_px=dst,
-        lane_width_m=float(lane_width_m), look_ahead_m=float(look_ahead_m), near_m=float(near_m),
-        visible_length_m=float(visible), xm_per_px=xm, ym_per_px=ym, scale_source=scale_source,
-        inverse_depth_scale_px_m=float(C), lane_width_ratio=r_k, dash_fit=float(dash_fit),
-        confidence=float(round(conf, 4)),
-        assumptions=tuple(assumptions), frames_used=used, frames_rejected=road.rejected,
-        frame_vanishing_points=tuple((i, float(p[0]), float(p[1])) for i, p in zip(used, road.vps)))
+    return conf
 
 
 def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], raw_look: _Look, focal_px, lane_width_m,
@@ -376,52 +404,3 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], raw_look
             f"their bow {found.bend_px:.2f} px -> {found.residual_bend_px:.2f} px; the frames are undistorted with it")
     return replace(geo, lens=lens, assumptions=(note,) + ((raw_note,) if raw_note else ()) + tuple(
         a for a in geo.assumptions if not a.startswith("the lens was estimated")))
-
-
-def _view_widening(frames: list[tuple[np.ndarray, tuple]], src, dst, size: tuple[int, int]) -> float | None:
-    """Return the median over frames of the ego lane's width at the top of the bird's-eye view
-    (a sixth down) over its width at the bottom (a sixth up): 1 when its lines are parallel, as
-    they are through a pinhole over a flat road (a lens not given bends them, a road not flat
-    spreads them). ``frames``: (mask, the ego lane's two line fits) each. Each line is a straight
-    line fitted to the paint of the view within w/32 of the line fit carried into the view (not
-    to a seam or the next line); frames where either spans under half the view are left out,
-    and fewer than 3 frames give None."""
-    w, h = size
-    M = cv2.getPerspectiveTransform(np.float32(src), np.float32(dst))
-    band = w / 32
-    ratios = []
-    for mask, fits in frames:
-        top_down = cv2.warpPerspective(mask, M, (w, h), flags=cv2.INTER_NEAREST)
-        ys, xs = np.nonzero(top_down)
-        ends = []
-        for c, d, top, bottom in fits:
-            pts = np.array([c + d * (r - c[1]) / d[1] for r in (top, bottom)], np.float64)
-            (x0, y0), (x1, y1) = cv2.perspectiveTransform(pts[None], M)[0]
-            if abs(y1 - y0) < 1.0:
-                break
-            on = np.abs(xs - (x0 + (ys - y0) * (x1 - x0) / (y1 - y0))) <= band
-            if on.sum() < 20 or np.ptp(ys[on]) < h / 2:
-                break
-            slope, icpt = np.polyfit(ys[on].astype(np.float64), xs[on].astype(np.float64), 1)
-            ends.append(icpt + slope * np.array([h / 6, 5 * h / 6]))
-        if len(ends) == 2:
-            top, bottom = np.abs(ends[1] - ends[0])
-            ratios.append(top / bottom)
-    return float(np.median(ratios)) if len(ratios) >= 3 else None
-
-
-def _bottom_v(basis: _Basis, ks: tuple[float, float], hood: np.ndarray, margin: float,
-              size: tuple[int, int]) -> float | None:
-    """Return the largest v (distance below the horizon) whose horizon-parallel segment between
-    the lines u = k v stays above the hood by ``margin`` and inside the frame."""
-    w, h = size
-    v_hi = float(np.max(basis.to_uv(np.array([[0, h], [w, h]], np.float64))[:, 1]))
-    for v in np.arange(math.floor(v_hi), 4.0, -1.0):
-        u = np.linspace(ks[0] * v, ks[1] * v, 64)
-        xy = basis.to_xy(u, np.full_like(u, v))
-        if xy[0, 0] < 0 or xy[-1, 0] > w - 1:
-            continue
-        cols = np.clip(np.round(xy[:, 0]).astype(int), 0, w - 1)
-        if np.all(xy[:, 1] <= hood[cols] - margin):
-            return float(v)
-    return None

@@ -96,11 +96,48 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
         If no frame gives a consistent vanishing point or shows the ego lane.
     """
     w, h = look.size
-    analyses, calibration = look.analyses, look.calibration
-    hood, hood_source = look.hood, look.hood_source
+    analyses = look.analyses
     assumptions = list(notes)
+    used, rejected = _consistent_frames(analyses, look.size)
+    weights = np.array([analyses[i].vp.inlier_segments for i in used], np.float64)
+    vps = np.array([analyses[i].vp.point_px for i in used])
+    vp = (vps * weights[:, None]).sum(0) / weights.sum()
+    scatter_y = float(np.std(vps[:, 1])) if len(used) > 1 else float("nan")
 
-    # frames with a vanishing point on a straight road, consistent with the others
+    # the ego lane: the nearest line left and right of the camera's; where a dashed line is not
+    # seen, the nearest is the next lane's, so frames whose lane is much wider than most are left out
+    angle_lists = {i: np.array([l.angle_deg for l in analyses[i].vp.lines]) for i in used}
+    roll, roll_source = _roll(angle_lists, _ego_frames(angle_lists, 0.0), estimate_roll, vp, w, assumptions)
+    basis = _basis(vp, roll)
+    slope = -math.tan(math.radians(roll))
+    horizon_row = float(vp[1] + slope * (w / 2 - vp[0]))
+
+    # the ego lane's width in k = du/dv
+    ego = _ego_frames(angle_lists, roll)
+    if not ego:
+        raise GeometryError(f"no frame shows both lines of the lane the car drives in, one on each side "
+                            f"of the camera and {EGO_ANGLES_DEG[0]:g}-{EGO_ANGLES_DEG[1]:g} deg from straight "
+                            "down below the vanishing point; give frames where the car drives between two "
+                            "lane lines (is the video rotated?)")
+    r_k = float(np.median([e[2] for e in ego.values()]))
+    pp = _principal_point(look.calibration, look.size, assumptions)
+    hood, hood_row, hood_source = _hood_row(look, used, assumptions)
+    return _Road(look, tuple(used), tuple(rejected), vp, vps, scatter_y, roll, roll_source, basis, slope, horizon_row, ego,
+                 r_k, basis.to_uv(pp), hood, hood_row, hood_source,
+                 _dash_runs_of(analyses, used, ego, hood, roll, (w, h)), tuple(assumptions))
+
+
+def _consistent_frames(analyses: tuple[_FrameAnalysis, ...], size: tuple[int, int]
+                       ) -> tuple[list[int], list[tuple[int, str]]]:
+    """Return (the frames with a vanishing point on a straight road, consistent with the others;
+    (frame, reason) of the others, sorted).
+
+    Raises
+    ------
+    GeometryError
+        If no frame is left; the message names every frame's reason.
+    """
+    w, h = size
     rejected: list[tuple[int, str]] = []
     cand = []
     for i, a in enumerate(analyses):
@@ -129,17 +166,14 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
     if not used:
         raise GeometryError(_no_frame_message(rejected, len(analyses)))
     rejected.sort()
-    weights = np.array([analyses[i].vp.inlier_segments for i in used], np.float64)
-    vps = np.array([analyses[i].vp.point_px for i in used])
-    vp = (vps * weights[:, None]).sum(0) / weights.sum()
-    scatter_y = float(np.std(vps[:, 1])) if len(used) > 1 else float("nan")
+    return used, rejected
 
-    # the ego lane: the nearest line left and right of the camera's; where a dashed line is not
-    # seen, the nearest is the next lane's, so frames whose lane is much wider than most are left out
-    angle_lists = {i: np.array([l.angle_deg for l in analyses[i].vp.lines]) for i in used}
-    ego = _ego_frames(angle_lists, 0.0)
 
-    # roll
+def _roll(angle_lists: dict[int, np.ndarray], ego: dict[int, tuple[int, int, float]], estimate_roll: bool,
+          vp: np.ndarray, w: int, assumptions: list[str]) -> tuple[float, str]:
+    """Return (roll deg, its source): from the lanes' spacing (``_roll_from_spacing``) when at
+    least ROLL_MIN_FRAMES frames give it one by one within ROLL_MAX_SPREAD_DEG, else 0; what it
+    assumed joins ``assumptions``."""
     roll, roll_source = 0.0, "assumed 0"
     if estimate_roll:
         found = _roll_from_spacing([(angle_lists[i], ego[i][:2]) for i in ego])
@@ -164,20 +198,13 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
             "the road by about 7 %")
     else:
         assumptions.append("every lane is as wide as the ego lane (the roll is measured from their spacing)")
-    basis = _basis(vp, roll)
-    slope = -math.tan(math.radians(roll))
-    horizon_row = float(vp[1] + slope * (w / 2 - vp[0]))
+    return roll, roll_source
 
-    # the ego lane's width in k = du/dv
-    ego = _ego_frames(angle_lists, roll)
-    if not ego:
-        raise GeometryError(f"no frame shows both lines of the lane the car drives in, one on each side "
-                            f"of the camera and {EGO_ANGLES_DEG[0]:g}-{EGO_ANGLES_DEG[1]:g} deg from straight "
-                            "down below the vanishing point; give frames where the car drives between two "
-                            "lane lines (is the video rotated?)")
-    r_k = float(np.median([e[2] for e in ego.values()]))
 
-    # the principal point
+def _principal_point(calibration: Calibration | None, size: tuple[int, int], assumptions: list[str]) -> np.ndarray:
+    """Return the principal point (x, y px): a measured calibration's, else the image centre
+    (which joins ``assumptions``, as does an estimated lens's focal length left unused)."""
+    w, h = size
     if calibration is not None and calibration.estimated:
         assumptions.append(f"the lens was estimated ({calibration.estimated}): its focal length is not used")
     if calibration is not None and not calibration.estimated:
@@ -187,10 +214,17 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
         pp = np.array([w / 2, h / 2])
     if calibration is None or calibration.estimated:
         assumptions.append("principal point at the image centre")
+    return pp
 
-    # hood row and the bottom of the road
+
+def _hood_row(look: _Look, used: list[int], assumptions: list[str]) -> tuple[np.ndarray, float, str]:
+    """Return (the hood's top row per column, the hood row, its source): the detected hood's
+    highest row over the middle 80 % of the columns, or, with no hood detected, just below the
+    lowest lane-line pixel of the frames used (which joins ``assumptions``)."""
+    w, h = look.size
+    hood, hood_source = look.hood, look.hood_source
     if hood_source == "not detected":
-        lowest = [max(l.rows_px[1] for l in analyses[i].vp.lines) for i in used]
+        lowest = [max(l.rows_px[1] for l in look.analyses[i].vp.lines) for i in used]
         hood_row = float(min(h, np.max(lowest) + 1))
         hood_source = "not detected: just below the lowest lane-line pixel"
         assumptions.append("hood not detected (it takes 3 frames of a moving car): the view starts "
@@ -199,10 +233,7 @@ def _analyse_road(look: _Look, estimate_roll: bool, notes: tuple[str, ...] = ())
     else:
         lo, hi = int(0.1 * w), int(0.9 * w)
         hood_row = float(np.min(hood[lo:hi]))
-
-    return _Road(look, tuple(used), tuple(rejected), vp, vps, scatter_y, roll, roll_source, basis, slope, horizon_row, ego,
-                 r_k, basis.to_uv(pp), hood, hood_row, hood_source,
-                 _dash_runs_of(analyses, used, ego, hood, roll, (w, h)), tuple(assumptions))
+    return hood, hood_row, hood_source
 
 
 def _no_frame_message(rejected: list[tuple[int, str]], n: int) -> str:

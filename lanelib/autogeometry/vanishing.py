@@ -141,6 +141,8 @@ class RoadLineFinder:
         return self.analyse(frame, undistorted).vp
 
     def _analyse_mask(self, mask: np.ndarray) -> _FrameAnalysis:
+        """Return the frame's analysis from its paint mask: the segments' vanishing point, the lines
+        through it, the point refitted through those lines, and whether the road is straight."""
         w, h = self.size
         seg = _segments(mask, self.band_px, self.max_run_px)
         n = len(seg.length)
@@ -163,57 +165,15 @@ class RoadLineFinder:
             return fail(f"inconsistent: only {int(inliers.sum())} of {n} line segments point at one "
                         "vanishing point; give frames of a straight road with both lane lines "
                         "visible", None, int(inliers.sum()))
-        # a short dash cut by a band row leaves a stub whose direction is poor: the segments that
-        # continue an inlier across a cut and point at the point within 3 deg join the inliers
         up = _up_links(seg)
-        sin, below = _angle_errors(vp, seg.centre, _normals(seg.direction))
-        loose = (sin < math.sin(math.radians(3.0))) & below
-        for _ in range(2):
-            linked = np.zeros(n, bool)
-            has_up = up >= 0
-            linked[up[has_up & inliers]] = True                 # the segment above an inlier
-            linked[has_up] |= inliers[up[has_up]]               # the segment below an inlier
-            inliers = inliers | (linked & loose)
-        # group the inlier segments into lines by their angle about the point
-        idx = np.flatnonzero(inliers)
-        dv = seg.centre[idx] - vp
-        ang = np.degrees(np.arctan2(dv[:, 0], dv[:, 1]))
-        order = np.argsort(ang)
-        groups, current = [], [idx[order[0]]]
-        for a_prev, a, i in zip(ang[order[:-1]], ang[order[1:]], idx[order[1:]]):
-            if a - a_prev >= LINE_GAP_DEG:
-                groups.append(current)
-                current = []
-            current.append(i)
-        groups.append(current)
-        lines, fits, points = [], [], []
-        for g in groups:
-            runs = np.isin(seg.run_segment, g)
-            x, y = seg.run_x[runs], seg.run_y[runs]
-            if len(x) < 6 or y.max() - y.min() < max(10.0, MIN_LINE_ROWS_FRACTION * h):
-                continue
-            c, d, _ = _fit_line(x, y)
-            chain = np.isin(seg.run_segment, _follow_up(g, up))
-            _, _, bow = _fit_line(seg.run_x[chain], seg.run_y[chain])
-            a = math.degrees(math.atan2(c[0] - vp[0], c[1] - vp[1]))
-            lines.append(RoadLine((float(c[0]), float(c[1])), (float(d[0]), float(d[1])),
-                                  (float(y.min()), float(y.max())), a, bow, len(x), len(g)))
-            fits.append((c, d, float(y.min()), float(y.max()), len(x)))
-            both = runs | chain
-            points.append(np.column_stack([seg.run_x[both], seg.run_y[both]]))
+        inliers = _with_stubs(seg, vp, inliers, up)
+        lines, fits, points = _lines_of(seg, _angle_groups(seg, vp, inliers), up, vp, h)
         if len(lines) < 2 or (max(l.angle_deg for l in lines) - min(l.angle_deg for l in lines)
                               < MIN_LINE_SEPARATION_DEG):
             return fail(f"too few lines: the segments form {len(lines)} line(s) through the vanishing "
                         "point, and it takes two lane lines; give frames where both lane lines are "
                         "visible", None, int(inliers.sum()), tuple(lines))
-        c = np.array([f[0] for f in fits])
-        d = np.array([f[1] for f in fits])
-        span = np.array([f[3] - f[2] for f in fits])
-        cnt = np.array([f[4] for f in fits], np.float64)
-        vp = _intersect(c, _normals(d), cnt * span ** 2 / np.maximum(np.abs(d[:, 1]), 0.05) ** 2, vp)
-        lines = [RoadLine(l.point_px, l.direction, l.rows_px,
-                          math.degrees(math.atan2(l.point_px[0] - vp[0], l.point_px[1] - vp[1])),
-                          l.bow_px, l.points, l.segments) for l in lines]
+        vp, lines = _refitted_point(fits, lines, vp)
         below = [i for i, l in enumerate(lines) if abs(l.angle_deg) < 88.0]
         if len(below) < 2:
             return fail("too few lines: fewer than two lines lie below the point where they meet; give "
@@ -225,33 +185,104 @@ class RoadLineFinder:
                         "a camera looking along the road sees its vanishing point; is the frame "
                         "rotated, or the camera not looking ahead?", None, int(inliers.sum()),
                         tuple(lines))
-        bottom = max(l.rows_px[1] for l in lines)
-        road_rows = max(bottom - vp[1], 1.0)
-        reason, straight = "", True
-        for l in lines:
-            length = (l.rows_px[1] - l.rows_px[0]) / max(l.direction[1], 1e-3)
-            if l.rows_px[1] - l.rows_px[0] >= 0.2 * road_rows and l.bow_px > MAX_BOW_PX + 0.003 * length:
-                straight = False
-                reason = (f"road not straight: a lane line bows {l.bow_px:.1f} px from a straight "
-                          "line; give frames of a straight stretch of road")
-                break
-        if straight:
-            found = _near_far_vps(seg, vp, road_rows)
-            if found is not None:
-                dx, dy = found[1] - found[0]
-                tol = max(4.0, FAR_NEAR_TOLERANCE * w)
-                if abs(dx) > tol:
-                    straight = False
-                    side = "right" if dx > 0 else "left"
-                    reason = (f"road not straight: the far lines point {abs(dx):.0f} px {side} of the near "
-                              "ones (a bend); give frames of a straight stretch of road")
-                elif abs(dy) > tol:
-                    straight = False
-                    reason = (f"road not flat: the far lines vanish {abs(dy):.0f} px {'below' if dy > 0 else 'above'} "
-                              "the near ones (a crest or a dip); give frames of a level stretch of road")
+        straight, reason = _straightness(seg, lines, vp, w)
         fits_out = tuple((f[0], f[1], f[2], f[3]) for f in fits)
         return _FrameAnalysis(VanishingPoint(vpt, n, int(inliers.sum()), tuple(lines), straight, reason),
                               mask, fits_out, tuple(points))
+
+
+def _with_stubs(seg: _Segments, vp: np.ndarray, inliers: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Return the inliers joined by the stubs of dashes: a short dash cut by a band row leaves a
+    stub whose direction is poor, so the segments that continue an inlier across a cut (``up``)
+    and point at ``vp`` within 3 deg join the inliers."""
+    n = len(seg.length)
+    sin, below = _angle_errors(vp, seg.centre, _normals(seg.direction))
+    loose = (sin < math.sin(math.radians(3.0))) & below
+    for _ in range(2):
+        linked = np.zeros(n, bool)
+        has_up = up >= 0
+        linked[up[has_up & inliers]] = True                 # the segment above an inlier
+        linked[has_up] |= inliers[up[has_up]]               # the segment below an inlier
+        inliers = inliers | (linked & loose)
+    return inliers
+
+
+def _angle_groups(seg: _Segments, vp: np.ndarray, inliers: np.ndarray) -> list[list[int]]:
+    """Return the inlier segments grouped into lines by their angle about ``vp``: a gap of
+    LINE_GAP_DEG or more starts a new line."""
+    idx = np.flatnonzero(inliers)
+    dv = seg.centre[idx] - vp
+    ang = np.degrees(np.arctan2(dv[:, 0], dv[:, 1]))
+    order = np.argsort(ang)
+    groups, current = [], [idx[order[0]]]
+    for a_prev, a, i in zip(ang[order[:-1]], ang[order[1:]], idx[order[1:]]):
+        if a - a_prev >= LINE_GAP_DEG:
+            groups.append(current)
+            current = []
+        current.append(i)
+    groups.append(current)
+    return groups
+
+
+def _lines_of(seg: _Segments, groups: list[list[int]], up: np.ndarray, vp: np.ndarray, h: int) -> tuple[list, list, list]:
+    """Return (lines, fits, points) of the groups long enough to be lines: each line's
+    ``RoadLine`` (its bow measured along the segments that continue it up the image, ``up``),
+    its straight fit (centroid, direction, top row, bottom row, run count) and its run centres."""
+    lines, fits, points = [], [], []
+    for g in groups:
+        runs = np.isin(seg.run_segment, g)
+        x, y = seg.run_x[runs], seg.run_y[runs]
+        if len(x) < 6 or y.max() - y.min() < max(10.0, MIN_LINE_ROWS_FRACTION * h):
+            continue
+        c, d, _ = _fit_line(x, y)
+        chain = np.isin(seg.run_segment, _follow_up(g, up))
+        _, _, bow = _fit_line(seg.run_x[chain], seg.run_y[chain])
+        a = math.degrees(math.atan2(c[0] - vp[0], c[1] - vp[1]))
+        lines.append(RoadLine((float(c[0]), float(c[1])), (float(d[0]), float(d[1])),
+                              (float(y.min()), float(y.max())), a, bow, len(x), len(g)))
+        fits.append((c, d, float(y.min()), float(y.max()), len(x)))
+        both = runs | chain
+        points.append(np.column_stack([seg.run_x[both], seg.run_y[both]]))
+    return lines, fits, points
+
+
+def _refitted_point(fits: list, lines: list[RoadLine], vp: np.ndarray) -> tuple[np.ndarray, list[RoadLine]]:
+    """Return the weighted least-squares intersection of the lines' fits (weighted by their run
+    counts and spans, and by their slant), and the lines with their angles about it."""
+    c = np.array([f[0] for f in fits])
+    d = np.array([f[1] for f in fits])
+    span = np.array([f[3] - f[2] for f in fits])
+    cnt = np.array([f[4] for f in fits], np.float64)
+    vp = _intersect(c, _normals(d), cnt * span ** 2 / np.maximum(np.abs(d[:, 1]), 0.05) ** 2, vp)
+    lines = [RoadLine(l.point_px, l.direction, l.rows_px,
+                      math.degrees(math.atan2(l.point_px[0] - vp[0], l.point_px[1] - vp[1])),
+                      l.bow_px, l.points, l.segments) for l in lines]
+    return vp, lines
+
+
+def _straightness(seg: _Segments, lines: list[RoadLine], vp: np.ndarray, w: int) -> tuple[bool, str]:
+    """Return (straight, reason): a long line bows more than MAX_BOW_PX + 0.3 % of its length, or
+    the far segments' vanishing point lies aside of (a bend) or above or below (a crest, a dip)
+    the near ones' by more than FAR_NEAR_TOLERANCE of the width, and the road is not straight."""
+    bottom = max(l.rows_px[1] for l in lines)
+    road_rows = max(bottom - vp[1], 1.0)
+    for l in lines:
+        length = (l.rows_px[1] - l.rows_px[0]) / max(l.direction[1], 1e-3)
+        if l.rows_px[1] - l.rows_px[0] >= 0.2 * road_rows and l.bow_px > MAX_BOW_PX + 0.003 * length:
+            return False, (f"road not straight: a lane line bows {l.bow_px:.1f} px from a straight "
+                           "line; give frames of a straight stretch of road")
+    found = _near_far_vps(seg, vp, road_rows)
+    if found is not None:
+        dx, dy = found[1] - found[0]
+        tol = max(4.0, FAR_NEAR_TOLERANCE * w)
+        if abs(dx) > tol:
+            side = "right" if dx > 0 else "left"
+            return False, (f"road not straight: the far lines point {abs(dx):.0f} px {side} of the near "
+                           "ones (a bend); give frames of a straight stretch of road")
+        if abs(dy) > tol:
+            return False, (f"road not flat: the far lines vanish {abs(dy):.0f} px {'below' if dy > 0 else 'above'} "
+                           "the near ones (a crest or a dip); give frames of a level stretch of road")
+    return True, ""
 
 
 def _band_vp(seg: _Segments, vp: np.ndarray, v_from: float, v_to: float) -> np.ndarray | None:
