@@ -191,3 +191,24 @@ def test_imports_go_down_the_layers(module):
     edges = graph()[0]
     up = sorted(t for t in edges[module] if layer_of(t) > layer_of(module))
     assert not up, f"{module} (layer {layer_of(module)}) imports from a layer above it: {up}"
+
+
+# the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it
+CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.lanes", "lanelib.linevote",
+        "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
+        "lanelib.hough", "lanelib.tracking", "lanelib.config", "lanelib.pipeline"}
+EXTENSIONS = ("lanelib.autogeometry",)
+
+
+@pytest.mark.parametrize("module", sorted(CORE))
+def test_the_core_reaches_no_extension(module):
+    """No core module imports an extension, directly or through another module."""
+    edges = graph()[0]
+    seen, todo = set(), [module]
+    while todo:
+        for t in edges.get(todo.pop(), ()):
+            if t not in seen:
+                seen.add(t)
+                todo.append(t)
+    reached = sorted(t for t in seen if any(t == e or t.startswith(e + ".") for e in EXTENSIONS))
+    assert not reached, f"{module} (core) imports the extension modules {reached}"

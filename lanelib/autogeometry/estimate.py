@@ -387,8 +387,8 @@ def _with_estimated_lens(found: LensEstimate, frames: list[np.ndarray], raw_look
             raw = None
         if raw is not None and raw.focal_source == "dash period and lane width":
             again = _solve(road, raw.focal_px, **scale)
-            # the raw frames' dashes are measured through the lens (4 % short on the synthetic
-            # 90 deg camera with k1 = -0.25): a scale not to be trusted
+            # the raw frames' dashes are measured through the lens, whose distortion shortens
+            # them: a scale not to be trusted
             geo = replace(again, focal_source="dash period of the raw frames and lane width",
                            confidence=round(again.confidence * RAW_DASH_CONFIDENCE, 4),
                            scale_source=f"dash period of the raw frames (focal {raw.focal_px:.0f} px) and lane "

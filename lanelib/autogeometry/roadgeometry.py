@@ -33,7 +33,7 @@ class RoadGeometry:
     ``dst_px`` are the bird's-eye points (tl, bl, br, tr), ``near_m`` and ``look_ahead_m`` the
     distances ahead of the camera of their bottom and top edges, ``visible_length_m`` the road
     between them. ``inverse_depth_scale_px_m`` is C in s = C / v + s0 and ``lane_width_ratio``
-    the ego lane's r (see the module docstring); ``dash_fit`` how well the dashes fit the dash
+    the ego lane's r (``estimate``, ``horizon``); ``dash_fit`` how well the dashes fit the dash
     period found (1: perfectly; 0: no dashes seen; used from DASH_MIN_FIT).
     ``frames_rejected`` holds (frame index, reason) pairs. ``lens`` is the lens estimated from
     the road's lines when none was given (``estimate_lens``; a ``camera.Calibration`` marked
