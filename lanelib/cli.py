@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from . import ablation, bench, data, evaluate, geometry, hough, runs, scoreboard, synth
+from . import ablation, autogeometry, bench, data, evaluate, hough, runs, scoreboard, synth
 from .benchmarks import culane, metrics, tusimple, why, why_images
 from .camera import Calibration, calibrate, parse_pattern
 from .config import (PipelineConfig, benchmark_config, load_config_or_preset, override, preset_names,
@@ -117,7 +117,7 @@ def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False,
     g.add_argument("--geometry-seconds", type=float, default=runs.GeometryOptions.seconds, metavar="S",
                    help="of a video read for the estimate, from its start (default 20)")
     g.add_argument("--accept-low-confidence", action="store_true",
-                   help=f"use an estimate whose confidence is below {geometry.LOW_CONFIDENCE} "
+                   help=f"use an estimate whose confidence is below {autogeometry.LOW_CONFIDENCE} "
                         "(refused otherwise)")
 
 
@@ -316,7 +316,7 @@ def _add_geometry(sub) -> None:
                     "already a config, e.g. one a tuner saved; else the whole config of --config or "
                     "the defaults) and prints the figures, the confidence and every assumption. "
                     "Frames with no consistent vanishing point, or an estimate below the confidence "
-                    "limit, stop with the reason (exit 2). See lanelib/geometry.py for the method.",
+                    "limit, stop with the reason (exit 2). See lanelib/autogeometry/ for the method.",
         epilog=_exit_codes())
     p.add_argument("input", type=Path, metavar="VIDEO_OR_FOLDER",
                    help="a video of the camera (a straight stretch helps) or a folder of its images")

@@ -1,7 +1,7 @@
 """lanelib's import graph, read from the source with ``ast``: no cycles, no late imports, layers.
 
 The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; io; the stages
-on arrays (thresholds, lanes, linevote, result, draw); geometry (camera, perspective, geometry); data;
+on arrays (thresholds, lanes, linevote, result, draw); geometry (camera, perspective, autogeometry); data;
 the basic pipeline and the tracker; config; the one-frame engine (pipeline); runs, evaluate,
 bench, synth, benchmarks; the scoreboard; widgets; cli. A module imports only from its own layer or below,
 never from above, and every import is at module level (a function-level
@@ -164,7 +164,7 @@ LAYERS = [
     {"lanelib.errors"},
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.lanes", "lanelib.linevote", "lanelib.result", "lanelib.draw"},  # stages
-    {"lanelib.camera", "lanelib.perspective", "lanelib.geometry"},
+    {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry"},
     {"lanelib.data"},
     {"lanelib.hough", "lanelib.tracking"},  # the basic pipeline; the tracker (takes a pipeline object)
     {"lanelib.config"},                     # nests every stage's config
@@ -191,3 +191,24 @@ def test_imports_go_down_the_layers(module):
     edges = graph()[0]
     up = sorted(t for t in edges[module] if layer_of(t) > layer_of(module))
     assert not up, f"{module} (layer {layer_of(module)}) imports from a layer above it: {up}"
+
+
+# the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it
+CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.lanes", "lanelib.linevote",
+        "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
+        "lanelib.hough", "lanelib.tracking", "lanelib.config", "lanelib.pipeline"}
+EXTENSIONS = ("lanelib.autogeometry",)
+
+
+@pytest.mark.parametrize("module", sorted(CORE))
+def test_the_core_reaches_no_extension(module):
+    """No core module imports an extension, directly or through another module."""
+    edges = graph()[0]
+    seen, todo = set(), [module]
+    while todo:
+        for t in edges.get(todo.pop(), ()):
+            if t not in seen:
+                seen.add(t)
+                todo.append(t)
+    reached = sorted(t for t in seen if any(t == e or t.startswith(e + ".") for e in EXTENSIONS))
+    assert not reached, f"{module} (core) imports the extension modules {reached}"
