@@ -9,7 +9,7 @@ OUT    ?= out
 # Udacity data for the real-data tests and benchmarks (skipped when absent)
 export LANELIB_DATA ?= $(abspath ../shared/data)
 
-.PHONY: demo test portability bench scoreboard lab venv clean e2e-deps
+.PHONY: demo test portability bench scoreboard ablation lab venv clean e2e-deps
 
 venv: $(STAMP)
 
@@ -68,6 +68,12 @@ bench: $(STAMP)
 # One table of lanelib on every data set at hand, real data first (rows without their data are skipped)
 scoreboard: $(STAMP)
 	$(PY) -m lanelib scoreboard --out $(OUT)/scoreboard --json $(OUT)/scoreboard.json
+
+# each part switched alone on every scoreboard row (about a minute per part); the table and the
+# figures go to docs/, where docs/results.md and notebook 09 show them
+ablation: $(STAMP)
+	$(PY) -m lanelib ablation --out $(OUT)/ablation --workers 2 --json docs/ablation.json \
+		--markdown docs/ablation.md
 
 lab: $(STAMP)
 	$(VENV)/bin/jupyter lab notebooks/

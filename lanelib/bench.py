@@ -17,14 +17,14 @@
 - ``stages_ms``: each stage alone on the same frames (one thread): the remap, the thresholds and
   each mask the rule uses, the searches, the measurements, the tracker's update, the overlay on
   the raw frame (the video path) and the full-frame undistort the images path and --debug add;
-  and the road geometry's per-frame vanishing point (``geometry.RoadLineFinder``), which
+  and the road geometry's per-frame vanishing point (``autogeometry.RoadLineFinder``), which
   ``--auto-geometry`` runs twice a second through a video.
 - ``fallbacks``: per clip (the benchmarked clip and each bundled synthetic clip), the
   tracker's share of frames that needed a fallback search (``LaneTracker.retries``: windows
   from the track, remembered bases, shorter views, other peaks), how often each ran, and the
   median CPU time of ``LaneTracker.update`` (one thread) on the frames that needed none and on
   those that did: how often the robust path runs and what it costs.
-- ``geometry_s``: ``--auto-geometry``'s estimate (``geometry.estimate_geometry``) from the frames
+- ``geometry_s``: ``--auto-geometry``'s estimate (``autogeometry.estimate_geometry``) from the frames
   it reads (up to 50 of the clip's first 20 s), CPU and wall seconds, without the decoding.
 
 Single-thread timings are CPU time of the timing thread (``time.thread_time``), which a busy
@@ -46,7 +46,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from . import data, geometry, io, thresholds
+from . import autogeometry, data, io, thresholds
 from .camera import Calibration
 from .config import PipelineConfig
 from .errors import InputError, LaneLibError
@@ -132,7 +132,7 @@ def stage_times(pipe, frames: list[np.ndarray], repeats: int = 3) -> dict[str, d
             tracker = LaneTracker(pipe)
             for raw in frames:
                 add("tracker update", lambda: tracker.update(raw))
-        finder = geometry.RoadLineFinder(pipe.size, lens=pipe.lens)
+        finder = autogeometry.RoadLineFinder(pipe.size, lens=pipe.lens)
         for _ in range(repeats):
             for raw in frames:
                 add("vanishing point (geometry)", lambda: finder.vanishing_point(raw))

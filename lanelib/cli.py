@@ -16,14 +16,14 @@ import os
 import sys
 from pathlib import Path
 
-from . import bench, data, evaluate, geometry, hough, runs, scoreboard, synth
+from . import ablation, autogeometry, bench, data, evaluate, hough, runs, scoreboard, synth
 from .benchmarks import culane, metrics, tusimple, why, why_images
 from .camera import Calibration, calibrate, parse_pattern
 from .config import (PipelineConfig, benchmark_config, load_config_or_preset, override, preset_names,
                      save_parts)
 from .draw import STRAIGHT_M
 from .errors import InputError, LaneLibError, PartialOutputError
-from .io import VIDEO_SUFFIXES, check_not_input, check_output, list_images, write_json
+from .io import VIDEO_SUFFIXES, check_not_input, check_output, list_images, write_json, write_text
 from .pipeline import LanePipeline
 from .synth import datasets as synth_datasets
 
@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_predict(sub)
     _add_synth(sub)
     _add_scoreboard(sub)
+    _add_ablation(sub)
     _add_why(sub)
     return parser
 
@@ -116,7 +117,7 @@ def _geometry_args(p: argparse.ArgumentParser, auto: bool, video: bool = False,
     g.add_argument("--geometry-seconds", type=float, default=runs.GeometryOptions.seconds, metavar="S",
                    help="of a video read for the estimate, from its start (default 20)")
     g.add_argument("--accept-low-confidence", action="store_true",
-                   help=f"use an estimate whose confidence is below {geometry.LOW_CONFIDENCE} "
+                   help=f"use an estimate whose confidence is below {autogeometry.LOW_CONFIDENCE} "
                         "(refused otherwise)")
 
 
@@ -315,7 +316,7 @@ def _add_geometry(sub) -> None:
                     "already a config, e.g. one a tuner saved; else the whole config of --config or "
                     "the defaults) and prints the figures, the confidence and every assumption. "
                     "Frames with no consistent vanishing point, or an estimate below the confidence "
-                    "limit, stop with the reason (exit 2). See lanelib/geometry.py for the method.",
+                    "limit, stop with the reason (exit 2). See lanelib/autogeometry/ for the method.",
         epilog=_exit_codes())
     p.add_argument("input", type=Path, metavar="VIDEO_OR_FOLDER",
                    help="a video of the camera (a straight stretch helps) or a folder of its images")
@@ -788,6 +789,43 @@ def _run_scoreboard(args) -> int:
         if r.error:
             print(f"error: {r.key}: {r.error}", file=sys.stderr)
     return 1 if any(r.error for r in rows) else 0
+
+
+def _add_ablation(sub) -> None:
+    p = sub.add_parser(
+        "ablation", help="each part switched alone, its effect on every row of the scoreboard",
+        description="Run the scoreboard once as it is and once per part with the part switched (off "
+                    "for a part on by default, on for an opt-in part), and print per part the change of "
+                    "each row's headline figure it makes (percentage points, + helps) and what the real "
+                    "rows say of it. See lanelib/ablation.py for the parts.",
+        epilog=_exit_codes("1 some runs' rows failed (see the JSON file);"))
+    p.add_argument("--parts", metavar="NAME,...", help="only these parts: " +
+                   ", ".join(q.name for q in ablation.PARTS))
+    p.add_argument("--only", metavar="ROW,...", help="only these scoreboard rows: " + ", ".join(scoreboard.ROWS))
+    p.add_argument("--out", type=Path, default=ablation.DEFAULT_OUT, metavar="DIR",
+                   help="folder of each run's files (out/ablation/<part>/ by default)")
+    p.add_argument("--workers", type=int, default=1, metavar="N", help="runs side by side (default 1)")
+    p.add_argument("--json", type=Path, metavar="FILE", help="also write every run's rows as JSON")
+    p.add_argument("--markdown", type=Path, metavar="FILE", help="also write the table as Markdown")
+    p.set_defaults(func=_run_ablation)
+
+
+def _run_ablation(args) -> int:
+    for target in (args.json, args.markdown):
+        if target:
+            check_output(target)
+    names = [n.strip() for n in args.parts.split(",") if n.strip()] if args.parts is not None else None
+    only = [k.strip() for k in args.only.split(",") if k.strip()] if args.only is not None else None
+    result = ablation.run(ablation.choose(names), only, args.out, args.workers,
+                          on_done=lambda name: print(f"ablation: {name} done", file=sys.stderr))
+    table = ablation.format_table(result)
+    print(table)
+    if args.json:
+        write_json(args.json, result.to_dict())
+    if args.markdown:
+        write_text(args.markdown, table + "\n")
+    failed = [r for rows in [result.baseline, *result.switched.values()] for r in rows if r.error]
+    return 1 if failed else 0
 
 
 def _add_why(sub) -> None:

@@ -183,8 +183,8 @@ def run_items(fn: Callable[..., list], items: Sequence, workers: int = 1, schedu
 # frames a segment of a tracked video is run before its first frame and dropped (``segments``):
 # the tracker's state (smoothing over 5 frames, the prior fits, held lines) mostly forgets a start
 # this far back, and the segment's frames come out as those of one run through the whole clip;
-# where it does not (a hairpin of country.mp4: the fits agree again only after 70+ frames, or
-# never before the segment ends), ``settle_joints`` finds it and runs the segment again
+# where it does not (on a hairpin the fits may agree again only after many frames, or never
+# before the segment ends), ``settle_joints`` finds it and runs the segment again
 WARMUP_FRAMES = 50
 # a segment is at least this many warm-up lengths long, so the warm-up costs at most ~1/8 more
 MIN_SEGMENT_WARMUPS = 8

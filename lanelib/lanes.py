@@ -437,7 +437,7 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
     for a quarter of them). A single line, a dashed one or texture is returned unchanged. The
     stripes are fitted with a shared curve rather than split at the residuals of one fit: on a
     tight bend a short line's one fit misses the curve, the residuals of the two stripes run into
-    each other and the gap looks filled (country.mp4's hairpins).
+    each other and the gap looks filled.
 
     Far ahead the two stripes blur into one blob (a few raw pixels hold both, stretched by the
     bird's-eye view) that fills the gap, and a line whose blurred rows hold many of its pixels
@@ -1150,10 +1150,8 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     much of the arc it spans: on a drawn 40 m bend the outer line, seen longer, read 0.0253 and
     the inner one 0.0224 1/m). Divided by the share, the two lines may still part by a
     curvature difference's dk * L**2 / 2 over the look-ahead's L that shrinks with L, as the
-    width spread's limit does. With the highway's 0.004 1/m over the whole view, the lane of
-    ``country``'s 35 m hairpin was refused in its 9.4 m look-ahead at the bend's start (frames
-    78-79: both lines fitted within 0.1 m of the truth, 0.0051-0.0058 1/m apart), and the
-    tracker went on with fits that left the road for the next 20 frames.
+    width spread's limit does: a fixed limit refuses the true lane of a tight bend seen only
+    in a short look-ahead.
 
     With ``width_reference_px`` (the tracked lane's width, px, on those rows) the spread is
     that of the width's difference from the reference: a grade makes the flat bird's-eye view

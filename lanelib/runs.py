@@ -47,13 +47,13 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 from tqdm import tqdm
 
-from . import cluster, geometry, hough, io
+from . import autogeometry, cluster, hough, io
 from .benchmarks import culane, tusimple
 from .camera import Calibration
 from .config import PipelineConfig, benchmark_config, to_dict
 from .errors import (ConfigError, DecodeStoppedError, GeometryError, InputError, LaneLibError,
                      PartialOutputError, naming_the_file)
-from .geometry import RoadGeometry
+from .autogeometry import RoadGeometry
 from .perspective import DEFAULT_LANE_WIDTH_M
 from .pipeline import LanePipeline, pipeline_for
 from .result import FrameResult, LinesResult
@@ -522,23 +522,23 @@ class GeometryOptions:
 
     Parameters
     ----------
-    lane_width_m, look_ahead_m, dash_m, gap_m, focal_px : as for ``geometry.estimate_geometry``.
+    lane_width_m, look_ahead_m, dash_m, gap_m, focal_px : as for ``autogeometry.estimate_geometry``.
     seconds : of a video read for the estimate, from its start (or from ``start_s``).
     max_frames : frames of those (or of a folder's images) used, evenly spread.
     check_every_s : through a video, the vanishing point is measured this often
-        (``geometry.RoadLineFinder``, about 15 ms a frame); the straight checks refine it
+        (``autogeometry.RoadLineFinder``, about 15 ms a frame); the straight checks refine it
         along the horizon (``GeometryWatch``).
     drift_checks : this many checks in a row with the vanishing point off the horizon (by more
-        than ``geometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
-        for a new estimate from those frames (fewer than ``geometry.MIN_GOOD_FRAMES``, 5, give
+        than ``autogeometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
+        for a new estimate from those frames (fewer than ``autogeometry.MIN_GOOD_FRAMES``, 5, give
         too little confidence for a new estimate to be used).
-    accept_low_confidence : use an estimate below ``geometry.LOW_CONFIDENCE`` (refused otherwise).
+    accept_low_confidence : use an estimate below ``autogeometry.LOW_CONFIDENCE`` (refused otherwise).
     """
 
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
-    look_ahead_m: float = geometry.DEFAULT_LOOK_AHEAD_M
-    dash_m: float = geometry.DEFAULT_DASH_M
-    gap_m: float = geometry.DEFAULT_GAP_M
+    look_ahead_m: float = autogeometry.DEFAULT_LOOK_AHEAD_M
+    dash_m: float = autogeometry.DEFAULT_DASH_M
+    gap_m: float = autogeometry.DEFAULT_GAP_M
     focal_px: float | None = None
     seconds: float = 20.0
     max_frames: int = 50
@@ -554,13 +554,13 @@ class GeometryOptions:
 
     def estimate(self, frames: Sequence[np.ndarray], calibration: Calibration | None,
                  hood_row_px: float | None = None, lens_from_road: bool = True) -> RoadGeometry:
-        """Return ``geometry.estimate_geometry`` of ``frames`` with these options.
+        """Return ``autogeometry.estimate_geometry`` of ``frames`` with these options.
 
         ``lens_from_road``: with no calibration, let the estimate measure the lens from the lane
-        lines' bend (``geometry.estimate_lens``); a run then undistorts with it
+        lines' bend (``autogeometry.estimate_lens``); a run then undistorts with it
         (``geometry_calibration``). Off for callers that cannot undistort with it.
         """
-        return geometry.estimate_geometry(frames, calibration, focal_px=self.focal_px,
+        return autogeometry.estimate_geometry(frames, calibration, focal_px=self.focal_px,
                                           lane_width_m=self.lane_width_m, look_ahead_m=self.look_ahead_m,
                                           dash_m=self.dash_m, gap_m=self.gap_m, hood_row_px=hood_row_px,
                                           lens_from_road=lens_from_road)
@@ -607,7 +607,7 @@ def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration |
     GeometryError
         If the frames give no consistent vanishing point (the reason: no road, too few
         segments, inconsistent, road not straight), or if the estimate's confidence is below
-        ``geometry.LOW_CONFIDENCE`` and ``options.accept_low_confidence`` is off: a low
+        ``autogeometry.LOW_CONFIDENCE`` and ``options.accept_low_confidence`` is off: a low
         confidence result is never used silently.
     """
     frames = sample_frames(source, options.seconds, options.max_frames, start_s)
@@ -624,7 +624,7 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
     ------
     GeometryError
         As ``estimate_road_geometry``: no consistent vanishing point, or a confidence below
-        ``geometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``; the message names
+        ``autogeometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``; the message names
         ``source`` and the fix.
     """
     try:
@@ -643,7 +643,7 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
 def _low_confidence(geo: RoadGeometry, n_frames: int) -> str:
     """Return why ``geo``, estimated from ``n_frames`` frames, is refused for its confidence."""
     return (f"the road geometry estimated from {n_frames} frames ({len(geo.frames_used)} on straight "
-            f"road) has confidence {geo.confidence:.2f}, below {geometry.LOW_CONFIDENCE}")
+            f"road) has confidence {geo.confidence:.2f}, below {autogeometry.LOW_CONFIDENCE}")
 
 
 def geometry_calibration(calibration: Calibration | None, geo: RoadGeometry) -> Calibration | None:
@@ -662,7 +662,7 @@ def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
 # direction: the road's, on average over straight road) from the straight checks' points:
 # at least this many of them, and at least as many as the estimate in use rests on (its
 # ``frames_used``), so that a refinement rests on more straight road than the estimate it corrects
-REFINE_MIN_CHECKS = 2 * geometry.MIN_GOOD_FRAMES
+REFINE_MIN_CHECKS = 2 * autogeometry.MIN_GOOD_FRAMES
 # ... and only when their median lies farther from the point in use than its standard error plus
 # this share of the width: the straight checks' column spreads 0.2-0.55 % of the width from one
 # check to the next (1.9 and 4.0 px on the 960 px P1 clips, 7.0 px on the 1280 px project video:
@@ -689,9 +689,9 @@ class GeometryWatch:
     says what happened and why.
 
     - **Drift.** After ``options.drift_checks`` checks in a row whose point lies off the horizon
-      (``RoadGeometry.horizon_shift_px`` beyond ``geometry.DRIFT_PX`` or 1 % of the height: a
+      (``RoadGeometry.horizon_shift_px`` beyond ``autogeometry.DRIFT_PX`` or 1 % of the height: a
       crest, a dip, a knocked camera) it estimates the geometry from those frames. A failed or
-      low-confidence new estimate keeps the old geometry. A new estimate starts the refinement
+      low-confidence new estimate keeps the old autogeometry. A new estimate starts the refinement
       afresh.
     - **Refinement.** The first estimate's point is where the road headed, on average, in the
       first seconds' straight frames: a gentle curve or the car's wander across its lane puts
@@ -701,7 +701,7 @@ class GeometryWatch:
       as many as the estimate in use rests on, and their median along the horizon lies
       farther from the point in use than its standard error (1.25 x 1.48 x MAD / sqrt(n))
       plus ``REFINE_TOLERANCE`` of the width, the point moves to the median
-      (``geometry.refined_geometry``: the horizon, hood, scale and look-ahead are kept). The
+      (``autogeometry.refined_geometry``: the horizon, hood, scale and look-ahead are kept). The
       next move takes twice as many points (and the median off the new point by as much): the
       checks, half a second apart, follow the car's weave across its lane for seconds, so the
       standard error of n of them is too small until they span several weaves; doubling the
@@ -718,8 +718,8 @@ class GeometryWatch:
         self.calibration = calibration
         self.options = options
         self.every = max(1, round(options.check_every_s * fps))
-        self._finder: geometry.RoadLineFinder | None = None  # built on first use (``finder``)
-        self.tolerance_px = max(geometry.DRIFT_PX, 0.01 * geo.size_px[1])
+        self._finder: autogeometry.RoadLineFinder | None = None  # built on first use (``finder``)
+        self.tolerance_px = max(autogeometry.DRIFT_PX, 0.01 * geo.size_px[1])
         self.refine_tolerance_px = REFINE_TOLERANCE * geo.size_px[0]
         self.refine_min = max(REFINE_MIN_CHECKS, len(geo.frames_used))  # points the next refinement takes
         self.off: deque[np.ndarray] = deque(maxlen=options.drift_checks)
@@ -733,11 +733,11 @@ class GeometryWatch:
         self.notes: list[str] = []
 
     @property
-    def finder(self) -> geometry.RoadLineFinder:
+    def finder(self) -> autogeometry.RoadLineFinder:
         """The frames' vanishing-point finder, built on first use: for the geometry's frame size
         and hood row (a new estimate keeps both: the hood is the car's) and the calibration."""
         if self._finder is None:
-            self._finder = geometry.RoadLineFinder(self.geometry.size_px, lens=self.calibration,
+            self._finder = autogeometry.RoadLineFinder(self.geometry.size_px, lens=self.calibration,
                                                    hood_top_px=self.geometry.hood_row_px)
         return self._finder
 
@@ -873,7 +873,7 @@ class GeometryWatch:
                  f"{abs(median):.1f} px {'right' if median > 0 else 'left'} of the one in use along the horizon "
                  f"(median; standard error {error:.1f} px, tolerance {self.refine_tolerance_px:.1f} px)")
         try:
-            new = geometry.refined_geometry(geo, median, f"vanishing point refined by {median:+.1f} px along the "
+            new = autogeometry.refined_geometry(geo, median, f"vanishing point refined by {median:+.1f} px along the "
                                                          f"horizon from {n} straight checks through the video")
         except GeometryError as e:
             self.notes.append(f"{where}; not refined: {e}")
@@ -1250,7 +1250,7 @@ class FrameWork:
     benchmark : "tusimple" or "culane".
     name : the frame as the labels name it (TuSimple ``raw_file``, CULane list entry).
     image : the image file.
-    sequence : the camera's folder (``frame_sequence``); its frames share one geometry.
+    sequence : the camera's folder (``frame_sequence``); its frames share one autogeometry.
     rows_px : the rows the lanes are given at (TuSimple: the label's ``h_samples``; CULane:
         ``culane.SAMPLE_ROWS_PX``, bottom up).
     target : the frame's own prediction file (TuSimple: a part; CULane: its ``.lines.txt``).
@@ -1501,8 +1501,8 @@ def _sequence_geometry(work: Sequence[FrameWork], calibration: Calibration | Non
     """Return the geometry of one sequence, estimated from up to ``options.max_frames`` of its
     frames, evenly spread, or a ``GeometryFallback`` saying why it is not used: the estimate
     failed (``GeometryError``, or frames it cannot take) or its confidence is below
-    ``geometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``. A value, not an
-    exception, so that a Dask task returns it like a geometry. An image that cannot be read is
+    ``autogeometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``. A value, not an
+    exception, so that a Dask task returns it like a autogeometry. An image that cannot be read is
     left out here (``predict_frame`` reports it)."""
     step = max(1, math.ceil(len(work) / options.max_frames))
     frames = []

@@ -200,7 +200,7 @@ def test_every_subcommand_documents_its_exit_codes(capsys):
         assert "exit codes: 0 every input ran;" in text and "2 nothing was run" in text
         assert "130 interrupted by Ctrl-C" in text
         assert ("every input ran; 1 " in text) == (name in ("images", "hough", "video", "evaluate", "predict",
-                                                                 "scoreboard"))
+                                                                 "scoreboard", "ablation"))
     assert "1 : the run finished but some inputs failed" in main.__doc__
 
 

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import geometry, io, runs
+from lanelib import autogeometry, io, runs
 from lanelib.camera import Calibration, calibrate
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config, save_config
@@ -190,7 +190,7 @@ def _shifted(frame: np.ndarray, dy: float) -> np.ndarray:
 def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     cal, geo = estimate
     frames = runs.sample_frames(CLIP, 6.0, 25)
-    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok]
+    straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok]
     assert len(straight) >= 6
     options = runs.GeometryOptions(check_every_s=0.04)  # every frame; 5 in a row (the default)
     watch = runs.GeometryWatch(geo, cal, options, fps=25.0)
@@ -213,7 +213,7 @@ def test_the_watch_pickles_without_its_maps_and_goes_on_the_same(estimate):
     and the copy checks the next frames as the original does, a new estimate included."""
     cal, geo = estimate
     frames = runs.sample_frames(CLIP, 6.0, 25)
-    straight = [f for f in frames if geometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
+    straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
     watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04), fps=25.0)
     assert watch.check(straight[0], 0, 0.0) is None  # the finder is built
     assert len(pickle.dumps(watch)) < 20_000 < 100 * 20_000 < len(pickle.dumps(watch.finder))
@@ -231,7 +231,7 @@ def test_the_watch_pickles_without_its_maps_and_goes_on_the_same(estimate):
 
 def test_refined_geometry_moves_the_view_along_the_horizon_and_keeps_the_scale(estimate):
     _, geo = estimate
-    new = geometry.refined_geometry(geo, 12.0, "refined by +12 px")
+    new = autogeometry.refined_geometry(geo, 12.0, "refined by +12 px")
     r = math.radians(geo.roll_deg)
     step = np.array([math.cos(r), -math.sin(r)]) * 12.0
     assert np.allclose(np.subtract(new.vanishing_point_px, geo.vanishing_point_px), step)
@@ -242,7 +242,7 @@ def test_refined_geometry_moves_the_view_along_the_horizon_and_keeps_the_scale(e
     assert new.yaw_deg < geo.yaw_deg and new.assumptions[-1] == "refined by +12 px"
     assert geo.horizon_shift_px(new.vanishing_point_px) == pytest.approx(0.0, abs=1e-9)
     with pytest.raises(GeometryError, match="outside the frame"):
-        geometry.refined_geometry(geo, -geo.size_px[0] / 2, "")
+        autogeometry.refined_geometry(geo, -geo.size_px[0] / 2, "")
 
 
 class _Points:
@@ -252,7 +252,7 @@ class _Points:
         self.points = iter(points)
 
     def vanishing_point(self, frame):
-        return geometry.VanishingPoint(next(self.points), 20, 20, (), True, "")
+        return autogeometry.VanishingPoint(next(self.points), 20, 20, (), True, "")
 
 
 def test_the_watch_refines_the_point_once_the_evidence_says_so_and_not_back_and_forth(estimate):

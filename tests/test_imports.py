@@ -2,7 +2,7 @@
 
 The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; params (every
 parameter record); io; the stages on arrays (thresholds, lanes, linevote, result, draw); geometry
-(camera, perspective, geometry); data; config; the one-frame engines (pipeline, the basic hough
+(camera, perspective, autogeometry); data; config; the one-frame engines (pipeline, the basic hough
 pipeline); the tracker; runs, evaluate, bench, synth, benchmarks; the scoreboard; widgets; cli.
 A module imports only from its own layer or below, never from above, and every import is at
 module level (a function-level import hides a cycle instead of removing it). An import under
@@ -181,14 +181,14 @@ LAYERS = [
     {"lanelib.params"},                     # every parameter record (imports only errors)
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.lanes", "lanelib.linevote", "lanelib.result", "lanelib.draw"},  # stages
-    {"lanelib.camera", "lanelib.perspective", "lanelib.geometry"},
+    {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry"},
     {"lanelib.data"},
     {"lanelib.config"},                     # nests the records of params; JSON and presets
     {"lanelib.pipeline", "lanelib.hough"},  # the one-frame engines: advanced, basic
     {"lanelib.tracking"},                   # the tracker loop over a LanePipeline
     {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
      "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: runs' frames explained
-    {"lanelib.scoreboard"},                 # measures with runs, evaluate and the benchmarks
+    {"lanelib.scoreboard", "lanelib.ablation"},  # measure with runs, evaluate and the benchmarks
     {"lanelib.widgets"},
     {"lanelib.cli", "lanelib.__main__", "lanelib"},
 ]
@@ -208,3 +208,24 @@ def test_imports_go_down_the_layers(module):
     edges = graph()[0]
     up = sorted(t for t in edges[module] if layer_of(t) > layer_of(module))
     assert not up, f"{module} (layer {layer_of(module)}) imports from a layer above it: {up}"
+
+
+# the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it
+CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.lanes", "lanelib.linevote",
+        "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
+        "lanelib.hough", "lanelib.tracking", "lanelib.config", "lanelib.pipeline"}
+EXTENSIONS = ("lanelib.autogeometry",)
+
+
+@pytest.mark.parametrize("module", sorted(CORE))
+def test_the_core_reaches_no_extension(module):
+    """No core module imports an extension, directly or through another module."""
+    edges = graph()[0]
+    seen, todo = set(), [module]
+    while todo:
+        for t in edges.get(todo.pop(), ()):
+            if t not in seen:
+                seen.add(t)
+                todo.append(t)
+    reached = sorted(t for t in seen if any(t == e or t.startswith(e + ".") for e in EXTENSIONS))
+    assert not reached, f"{module} (core) imports the extension modules {reached}"

@@ -104,7 +104,7 @@ def test_a_row_without_its_data_is_skipped_with_the_reason(monkeypatch, tmp_path
 
 
 def test_a_row_that_fails_keeps_its_error_and_the_table_says_so(monkeypatch, tmp_path):
-    def broken(out):
+    def broken(out, settings):
         raise InputError(f"{out}/x.jpg: not an image; replace it")
 
     monkeypatch.setitem(scoreboard.ROWS, "synth-clip", ("synthetic clip", broken))
@@ -216,7 +216,7 @@ def test_scoreboard_real_rows_run_on_the_dev_data(culane_dev, tusimple_dev, udac
 
 
 def test_scoreboard_with_a_failed_row_prints_the_others_and_exits_1(monkeypatch, tmp_path, capsys):
-    def broken(out):
+    def broken(out, settings):
         raise InputError("x.mp4: the video stopped decoding at frame 3; pass a complete video")
 
     monkeypatch.setitem(scoreboard.ROWS, "synth-clip", ("synthetic clip", broken))

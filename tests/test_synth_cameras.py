@@ -10,7 +10,7 @@ import pytest
 from lanelib import io, runs
 from lanelib.camera import Calibration, undistort_points
 from lanelib.cli import main
-from lanelib.geometry import RoadLineFinder, detect_hood, estimate_geometry, estimate_lens
+from lanelib.autogeometry import RoadLineFinder, detect_hood, estimate_geometry, estimate_lens
 from lanelib.perspective import Perspective
 from lanelib.synth import (Camera, CarPose, CurvatureProfile, GroundGrid, Layout, Look, Renderer, Scene,
                            camera_truth, lane_truth, load_video_truth, video_sets, write_video)

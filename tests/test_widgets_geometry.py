@@ -11,7 +11,7 @@ import pytest
 
 from lanelib import io, runs, widgets
 from lanelib.errors import GeometryError, InputError
-from lanelib.geometry import estimate_geometry
+from lanelib.autogeometry import estimate_geometry
 from lanelib.perspective import Perspective, PerspectiveConfig
 from lanelib.widgets.perspective import ESTIMATE_LABELS, _values, carried_car_x
 

@@ -15,7 +15,7 @@ x = 671, right of the image centre).
 Other cameras: ``Camera.pinhole`` builds an ideal (or mildly distorted) camera of any size, focal
 length and mounting, including a roll about the optical axis (``roll_deg``, 0 for the bundled
 camera, which stays the same bit for bit). ``vanishing_point_px`` and ``horizon_px`` give the
-geometry that ``lanelib.geometry`` estimates from the road.
+geometry that ``lanelib.autogeometry`` estimates from the road.
 
 Frames: the car frame has its origin on the road surface below the camera, x to the right,
 y down and z forward, in metres. The road is the plane y = 0.

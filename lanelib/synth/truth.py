@@ -84,7 +84,7 @@ class CameraTruth:
 
     ``roll_deg`` is written to the truth files only when it is not 0 (the bundled camera's files
     do not hold it). ``vanishing_point_px``, ``horizon_px`` and ``birdseye_scale`` give the true
-    road geometry that ``lanelib.geometry`` estimates.
+    road geometry that ``lanelib.autogeometry`` estimates.
     """
 
     camera_matrix: tuple[tuple[float, ...], ...]

@@ -14,7 +14,7 @@ frame, the bird's-eye view, colour conversions, the lane mask) is computed once 
   (``src.tl.x``, ..., ``dst.left_x``, ...; ``set_points``), the symmetric shortcut (top y, top
   width, bottom width, centre x, dst margin) and clicks on the preview (``ipyevents``) that place
   the four src corners, and "estimate from this clip/frame" (``estimate``, ``set_geometry``:
-  the road geometry of ``lanelib.geometry``); the points on the undistorted frame, the
+  the road geometry of ``lanelib.autogeometry``); the points on the undistorted frame, the
   bird's-eye view and the straight-line check.
 - ``FitTuner`` (``widgets/fit.py``): sliding windows (number, margin, minimum pixels), the
   search around a fit and the search's switches (trimming, window histogram, centre side first,

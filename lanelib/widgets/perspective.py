@@ -18,7 +18,7 @@ from ..camera import Calibration, FastBirdseye, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
 from ..errors import GeometryError, InputError, LaneLibError
-from ..geometry import LOW_CONFIDENCE, RoadGeometry
+from ..autogeometry import LOW_CONFIDENCE, RoadGeometry
 from ..perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
                            straight_line_check, trapezoid_src)
 from .base import Tuner, row, sized

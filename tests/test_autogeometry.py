@@ -1,4 +1,4 @@
-"""Tests of lanelib.geometry: the road geometry estimated from frames, against the true geometry of
+"""Tests of lanelib.autogeometry: the road geometry estimated from frames, against the true geometry of
 synthetic cameras (issue 15, point 3), and its errors on frames that show no usable road.
 
 Every camera sees the same straight road (a yellow solid line left, dashed white lines right, a
@@ -16,10 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import geometry
+from lanelib import autogeometry
 from lanelib.camera import Calibration, undistort_points
 from lanelib.errors import GeometryError, LaneLibError
-from lanelib.geometry import LOW_CONFIDENCE, RoadGeometry, RoadLineFinder, estimate_geometry, vanishing_point
+from lanelib.autogeometry import dashes as dash_period
+from lanelib.autogeometry import LOW_CONFIDENCE, RoadGeometry, RoadLineFinder, estimate_geometry, vanishing_point
 from lanelib.config import PipelineConfig
 from lanelib.evaluate import evaluate_video
 from lanelib.io import VideoReader, read_image
@@ -201,7 +202,7 @@ def test_an_implausible_camera_height_is_said_and_distrusted(estimates):
     says so and its confidence falls below LOW_CONFIDENCE (a wrong pairing of the lines does the same)."""
     _, frames, _ = estimates["bundled"]
     geom = estimate_geometry(frames, lens=lens_of(Camera()), lane_width_m=0.6)
-    assert geom.camera_height_m < geometry.CAMERA_HEIGHT_RANGE_M[0]
+    assert geom.camera_height_m < autogeometry.CAMERA_HEIGHT_RANGE_M[0]
     assert any(a.startswith("implausible") for a in geom.assumptions)
     assert geom.low_confidence
 
@@ -312,7 +313,7 @@ def test_vanishing_point_of_one_frame(estimates):
     frame = Renderer(STRAIGHT, GroundGrid.build(tilted)).render(POSES[0])
     shift = geom.horizon_shift_px(RoadLineFinder(tilted.size_px).vanishing_point(frame).point_px)
     expected = tilted.vanishing_point_px()[1] - camera.vanishing_point_px()[1]    # 19 px higher
-    assert shift == pytest.approx(expected, abs=1.5) and -shift > geometry.DRIFT_PX
+    assert shift == pytest.approx(expected, abs=1.5) and -shift > autogeometry.DRIFT_PX
 
 
 # --------------------------------------------------------------------------- bad input
@@ -400,7 +401,7 @@ def test_the_dash_length_model_allows_for_blur_and_ignores_markers_and_merged_ru
     merged_q, merged = np.array([0.02]), np.array([3 * a + b * 0.02 ** 2])
     centre = np.concatenate([q, markers_q, merged_q])
     length = np.concatenate([dashes, markers, merged])
-    got_a, got_b = geometry._dash_length_model(centre, length)
+    got_a, got_b = dash_period._dash_length_model(centre, length)
     assert got_a == pytest.approx(a, rel=0.02) and got_b == pytest.approx(b, rel=0.05)
     own = markers - got_b * markers_q ** 2
-    assert np.all(own < geometry.DASH_LENGTH_WINDOW[0] * got_a)
+    assert np.all(own < dash_period.DASH_LENGTH_WINDOW[0] * got_a)
