@@ -1,201 +1,77 @@
-"""Lane tracking across video frames: sanity checks, smoothing, fall back and reset.
+"""Lane tracking across video frames: search near the track, check, infer, smooth, hold, reset.
 
 ``LaneTracker.update(frame)`` runs one frame through a ``LanePipeline`` and returns a
 ``FrameResult`` whose fits are the tracked (smoothed) lane, so ``LanePipeline.annotate`` and the
 debug composite work on it unchanged. Per frame:
 
-1. **Search.** Around the tracked lane when the previous frame was accepted (``method`` "prior");
-   sliding windows when the tracker is lost or reset ("windows"), started from the tracked lines'
-   positions when there is a track. A prior search that fails the checks is retried with sliding
-   windows on the same mask. **Re-acquisition**: a line inferred (step 3) in the last
-   ``reacquire_after_frames`` accepted frames or more, not kept in this one, is looked for again
-   in a band around its inference whose half width grows with the frames it has been inferred
-   (twice ``prior_margin_px``, then one ``prior_margin_px`` more a frame, up to
-   ``reacquire_band_m``): the inference drifts from the road while nothing shows the line (on
-   ``country`` the lane's width changes in the flat view over a crest, and the returning right
-   paint lay 0.7-1.3 m outside the line inferred for 40 frames, beyond the 60 px prior band;
-   found there, it is still refused by the pair's checks, rightly by what the frame shows: the
-   flat view widens the lane ahead over the dip beyond the crest, and no stripes tell that grade).
-   The line is searched within ``prior_margin_px`` of the inference moved across to the pixels
-   nearest it that could be a line (``min_line_pixels`` in a bin ``prior_margin_px`` wide), so a
-   brighter verge or barrier farther out is not preferred to the paint; the line found
-   must pass every check below, against a jump limit as wide as the band (the tracked line
-   was inferred: its distance from the paint is the inference's error, not a jump), so the
-   pair's checks with the seen line (width at the car, parallel, curvatures) decide. A line
-   that is seen but stops short of the car (``max_gap_m``) still counts as inferred there.
-   With a track the search reads only the look-ahead that keeps the
-   tracked lines in the view (``lanes.lookahead_top_px``: shorter on a tight bend), at most
-   ``lookahead_growth_m`` beyond the rows the track was measured on (``lookahead_top_px``), and
-   the checks compare the lines over those rows only. Without a track, a whole view that gives
-   no lane is searched again in shorter views (``LanePipeline.short_view_search``).
-   **The road seen from the car.** With a track, when the checks refuse a line, the look-ahead
-   is also cut where the tracked lane's interior stops looking like the road near the car
-   (``road_view_top_px``, ``lanes.road_view_top_px``: more saturated than the road's surface
-   just ahead, over ``road_view_run_m`` of rows): beyond a crest, or a car or anything else
-   standing on the road, the far rows hold grass, a barrier or other stretches of the road
-   farther round a bend, and the lines' fits follow them (on ``country`` a left line curving
-   right over the crest, a right line off at the top: refused as not parallel or bent, the lane
-   was inferred, held and lost). The lane is searched again around the track (or with windows
-   from it) in that shorter view, like a tight bend's, and kept when both its lines pass (one
-   line kept from a shorter view set off longer chains of inferred lines on unbundled country
-   clips). Only then: a frame whose lines pass samples nothing and is never cut short (cut on
-   every frame, the look-ahead of a tight bend whose verge the track's loose interior took in
-   was cut too, and an unbundled country clip fell from 93 to 76 % of points).
-2. **Checks.** The plausibility checks every found lane passes, image or video
-   (``lanes.LaneChecks``, ``PipelineConfig.checks``), by the same functions ``LanePipeline.detect``
-   uses. Each line alone (``lanes.line_problem``): its pixels may not fill more than
-   ``max_band_fill`` of the band they were searched in (a bright verge is not a line), nor spread
-   across it like texture (``max_band_scatter``; a double line's two narrow stripes are not
-   texture, ``LineFit.stripe_scatter_px``). Each line against the track (this module's
-   own checks, ``TrackerConfig``): its position at the car may not move more than ``max_jump_m``
-   (from a line inferred long enough to be re-acquired, step 1: the re-acquisition band's half
-   width) and its shape may not bend away from the tracked line by more than ``max_bend_m``, over
-   the look-ahead's rows on which both lie in the view (``_bend_rows``: a tight bend's lines
-   leave the view sideways before the shortest look-ahead's top row, and beyond that row the
-   two fits' extrapolations are compared, not anything seen). The pair
-   (``lanes.pair_problem``): lane width at the car within ``min_width_m`` to ``max_width_m``, the
-   lines roughly parallel (the width varies by at most ``max_width_spread_m`` from the bottom to
-   the top row) and their curvatures consistent (differ by at most ``max_curvature_diff_per_m``;
-   both limits scaled to the look-ahead's share of the view).
-   With a track the pair's width is compared row by row with the tracked width
-   (``width_reference_px``: a grade widens or narrows the flat view's lane ahead, and the track
-   follows it), unless the newest accepted frame inferred a line: that width ahead is only
-   carried over from older frames (``_width_reference``). A line is not checked for bending
-   away from a tracked line that was inferred, not seen; and when both lines bend away from
-   the track alike and pass the pair's checks on their own, the road changed faster than the
-   smoothed track and both are kept (``_pair_outvotes_track``). A pair refused as not parallel against the track is kept when
-   it is parallel on the road ahead's grade: its width changes along the view as the seen
-   double line's two stripes' spacing does (``grade_pair_check``). A line whose pixels stop
-   more than ``max_gap_m`` short of the view's bottom row (``lanes.LineFit.gap_px``: its paint
-   near the car in an overpass's shade or worn away) is seen only far ahead; its position at
-   the car would be an extrapolation (on ``shadows`` lines seen only 14-20 m ahead put the
-   reported line 45-65 px off at the car in the raw image, false lines by the TuSimple rule).
-   **On a bend** the limit is ``near_gap_m`` (``_gap_limits_m``) for a line whose paint reached
-   the car in the newest accepted frames (``_gap_limit_m``), when the tracked line bends by more
-   than ``near_gap_bend_m`` over the gap (``|a| * gap**2``: the part of the extrapolation that
-   rests on the fitted curvature, the least certain coefficient of a line seen over a few
-   metres) and the other line of the frame reaches the car within ``near_gap_m``: a tight
-   bend's line sweeps sideways across the flat view faster ahead than a parabola does, and
-   its fit over the far rows, extrapolated a few metres to the car, is off there. On a straight
-   road (a dashed line's gaps) or when the other line stops short of the car too, the
-   limit stays ``max_gap_m`` (joined to the track alone, such a line drifted from the road
-   while the car moved under an overpass on ``shadows``).
-   With a track it is kept where it was seen if it lies within ``max_jump_m`` of its tracked line there, and joined
-   nearer the car (one second-order fit to both) to the line inferred from the other line
-   (step 3) when that one reaches the car, or else to its tracked line; otherwise it is refused.
-   Without a track it is taken as ``LanePipeline.detect`` takes it. When the pair fails but a
-   track exists, the line with the higher confidence is kept. A detection that lost a line to the checks is kept in the result's
-   ``rejected``.
-3. **One line lost.** The other line is inferred from the kept one and the tracked lane: the
-   kept line moved along its normal by the tracked lane's normal width on each row
-   (``lanes.normal_width_m``, ``lanes.offset_line``; a grade's widening of the flat view's lane
-   ahead, which the track follows, is carried over): the kept line's shape (the lines of a
-   lane are parallel; the tracked difference of their shapes was measured on older frames, and
-   on a bend that tightens or opens it bends the inferred line off the lane ahead), not shifted
-   by a constant x (on a 35 m bend the two differ by half a metre 20 m ahead). When the kept
-   line is a double line whose two stripes show on enough rows (``TrackerConfig.stripe_spread``),
-   the width ahead is the width at the car scaled as the stripes' spacing: the tracked
-   width ahead is only as new as the last frame that saw both lines.
-   The width at the car is not the tracked lane's but the median of the normal widths at the car
-   of the last ``smooth_frames`` frames that saw both lines reaching the car (``seen_width_m``;
-   the tracked width on the other rows is scaled to it), but not of a frame in which a line
-   reached it only by an extrapolation that rests on the curvature (``_bent_gap``: its pixels
-   stop more than ``near_gap_m`` short of the view's bottom row where its tracked line bends by
-   more than ``near_gap_bend_m`` over the gap; the paint near the car in a tree's shade on a
-   bend, and the other line's too, so neither was joined in step 2): its width at the car is
-   no measurement, and the median would carry its error into the lines inferred later.
-   Once one line is inferred, the
-   tracked lane holds inferred lines, and a width read back from them each frame drifts (on a
-   bend that turns from frame to frame by 0.26 m in 24 frames on drawn lines; on a 4.4 m
-   country lane whose left line went unseen for 200 frames from 4.4 to 2.8 m, the search then
-   looking for the line 1.5 m beside it).
-   Its confidence is half the kept line's.
+1. **Search.** Around the predicted lane when the previous frame was accepted ("prior"), with
+   sliding windows from the track's lines otherwise ("windows"); a prior search that fails its
+   checks is retried with windows on the same mask. With a track the look-ahead keeps the
+   tracked lines in view (``lanes.lookahead_top_px``: shorter on a tight bend), growing by at
+   most ``lookahead_growth_m`` a frame beyond the rows the track was measured on. Without a track
+   a whole view that gives no lane is searched again in shorter views
+   (``LanePipeline.short_view_search``). **Re-acquisition**: a line inferred for
+   ``reacquire_after_frames`` frames is looked for in a band around its inference that widens
+   with the frames it has been inferred (up to ``reacquire_band_m``), since an inference drifts
+   while nothing shows the line; the line found there passes every check, with a jump limit as
+   wide as the band. **The road seen from the car** (``road_view_run_m``): when a line is
+   refused, the look-ahead is also cut where the lane's interior stops looking like the road
+   near the car (beyond a crest, a vehicle on the road) and the lane is searched again there.
+2. **Checks.** Every found lane passes the checks ``LanePipeline.detect`` uses
+   (``lanes.LaneChecks``): each line alone (``lanes.line_problem``: not a bright patch that fills
+   its band, not texture), each line against the track (``max_jump_m`` at the car,
+   ``max_bend_m`` in shape over the rows where both lie in view), and the pair
+   (``lanes.pair_problem``: width at the car, parallel, equal curvatures; with a track the width
+   is compared row by row with the tracked width, which carries a grade's change of the flat
+   view). A pair whose lines both bend from the track alike and pass the pair's checks outvotes
+   the track. A pair refused as not parallel is kept when its width changes as a seen double
+   line's stripe spacing does (``grade_pair_check``). A line whose pixels stop more than
+   ``max_gap_m`` short of the car is an extrapolation there: with a track it is kept where
+   seen and joined near the car to the inferred or tracked line (on a bend, within
+   ``near_gap_m``), otherwise refused. When the pair fails, the line with the higher confidence
+   is kept. A detection that lost a line to the checks is kept in the result's ``rejected``.
+3. **One line lost.** The other line is inferred from the kept one: moved along its normal by
+   the lane's width (``lanes.offset_line``), so it has the kept line's shape. The width at the
+   car is the median of the widths seen at the car in the last ``smooth_frames`` frames that saw
+   both lines (``seen_width_m``), since a width read back from inferred lines drifts; ahead it
+   follows the tracked width, or a seen double line's stripe spacing (``stripe_spread``). Its
+   confidence is half the kept line's.
 4. **Smoothing.** The reported fit is a weighted average of the fits accepted in the last
-   ``smooth_frames`` frames, weight = ``recency_decay ** age`` times the line's confidence.
-   Why a weighted average and not a Kalman filter on the coefficients: between frames the lane
-   moves with steering and road geometry that the tracker does not observe, so a Kalman filter's
-   motion model would be "constant coefficients plus tuned noise", which is an exponential filter
-   with a gain to tune; the averaging window does the same with two plain parameters, has a
-   bounded memory (nothing older than ``smooth_frames`` frames survives, so a reset is clean)
-   and a lag that is easy to state (about one frame at the defaults). Weighting by confidence
-   gives it the one thing a Kalman filter would add: a poor detection moves the lane less.
-   Averaging coefficients is averaging the curves row by row, since x(y) is linear in them.
-5. **Hold and reset.** With no acceptable line the last tracked lane (as predicted, step 7) is
-   reported for up to ``hold_frames`` frames with a confidence falling linearly to zero; then
-   the tracker resets and reports no lane until a pair passes the checks again. A frame in which
-   no search saw any line at all (under an overpass, on a stretch without paint) does not count
-   toward ``hold_frames``: up to ``blind_hold_frames`` such frames are held beside them (logged
-   and drawn as held all the same), since nothing contradicts the track there; a frame whose
-   lines were seen and refused counts. The confidence falls with both.
-   **Restart from one line.** Without a track one line alone starts none (a confident wrong
-   lane is worse than none), except soon after a reset: in the ``restart_frames`` frames after
-   the reset of a track that saw both lines at the car, a line that passes every line check,
-   reaches the car (``max_gap_m``) and lies within ``restart_distance_m`` there of the lost
-   track's line on its side (seen, not inferred, in its newest accepted frame), and that agrees
-   with such a line of the previous frame (within ``max_jump_m`` at the car and ``max_bend_m``
-   in shape: a lone line's shape has no pair to check it), restarts the lane. The other line is
-   inferred as in step 3 at the width seen at the car before the loss (``seen_width_m``,
-   remembered through the reset), parallel to the seen line or widened ahead as its double
-   stripes (the lost track's shape ahead is as old as the loss); ``sources`` say "inferred" for
-   it. When both lines lie where the lost track's were but fail the pair's checks, neither
-   restarts. A track so restarted that is lost before it sees both lines at the car is not
-   restarted again (restarts do not chain). On ``country`` the right line's paint is missing
-   for some 40 frames beyond the S-bend after the crest while the double left line shows; the
-   lane held there was reset, and 33 frames reported no lane.
-6. **History of bases** (``base_history_frames``, off by default). The lines' x on the bottom
-   row in the last accepted frames is kept, and survives a reset. When the windows start from
-   the histogram (no track) and a base's peak stands out less than ``min_base_peak``
-   ((peak - mean) / mean, ``lanes.base_peak_confidence``), the windows are run again from the
-   median of that history for the weak side, and the search that passes more lines is kept.
-7. **Trend.** The smoothed lane lags the road by about a frame, which on an S-bend puts the
-   search and the checks beside the lane. From the third accepted frame on, the lane that is
-   searched around, checked against and held (``predicted_lane``) is the smoothed lane moved
-   along the trend of the lane's centre line over the last ``trend_frames`` accepted frames, to
-   the frame being tracked; the reported lane of an accepted frame stays the smoothed one (moved
-   too, it carries the trend's noise into every frame: the offset error on every bundled clip
-   grew, e.g. ``project`` 1.5 -> 2.0 cm median).
-
-8. **The asphalt edge.** When a search's best lane has one line and no paint at all on the
-   other side (a country road whose right side is only the asphalt edge, then grass or gravel),
-   the unpainted edge on that side is taken as the line (``LanePipeline.edge_search``,
-   ``lanes.road_edge``) if the pair passes every check above. With a track only where the
-   track's line on that side was an edge already (what the search found there failed the checks
-   and is dropped for it, ``_edge_candidate``). The result's ``sources`` say "edge" for it
-   ("seen", "inferred", "held" for the others).
-   **A painted line that fades out** is not moved out to the asphalt edge beyond it: the paint
-   runs a shoulder inside the edge (``sets.country_layout``: 0.35 m; real roads: a shoulder of
-   some width, constant along a stretch). While both lines are seen at the car, the tracker
-   measures each painted line's shoulder (``_shoulder_beside``; on one frame of each
-   ``shoulder_every``, by the frame's number in the video): the asphalt edge is looked for
-   from the paint out to ``EdgeConfig.max_shoulder_m`` beyond it on the rows within
-   ``shoulder_near_m`` of the car (``lanes.road_edge`` from the line, the road read between the
-   lines), and where it is clearly found (edge points on half the rows, at one distance from the
-   paint's pixels within ``shoulder_spread_m``) the median distance is remembered; the shoulder
-   is the median of the last ``shoulder_frames`` measurements once half of them are in and agree
-   within ``shoulder_spread_m`` (``shoulder_m``). When that line's paint then fades (no line
-   kept there for ``reacquire_after_frames`` frames; or a line seen there only ahead, the
-   paint returning: its pixels stop more than ``return_gap_m`` short of the view's bottom row;
-   or one that is the asphalt edge itself, less than half the shoulder inside
-   it: the grass beside the edge passed for a line, ``_faded_side``), the edge is looked for the
-   shoulder (plus or minus the line's jump limit) beyond the line inferred from the other one,
-   and the line is placed the shoulder inside it where it is seen, joined beyond to the
-   inference (``LanePipeline.edge_search`` with ``shoulder_m``), or, where the search has
-   pixels on that side (the returning paint), joined nearer the car to them (``_joined_paint``:
-   the paint where it is seen, the edge near the car; tried first, the other if it fails); it
-   is kept when the pair then
-   passes every check against the track, and its ``sources`` say "shoulder" (logged; "shoulder"
-   in ``retries``). Such a line is not paint seen: it does not end the line's run of missing
-   paint (nor does paint seen only beyond ``return_gap_m``), nor give a width seen at the car
-   (step 3). Without a measured shoulder, or where the
-   edge is not found or the pair fails, the line is inferred as in step 3. On ``country``
-   (frames 173-205, the right paint missing) the right line so placed lies 0-13 cm outside the
-   truth at the car, where the inferred one lay 23-46 cm inside it: the shoulder was measured on
-   the crest, whose flat view compresses the road across (0.26 m for 0.35 m). Frames 206-225:
-   the paint returns beyond the crest into a sag, seen only 3-10 m ahead, where the flat view
-   widens the lane ahead; extrapolated to the car, or joined to the inference, it lay 15-47 cm
-   inside the truth there, and the reported line 65-86 cm inside it at the view's far end
-   (13 false lines in 210-223); joined to the returning paint the reported line lies 0-5 cm
-   outside the truth at the car and 7-24 cm inside it at the far end (none).
+   ``smooth_frames`` frames, weight ``recency_decay ** age`` times the line's confidence. A
+   weighted window and not a Kalman filter: the tracker does not observe the steering or the
+   road that move the lane between frames, so a Kalman filter's motion model would be "constant
+   coefficients plus tuned noise", an exponential filter with a gain to tune; the window has two
+   plain parameters, a bounded memory (a reset is clean) and a lag of about a frame, and the
+   confidence weights let a poor detection move the lane less. Averaging coefficients averages
+   the curves row by row, since x(y) is linear in them.
+5. **Hold and reset.** With no acceptable line the predicted lane is reported for up to
+   ``hold_frames`` frames with a confidence falling to zero; then the tracker resets and reports
+   no lane until a pair passes the checks. Frames in which no search saw any line at all (under
+   an overpass) are held for up to ``blind_hold_frames`` beside them, since nothing contradicts
+   the track. **Restart from one line**: in the ``restart_frames`` frames after a reset, a line
+   that passes every line check, reaches the car, lies within ``restart_distance_m`` of the lost
+   track's line on its side and agrees with such a line of the previous frame restarts the lane,
+   the other line inferred (restarts do not chain). **Pitched start**: without a track, a pair
+   refused only as not parallel that is a lane in a pitched flat view
+   (``lanes.pitched_pair_problem``) and agrees with the previous frame's starts the track
+   (``pitched_start_frames``).
+6. **History of bases** (``base_history_frames``, off by default): when the windows start from a
+   weak histogram peak (``min_base_peak``), they are run again from the median of the recent
+   accepted bases, and the search that passes more lines is kept.
+7. **Trend.** The lane searched around, checked against and held (``predicted_lane``) is the
+   smoothed lane moved along the trend of its centre line over the last ``trend_frames`` accepted
+   frames, since the smoothed lane lags the road by about a frame; the reported lane of an
+   accepted frame stays the smoothed one, which does not carry the trend's noise.
+8. **The asphalt edge.** When a lane has one line and no paint at all on the other side, the
+   unpainted asphalt edge there is taken as the line if the pair passes every check
+   (``LanePipeline.edge_search``); ``sources`` says "edge". **A painted line that fades out** is
+   placed its measured shoulder inside the asphalt edge: while both lines are seen, each painted
+   line's distance out to the asphalt edge is measured near the car (on one frame in
+   ``shoulder_every``) and remembered (``shoulder_frames``, agreeing within
+   ``shoulder_spread_m``); when the paint then fades, the line is placed that far inside the
+   edge where the edge is seen, joined beyond to the inference or nearer the car to returning
+   paint (``return_gap_m``), and kept when the pair passes its checks; ``sources`` says
+   "shoulder".
 
 Confidence per line (0-1): ``result.line_confidence`` of the accepted detection (span of rows
 covered times pixel support), half the other line's for an inferred line, the last value times
@@ -357,9 +233,8 @@ class LaneTracker:
         fitted by a straight line in the frame number, and both lines are moved by that rate
         times the frames from the average's time to ``frame`` (the width is kept). While the lane
         is not seen the trend is followed no further than the frame after the last accepted
-        one: nothing is known about the road beyond it (followed through a whole hold, the held
-        lane drifted so far that on ``shadows`` the lines coming back after the overpass were
-        refused as bent 1.4-1.9 m away from it).
+        one: nothing is known about the road beyond it, and a held lane that followed the trend
+        through a whole hold would drift from the lines that come back.
 
         Parameters
         ----------
@@ -629,8 +504,7 @@ class LaneTracker:
         distance from their median) within ``shoulder_spread_m``. With the line's ``pixels``
         ((ys, xs) of the search) the distance on a row is from the median of its pixels on that
         row of the shrunk grid, where it has some: the paint where it is, not a fit of the whole
-        look-ahead (on ``country``'s hairpin the right line's fit lay 5-20 cm outside its paint
-        at the car)."""
+        look-ahead (on a tight bend a fit can lie centimetres outside its paint at the car)."""
         cfg = replace(self.pipeline.config.edge, trace_margin_m=0.0)
         k = cfg.scale
         top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym)))
@@ -669,9 +543,8 @@ class LaneTracker:
         line kept there is seen only far ahead (``max_gap_m``: the paint returning ahead, which
         would be joined nearer the car to the line inferred from the other line); or it is the
         asphalt edge itself, not paint: the edge lies less than half the shoulder beyond it
-        (``_shoulder_beside``; the grass beside the edge can pass for a line in the search's mask:
-        on ``country`` frame 202 the line taken lay 0.42 m outside the truth, the shoulder
-        0.35 m)."""
+        (``_shoulder_beside``; the grass beside the edge can pass for a line in the search's
+        mask)."""
         search, left, right = best[:3]
         for i, (fit, other) in enumerate(((left, right), (right, left))):
             if other is None or self._edge[i] or not self._faded_run[i] or search.edge[i] or search.shoulder[i]:
@@ -731,9 +604,9 @@ class LaneTracker:
         on each row between the paint's nearest (all but ``lanes.NEAR_SHARE`` of its pixels lie
         above it) and the view's bottom row: the paint where it is seen, the edge near the car,
         where the paint is missing. Extrapolated to the car, or joined to the line inferred from
-        the other line, the paint seen only 5-10 m ahead in a sag beyond a crest lay 15-47 cm
-        inside the truth at the car on ``country`` (the flat view widens the lane ahead there,
-        and the inference does not follow). Its pixel count and rows are the edge's and the
+        the other line, paint seen only a few metres ahead in a sag beyond a crest lies inside
+        the line at the car (the flat view widens the lane ahead there, and the inference does
+        not follow). Its pixel count and rows are the edge's and the
         paint's together (its confidence, ``result.line_confidence``)."""
         ys, xs = np.asarray(pixels[0]), np.asarray(pixels[1], float)
         keep = ys >= top_px
@@ -971,8 +844,8 @@ class LaneTracker:
         those where both lie in the view, and always the bottom row (the car).
 
         The look-ahead keeps at least ``SearchConfig.min_view_fraction`` of the view (9.4 m), but
-        on a tight bend the lines leave the view sideways sooner (on ``country``'s 35 m hairpin
-        after 6-7 m, on an unbundled asphalt-edge clip's tighter bend after 3-4 m). Above that
+        on a tight bend the lines leave the view sideways sooner (on a 35 m bend after a few
+        metres). Above that
         the fit and the track are extrapolations of 2nd-order fits made from different pixels; a
         line that bows with the bend (``SearchConfig.short_bend_resolution``) parts from a
         straighter track there by metres, and was refused as bent although both lay on the
@@ -1065,9 +938,9 @@ class LaneTracker:
         """Return how a line that could restart the lane agrees with one the previous frame
         could have restarted it from on the same side, or None when none agrees: within
         ``max_jump_m`` at the car and ``max_bend_m`` in shape over the view (the checks of a line
-        against its track, step 2). A single line's fit has no pair to check its shape (on
-        ``country``'s S-bend after the crest the double line's fit turned the wrong way beyond
-        20 m, and the next frame's bent 6 m away from it)."""
+        against its track, step 2). A single line's fit has no pair to check its shape: on an
+        S-bend a lone line's fit can turn the wrong way far ahead, and the next frame's then
+        bends metres away from it."""
         for previous_side, coeffs in self._restart_candidates[0]:
             if previous_side != side:
                 continue
@@ -1161,16 +1034,14 @@ class LaneTracker:
 
         None unless the stripes show on at least 4 bands of rows covering half the look-ahead
         (from ``top_px``), their spacing lies within an eighth of ``double_line_px`` (RMS) of
-        the straight line, and the scale at the look-ahead's top is 0.7-2.5: on ``country``
-        spreads taken from fewer or scattered bands swung the clip's point accuracy from 64 to
-        87 % with the number of bands; with these gates it stays at 82-87 % (78 % without).
+        the straight line, and the scale at the look-ahead's top is 0.7-2.5: a spread read from
+        fewer or scattered bands is noise, and the inferred line would follow it.
         The look-ahead is read only down from where the line lies in the view
         (``_in_view_top_px``): on a tight bend the line leaves the view sideways, and above
         that no stripes can show (as the bend check reads only rows in view, ``_bend_rows``).
-        Counted as stripes missing, on ``country``'s hairpin in tree shade (frames 140-147) no
-        spread was read, the pair of seen lines was refused as not parallel (the flat view
-        narrows the lane ahead there by 1 m), the double line was inferred from the right line
-        and drifted 0.3-0.8 m off its paint.
+        Rows where the line is out of view are not counted as stripes missing: on a tight bend
+        in shade no spread would be read, and the double line, inferred from the other line,
+        would drift off its paint.
         """
         spacing = self.pipeline.config.search.double_line_px
         if not spacing:
@@ -1288,10 +1159,8 @@ class LaneTracker:
 
         An inferred line's width ahead is not a measurement: it is the tracked width carried
         over from the last frame that saw both lines (step 3), so on a bend that tightens it is
-        as old as that frame. Against it a pair seen now was refused as not parallel although
-        both lines lay on the lane (``country``'s 35 m hairpin, frames 97-98: 0.67-0.69 m
-        against the track, both lines within 0.14 m of the truth), and the track went on inferring the
-        line from a stale width. Such a pair is checked as a pair on its own, as without a
+        as old as that frame. Against it a pair seen now on the lane would be refused as not
+        parallel, and the track would go on inferring the line from a stale width. Such a pair is checked as a pair on its own, as without a
         track, just as a seen line is not checked for bending away from an inferred one.
         """
         if track is None or self._track_inferred(0) or self._track_inferred(1):
