@@ -31,7 +31,7 @@ demo: $(STAMP)
 NBVAL := $(PY) -m pytest -q -n 2 --dist loadfile --nbval --nbval-current-env --nbval-cell-timeout=300
 
 test: $(STAMP) e2e-deps
-	$(NBVAL) tests notebooks
+	$(NBVAL) --doctest-modules tests notebooks lanelib
 	@$(MAKE) --no-print-directory portability
 
 # The notebooks' outputs must replay on every machine, not only the one that wrote them. Replay

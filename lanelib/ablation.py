@@ -9,8 +9,9 @@ run without it for a part on by default, the run with it minus the baseline for 
 So a positive figure always says the part helps there.
 
 ``verdict`` reads the real rows only (``REAL``): a part is on by default only when it improves a
-real row and worsens none, by more than ``TOLERANCE`` (the figures' rounding). The synthetic rows
-stand beside them; a part that helps only there is no reason to be on.
+real row and worsens none, each by more than the row's resolution (``resolution``: what one frame
+changes on a clip, one line of one frame on a benchmark set; at least the figures' rounding). The
+synthetic rows stand beside them; a part that helps only there is no reason to be on.
 
 ``python -m lanelib ablation`` runs it (``make ablation``; about a minute per part on one core,
 ``--workers`` runs parts side by side).
@@ -33,7 +34,25 @@ HEADLINE = {"culane": "f1_pct", "tusimple": "accuracy_pct", "project": "plausibl
             "challenge": "plausible_pct", "p1-white": "plausible_pct", "p1-yellow": "plausible_pct",
             "synth-culane": "f1_pct", "synth-tusimple": "accuracy_pct", "synth-clip": "point_accuracy_pct"}
 REAL = ("culane", "tusimple", "project", "challenge", "p1-white", "p1-yellow")
-TOLERANCE = 0.1  # percentage points: the figures are rounded to 0.1
+PER_LINE = ("culane", "tusimple", "synth-culane", "synth-tusimple")  # scored line by line
+LINES_PER_FRAME = 4  # about as many lines as a benchmark frame labels
+ROUNDING = 0.1  # percentage points: the figures are rounded to 0.1
+
+
+def resolution(row: Row) -> float:
+    """Return the least change (percentage points) of a row's headline figure that says more
+    than one item of its set: one frame of a clip, one line of one frame of a benchmark set
+    (``LINES_PER_FRAME`` a frame), and at least the figures' rounding.
+
+    Examples
+    --------
+    >>> resolution(Row("tusimple", "TuSimple dev", frames=10)), resolution(Row("challenge", "", frames=484))
+    (2.5, 0.21)
+    >>> resolution(Row("project", "", frames=1260))
+    0.1
+    """
+    items = (row.frames or 1) * (LINES_PER_FRAME if row.key in PER_LINE else 1)
+    return max(ROUNDING, round(100.0 / items, 2))
 
 
 @dataclass(frozen=True)
@@ -127,13 +146,15 @@ class Ablation:
 
     def verdict(self, name: str) -> str:
         """Return what the real rows say of the part: "earns its place" (it improves a real row
-        and worsens none), "worsens a real row", "no effect on the real rows" or "not measured"."""
-        real = [v for k, v in self.effects(name).items() if k in REAL and v is not None]
+        and worsens none, each by more than the row's ``resolution``), "worsens a real row", "no
+        effect on the real rows" or "not measured"."""
+        limit = {r.key: resolution(r) for r in self.baseline}
+        real = [(v, limit[k]) for k, v in self.effects(name).items() if k in REAL and v is not None]
         if not real:
             return "not measured"
-        if any(v < -TOLERANCE for v in real):
+        if any(v < -lim for v, lim in real):
             return "worsens a real row"
-        if any(v > TOLERANCE for v in real):
+        if any(v > lim for v, lim in real):
             return "earns its place"
         return "no effect on the real rows"
 
@@ -214,13 +235,16 @@ def run(parts: Sequence[Part] = PARTS, only: Sequence[str] | None = None, out: s
 
 
 def format_table(ablation: Ablation) -> str:
-    """Return the ablation as a Markdown table: the baseline's headline figures, then per part
-    its effect on each row (percentage points; + helps) and the real rows' verdict."""
+    """Return the ablation as a Markdown table: the baseline's headline figures and each row's
+    resolution, then per part its effect on each row (percentage points; + helps) and the real
+    rows' verdict."""
     keys = [r.key for r in ablation.baseline]
     head = ["part", "switched"] + [ROWS[k][0] for k in keys] + ["real rows say"]
     lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
     base = [f"{v:.1f}" if (v := _headline(r)) is not None else "-" for r in ablation.baseline]
     lines.append("| baseline (headline figure, %) | | " + " | ".join(base) + " | |")
+    res = [f"{resolution(r):g}" for r in ablation.baseline]
+    lines.append("| resolution (one frame or line) | | " + " | ".join(res) + " | |")
     for p in ablation.parts:
         if p.name not in ablation.switched:
             continue

@@ -16,12 +16,12 @@ ON = Part("kept part", ("search.grow_margin_px=0",), True, "on by default")
 OPT = Part("opt-in part", ("thresholds.clahe=true",), False, "off by default")
 
 
-def rows(culane_f1, project_pct, synth_pct, tusimple_skipped=False):
-    return [Row("culane", "CULane dev", figures={"f1_pct": culane_f1, "precision_pct": 80.0}),
+def rows(culane_f1, project_pct, synth_pct, tusimple_skipped=False, tusimple=80.0):
+    return [Row("culane", "CULane dev", frames=120, figures={"f1_pct": culane_f1, "precision_pct": 80.0}),
             Row("tusimple", "TuSimple dev", skipped="no data") if tusimple_skipped else
-            Row("tusimple", "TuSimple dev", figures={"accuracy_pct": 80.0}),
-            Row("project", "Udacity project video", figures={"plausible_pct": project_pct}),
-            Row("synth-clip", "synthetic clip", figures={"point_accuracy_pct": synth_pct})]
+            Row("tusimple", "TuSimple dev", frames=10, figures={"accuracy_pct": tusimple}),
+            Row("project", "Udacity project video", frames=1260, figures={"plausible_pct": project_pct}),
+            Row("synth-clip", "synthetic clip", frames=250, figures={"point_accuracy_pct": synth_pct})]
 
 
 def test_an_effect_is_positive_where_the_part_helps_whether_it_is_on_by_default_or_opt_in():
@@ -35,22 +35,34 @@ def test_an_effect_is_positive_where_the_part_helps_whether_it_is_on_by_default_
     assert ab.verdict(OPT.name) == "worsens a real row"  # its synthetic gain is no reason
     table = ablation.format_table(ab).splitlines()
     assert table[2].split("|")[3:7] == [" 57.5 ", " 80.0 ", " 100.0 ", " 99.0 "]
+    assert table[3].split("|")[3:7] == [" 0.21 ", " 2.5 ", " 0.1 ", " 0.4 "]  # one line, or one frame
     assert "| kept part | off: `search.grow_margin_px=0` | +2.5 | +0.0 | +0.0 | -0.5 | earns its place |" in table
     assert "| opt-in part | on: `thresholds.clahe=true` | +0.0 | - | -1.0 | +1.0 | worsens a real row |" in table
 
 
-def test_verdicts_within_the_rounding_and_without_real_rows():
+def test_a_change_within_a_rows_resolution_says_nothing():
     base = rows(57.5, 100.0, 99.0)
+    # off: CULane F1 0.1 lower, less than one line of its 120 frames; the synthetic clip's loss
     ab = Ablation(base, {ON.name: rows(57.4, 100.0, 90.0)}, (ON,))
     assert ab.verdict(ON.name) == "no effect on the real rows"
-    synth_only = [Row("synth-clip", "synthetic clip", figures={"point_accuracy_pct": 99.0})]
+    # off: CULane 6.5 lower, TuSimple 0.6 higher: less than one line of its 10 frames
+    ab = Ablation(base, {ON.name: rows(51.0, 100.0, 99.0, tusimple=80.6)}, (ON,))
+    assert ab.effects(ON.name)["tusimple"] == -0.6
+    assert ab.verdict(ON.name) == "earns its place"
+    # off: TuSimple 3 points higher, more than one line: the part worsens it
+    ab = Ablation(base, {ON.name: rows(51.0, 100.0, 99.0, tusimple=83.0)}, (ON,))
+    assert ab.verdict(ON.name) == "worsens a real row"
+
+
+def test_verdicts_without_real_rows():
+    synth_only = [Row("synth-clip", "synthetic clip", frames=250, figures={"point_accuracy_pct": 99.0})]
     ab = Ablation(synth_only, {ON.name: synth_only}, (ON,))
     assert ab.verdict(ON.name) == "not measured"
 
 
 def test_a_tusimple_row_with_frames_over_its_time_limit_is_not_compared():
     slow = rows(57.5, 100.0, 99.0)
-    slow[1] = Row("tusimple", "TuSimple dev", figures={"accuracy_pct": 72.0, "over_200ms": 1})
+    slow[1] = Row("tusimple", "TuSimple dev", frames=10, figures={"accuracy_pct": 72.0, "over_200ms": 1})
     ab = Ablation(rows(57.5, 100.0, 99.0), {ON.name: slow}, (ON,))
     assert ab.effects(ON.name)["tusimple"] is None
     assert ab.verdict(ON.name) == "no effect on the real rows"
