@@ -34,7 +34,7 @@ class PipelineConfig:
     draw: DrawConfig = DrawConfig()
     hough: HoughConfig = HoughConfig()
     lines: LinesConfig = LinesConfig()  # every visible line (``detect_lines``, ``predict``)
-    edge: EdgeConfig = EdgeConfig()  # the asphalt edge of a side without paint (``lanes.road_edge``)
+    edge: EdgeConfig = EdgeConfig()  # the asphalt edge of a side without paint (``roads.edge.road_edge``)
 
 
 def to_dict(obj) -> dict:
@@ -211,7 +211,7 @@ def preset(name: str) -> PipelineConfig:
 
     Presets are partial JSON files in ``lanelib/presets/``; the keys they leave out keep their
     defaults. An unknown name raises ``ConfigError`` listing the presets. The road presets set
-    the plausibility checks (``lanes.LaneChecks``) for a kind of road, with the default camera:
+    the plausibility checks (``params.LaneChecks``) for a kind of road, with the default camera:
 
     - ``highway``: the defaults spelled out, lanes of 3.0-4.5 m whose lines' curvatures differ
       by at most 0.004 1/m (a measurement allowance: on a highway's 250 m+ curves a 3.7 m lane's

@@ -48,7 +48,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
     config : colours, opacity, line width, samples per line.
     height_px : height of the bird's-eye view (default: the image's).
     held : the lane is held from earlier frames: area and lines in ``config.held_color``.
-    top_px : the bird's-eye row the lane is drawn from (``lanes.holds_from_px``: where it holds).
+    top_px : the bird's-eye row the lane is drawn from (``checks.holds_from_px``: where it holds).
     """
     if isinstance(to_image, np.ndarray):
         raise InputError("lane_overlay: to_image is a transform of points, not a matrix; pass "

@@ -33,7 +33,7 @@ the official TuSimple score uses (``every_row=False`` here, True there); the nam
 ``line_threshold_px``, ``line_accuracy``, ``score_lines`` and ``LineScores`` are imported from it.
 
 What the errors include: the truth gives the offset and the curvature AT THE CAR, while the
-pipeline (``lanes.measure``) takes the offset on the bird's-eye view's bottom row, about 4.8 m
+pipeline (``fit.measure``) takes the offset on the bird's-eye view's bottom row, about 4.8 m
 ahead of the camera, and the curvature of a parabola fitted over the whole view (4.8 m to 28 m
 ahead). A heading of 0.01 rad therefore adds about 4.8 cm to the offset error, and in a clothoid
 transition the fit reports the mean curvature of the road ahead rather than that at the car.

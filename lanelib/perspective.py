@@ -31,7 +31,8 @@ import numpy as np
 
 from . import io
 from .errors import ConfigError
-from .lanes import SearchConfig, sliding_windows
+from .params import SearchConfig
+from .search import sliding_windows
 # the default points and scale are perspective's public names too (geometry, runs, synth use them)
 from .params.stages import (DEFAULT_DST_1280x720, DEFAULT_LANE_WIDTH_M, DEFAULT_SRC_1280x720,
                              DEFAULT_VISIBLE_LENGTH_M, PerspectiveConfig, Point)

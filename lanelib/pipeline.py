@@ -1,7 +1,7 @@
 """``LanePipeline``: the advanced lane-finding pipeline wired from one ``PipelineConfig``.
 
 One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
-search -> fits -> plausibility checks (``lanes.LaneChecks``, the same as the video tracker's) ->
+search -> fits -> plausibility checks (``params.LaneChecks``, the same as the video tracker's) ->
 measurements -> overlay on the undistorted frame (``detect_lines``: every lane line in view as
 well, for the benchmarks, in a wider and longer view). A lane that fails the checks is not found; what
 it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
@@ -17,13 +17,20 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from . import draw, lanes, linevote, thresholds
+from . import draw, thresholds
 from .camera import Calibration, Undistorter
+from .checks import LaneCheck, check_lane, holds_from_px, search_bands_px
 from .config import PipelineConfig
 from .errors import InputError
-from .lanes import LaneCheck, LaneMeasurement, LaneSearch, LinesConfig, LineFit
+from .fit import least_squares_poly, measure, offset_line
+from .lines import vote
+from .lines.trace import find_lines
+from .params import LinesConfig
 from .perspective import LinesView, Perspective, scaled
+from .records import LaneMeasurement, LaneSearch, LineFit, line_source
 from .result import FrameResult, LinesResult, Rejected, image_line, line_confidence
+from .roads.edge import road_edge
+from .search import candidate_bases, fit_side, histogram, search_around, sliding_windows
 
 
 BAND_STRIPS = 4  # strips in which band_binary computes the bands around prior fits
@@ -114,16 +121,16 @@ class LanePipeline:
 
         The windows start from ``bases``, the lines' x (px) on the bottom row, when given (e.g.
         the tracked lane's), else from the histogram peaks nearest the car. ``top_px`` is the
-        first row of the look-ahead (0: the whole view; ``lanes.lookahead_top_px``).
+        first row of the look-ahead (0: the whole view; ``search.lookahead_top_px``).
         """
         if prior is not None:
-            return lanes.search_around(binary, prior[0], prior[1], self.config.search, top_px)
-        return lanes.sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
-                                     top_px=top_px)
+            return search_around(binary, prior[0], prior[1], self.config.search, top_px)
+        return sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
+                               top_px=top_px)
 
     def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
-        """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
-        return lanes.search_bands_px(search, self.size, self.config.search)
+        """Return the width (px) of the band each line was searched in (``checks.search_bands_px``)."""
+        return search_bands_px(search, self.size, self.config.search)
 
     def line_confidence(self, fit: LineFit) -> float:
         """Return the 0-1 confidence of a fitted line (``result.line_confidence``)."""
@@ -132,14 +139,14 @@ class LanePipeline:
     def measure(self, left: LineFit, right: LineFit) -> LaneMeasurement:
         """Return curvature, radius, offset and lane width in metres for two fits."""
         p = self.perspective
-        return lanes.measure(left, right, self.size[1], self.car_x_px, p.xm_per_px, p.ym_per_px)
+        return measure(left, right, self.size[1], self.car_x_px, p.xm_per_px, p.ym_per_px)
 
     # ---- one frame ------------------------------------------------------------------------
 
     def band_binary(self, raw: np.ndarray, prior: tuple[LineFit, LineFit]) -> np.ndarray:
         """Return the lane-pixel mask of a RAW frame near the ``prior`` fits only (0 elsewhere).
 
-        Inside the bands that ``lanes.search_around`` reads (``prior_margin_px`` either side of
+        Inside the bands that ``search.search_around`` reads (``prior_margin_px`` either side of
         each found prior line) the mask equals ``binary(birdseye(raw))``. The view is cut into
         ``BAND_STRIPS`` horizontal strips; in each, the pieces of band, grown by the border
         ``thresholds.context_px`` asks for, are laid side by side (in x order, so a piece cut by
@@ -234,12 +241,12 @@ class LanePipeline:
         return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
 
     def check(self, search: LaneSearch, turn_back: bool = False) -> LaneCheck:
-        """Return the plausibility checks (``lanes.check_lane``, ``config.checks``) of a search's
-        fits; with ``turn_back``, each line's hook beyond its pixels too (``lanes.turn_back_problem``)."""
+        """Return the plausibility checks (``checks.check_lane``, ``config.checks``) of a search's
+        fits; with ``turn_back``, each line's hook beyond its pixels too (``checks.turn_back_problem``)."""
         p = self.perspective
-        return lanes.check_lane(search.left, search.right, self.search_bands_px(search),
-                                self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks,
-                                search.top_px, self.size[0] if turn_back else None)
+        return check_lane(search.left, search.right, self.search_bands_px(search),
+                          self.size[1], p.xm_per_px, p.ym_per_px, self.config.checks,
+                          search.top_px, self.size[0] if turn_back else None)
 
     def detect(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                keep_images: bool = False) -> FrameResult:
@@ -319,7 +326,7 @@ class LanePipeline:
         The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
         looked for in the lines view (``lines_view``: by default 28 m across and 150 m ahead), masked
         by the rule of the thresholds rescaled to it (not at the edge of the frame), by
-        ``lanes.find_lines`` or ``linevote.vote_lines`` (``LinesConfig.method``), and mapped back to
+        ``lines.trace.find_lines`` or ``lines.vote.vote_lines`` (``LinesConfig.method``), and mapped back to
         the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
         keeps the view ("lines_birdseye") and its mask ("lines_binary"). ``config``: the search's
         parameters (default: ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V``
@@ -347,11 +354,11 @@ class LanePipeline:
         refused: tuple = ()
         if config.method == "vote":
             weights = self.lines_row_weights() if config.row_weight_power > 0 else None
-            weighed = linevote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
-            found = linevote.reported(weighed, config, mask.shape[0], view.ym_per_px)
+            weighed = vote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
+            found = vote.reported(weighed, config, mask.shape[0], view.ym_per_px)
             refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
         else:
-            found = lanes.find_lines(mask, config, view.xm_per_px, view.ym_per_px)
+            found = find_lines(mask, config, view.xm_per_px, view.ym_per_px)
         images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
         return LinesResult(tuple(to_raw(line) for line in found), ego_result, images, refused)
 
@@ -360,7 +367,7 @@ class LanePipeline:
 
         For a frame without a track whose whole view failed its checks: sliding windows over the
         lower ``SearchConfig.short_views`` shares of the view in turn (a tight bend's lane stays
-        in a shorter view; ``lanes.lookahead_top_px``). Its search's ``top_px`` says which.
+        in a shorter view; ``search.lookahead_top_px``). Its search's ``top_px`` says which.
         """
         h = self.size[1]
         for share in self.config.search.short_views:
@@ -375,18 +382,18 @@ class LanePipeline:
         The robust path (``SearchConfig.candidates``), for a frame whose search from the
         strongest peaks failed its checks (a seam, a kerb or a shadow edge took a line): sliding
         windows from each pair of the ``candidates`` strongest peaks on each side
-        (``lanes.candidate_bases``), the pairs with the stronger peaks first, skipping the pair
+        (``search.candidate_bases``), the pairs with the stronger peaks first, skipping the pair
         already tried. Its search's ``method`` is "robust".
         """
         sc = self.config.search
-        hist = lanes.histogram(binary, sc.histogram_fraction)
-        lefts, rights = lanes.candidate_bases(hist, self.car_x_px, sc.candidates, sc.margin_px)
+        hist = histogram(binary, sc.histogram_fraction)
+        lefts, rights = candidate_bases(hist, self.car_x_px, sc.candidates, sc.margin_px)
         pairs = sorted(((l, r) for l in lefts for r in rights),
                        key=lambda p: -(int(hist[int(p[0])]) + int(hist[int(p[1])])))
         for bases in pairs:
             if first.bases_px == bases:
                 continue
-            search = lanes.sliding_windows(binary, sc, bases=bases, car_x=self.car_x_px)
+            search = sliding_windows(binary, sc, bases=bases, car_x=self.car_x_px)
             if self.check(search).ok and search.left.found and search.right.found:
                 return replace(search, method="robust")
         return None
@@ -399,14 +406,14 @@ class LanePipeline:
 
         Only for a search that found one line, which passes its own check, and no paint at all
         on the other side (its fit not found): a painted line that is seen is never replaced.
-        The edge (``lanes.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
+        The edge (``roads.edge.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
         ``bird``, between ``range_m`` from ``guide_px``: by default a lane's width from the found
         line) is then checked with the found line as a lane (``check``: width within the
         road's range, parallel, equally curved) over the rows where the edge is seen (the
         search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
         beyond); its search's ``edge`` flags the side. With ``shoulder_m`` (a painted line faded
         out, ``LaneTracker`` step 8) the line is placed that far inside the edge, along its
-        normal (``lanes.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
+        normal (``fit.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
         (one second-order fit to both), the look-ahead and the other line kept; the search's
         ``shoulder`` flags the side instead, and it is returned unchecked: the tracker checks it
         against its track (the lane's width ahead, which a grade changes in the flat view).
@@ -419,8 +426,8 @@ class LanePipeline:
         if first.left or first.right:
             return None
         p = self.perspective
-        fit, _ = lanes.road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, self.config.checks,
-                                 cfg, search.top_px, guide_px, range_m)
+        fit, _ = road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, self.config.checks,
+                           cfg, search.top_px, guide_px, range_m)
         if not fit.found:
             return None
         h = self.size[1]
@@ -430,11 +437,11 @@ class LanePipeline:
             # it to the guide (one second-order fit to both); the look-ahead and the other line
             # are kept
             inward = -shoulder_m if side == "right" else shoulder_m
-            placed = lanes.offset_line(fit.coeffs_px, inward, p.xm_per_px, p.ym_per_px, h, seen_top)
+            placed = offset_line(fit.coeffs_px, inward, p.xm_per_px, p.ym_per_px, h, seen_top)
             if seen_top > search.top_px and guide_px is not None:
                 near = np.arange(float(seen_top), float(h))
                 far = np.arange(float(search.top_px), float(seen_top))
-                placed = lanes.least_squares_poly(
+                placed = least_squares_poly(
                     np.concatenate([near, far]),
                     np.concatenate([np.polyval(placed, near), np.polyval(guide_px, far)]), 2, float(h))
             return replace(search, **{side: replace(fit, coeffs_px=tuple(placed))},
@@ -447,8 +454,8 @@ class LanePipeline:
         if top > search.top_px:
             ys, xs = search.right_pixels if side == "left" else search.left_pixels
             near = ys >= top
-            refit, _ = lanes.fit_side((ys[near], xs[near]), "left" if side == "right" else "right",
-                                      self.size[1], self.config.search, "no lane pixels")
+            refit, _ = fit_side((ys[near], xs[near]), "left" if side == "right" else "right",
+                                self.size[1], self.config.search, "no lane pixels")
             if not refit.found:
                 return None
             fits["left" if side == "right" else "right"] = refit
@@ -474,7 +481,7 @@ class LanePipeline:
                    for side, fit in (("left", search.left), ("right", search.right)) if not fit.found]
         if check.reason:
             reasons.append(check.reason)
-        sources = tuple(lanes.line_source(search, i) if fit.found else "" for i, fit in enumerate((left, right)))
+        sources = tuple(line_source(search, i) if fit.found else "" for i, fit in enumerate((left, right)))
         return FrameResult(left, right, self.measure(left, right), search.method,
                            self.line_confidence(left), self.line_confidence(right),
                            "; ".join(reasons), search, images if images is not None else {}, rejected,
@@ -497,13 +504,13 @@ class LanePipeline:
 
         ``frame`` is the undistorted frame, or with ``raw`` the RAW frame: the lane is then mapped
         through the lens model onto it (no full-frame undistortion needed). The lines are drawn
-        only from the row where they hold (``lanes.holds_from_px``): not where a fit leaves the
+        only from the row where they hold (``checks.holds_from_px``): not where a fit leaves the
         view, hooks back beyond its paint or meets the other line.
         """
         to_frame = self.birdseye_to_raw if raw else self.perspective.inverse
         held = result.method == "hold"  # held from earlier frames: drawn in the held colour
-        top = lanes.holds_from_px(result.left, result.right, self.size[1], self.size[0],
-                                  self.perspective.xm_per_px, self.config.checks)
+        top = holds_from_px(result.left, result.right, self.size[1], self.size[0],
+                            self.perspective.xm_per_px, self.config.checks)
         out = draw.lane_overlay(frame, result.left.coeffs_px, result.right.coeffs_px, to_frame,
                                 self.config.draw, self.size[1], held=held, top_px=top)
         edges = tuple(side for side, src in zip(("left", "right"), result.sources) if src == "edge")

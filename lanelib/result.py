@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .lanes import LaneMeasurement, LaneSearch, LineFit, SearchConfig, ViewLine
+from .lines.trace import ViewLine
+from .params import SearchConfig
+from .records import LaneMeasurement, LaneSearch, LineFit
 
 
 def line_confidence(fit: LineFit, height_px: int, config: SearchConfig = SearchConfig()) -> float:
@@ -63,7 +65,7 @@ class FrameResult:
     measurements are NaN. A detection that failed the checks is kept apart in ``rejected``, never
     reported as the lane. ``left_conf``/``right_conf`` are 0-1 confidences per line (0 for a line
     not found or rejected). ``sources`` says where each reported line comes from: "seen" (paint
-    found in this frame), "edge" (the unpainted asphalt edge, ``lanes.road_edge``), "shoulder"
+    found in this frame), "edge" (the unpainted asphalt edge, ``roads.edge.road_edge``), "shoulder"
     (a faded painted line placed its measured shoulder inside the asphalt edge,
     ``tracking.LaneTracker`` step 8), "inferred" (from the other line and the tracked width),
     "held" (from earlier frames), "" (no line).
@@ -128,7 +130,7 @@ class ImageLine:
     """One lane line of ``LanePipeline.detect_lines``: where it is seen, in the RAW image.
 
     ``points_px`` is an (N, 2) array of (x, y) px of the line over the span where it has pixels,
-    sorted by y; ``view`` is its fit in the lines view (``lanes.ViewLine``); ``offset_m`` is its
+    sorted by y; ``view`` is its fit in the lines view (``lines.trace.ViewLine``); ``offset_m`` is its
     distance (m) right (+) or left (-) of the car's centre line at the ego view's bottom row.
     """
 
@@ -165,7 +167,7 @@ class LinesResult:
     ``ego`` is the frame's ``FrameResult`` (``detect``): what the overlay, curvature and offset
     use (None when not asked for: ``predict`` needs only the lines); ``lines`` holds every line
     seen, the ego pair's lines among them; ``refused`` the lines the search weighed and did not
-    report, each with why (``LinesConfig.method = "vote"``: ``linevote.vote_candidates``).
+    report, each with why (``LinesConfig.method = "vote"``: ``lines.vote.vote_candidates``).
     """
 
     lines: tuple[ImageLine, ...]

@@ -7,7 +7,7 @@ debug composite work on it unchanged. Per frame:
 1. **Search.** Around the predicted lane when the previous frame was accepted ("prior"), with
    sliding windows from the track's lines otherwise ("windows"); a prior search that fails its
    checks is retried with windows on the same mask. With a track the look-ahead keeps the
-   tracked lines in view (``lanes.lookahead_top_px``: shorter on a tight bend), growing by at
+   tracked lines in view (``search.lookahead_top_px``: shorter on a tight bend), growing by at
    most ``lookahead_growth_m`` a frame beyond the rows the track was measured on. Without a track
    a whole view that gives no lane is searched again in shorter views
    (``LanePipeline.short_view_search``). **Re-acquisition**: a line inferred for
@@ -18,10 +18,10 @@ debug composite work on it unchanged. Per frame:
    refused, the look-ahead is also cut where the lane's interior stops looking like the road
    near the car (beyond a crest, a vehicle on the road) and the lane is searched again there.
 2. **Checks.** Every found lane passes the checks ``LanePipeline.detect`` uses
-   (``lanes.LaneChecks``): each line alone (``lanes.line_problem``: not a bright patch that fills
+   (``params.LaneChecks``): each line alone (``checks.line_problem``: not a bright patch that fills
    its band, not texture), each line against the track (``max_jump_m`` at the car,
    ``max_bend_m`` in shape over the rows where both lie in view), and the pair
-   (``lanes.pair_problem``: width at the car, parallel, equal curvatures; with a track the width
+   (``checks.pair_problem``: width at the car, parallel, equal curvatures; with a track the width
    is compared row by row with the tracked width, which carries a grade's change of the flat
    view). A pair whose lines both bend from the track alike and pass the pair's checks outvotes
    the track. A pair refused as not parallel is kept when its width changes as a seen double
@@ -31,7 +31,7 @@ debug composite work on it unchanged. Per frame:
    ``near_gap_m``), otherwise refused. When the pair fails, the line with the higher confidence
    is kept. A detection that lost a line to the checks is kept in the result's ``rejected``.
 3. **One line lost.** The other line is inferred from the kept one: moved along its normal by
-   the lane's width (``lanes.offset_line``), so it has the kept line's shape. The width at the
+   the lane's width (``fit.offset_line``), so it has the kept line's shape. The width at the
    car is the median of the widths seen at the car in the last ``smooth_frames`` frames that saw
    both lines (``seen_width_m``), since a width read back from inferred lines drifts; ahead it
    follows the tracked width, or a seen double line's stripe spacing (``stripe_spread``). Its
@@ -53,7 +53,7 @@ debug composite work on it unchanged. Per frame:
    track's line on its side and agrees with such a line of the previous frame restarts the lane,
    the other line inferred (restarts do not chain). **Pitched start**: without a track, a pair
    refused only as not parallel that is a lane in a pitched flat view
-   (``lanes.pitched_pair_problem``) and agrees with the previous frame's starts the track
+   (``checks.pitched_pair_problem``) and agrees with the previous frame's starts the track
    (``pitched_start_frames``).
 6. **History of bases** (``base_history_frames``, off by default): when the windows start from a
    weak histogram peak (``min_base_peak``), they are run again from the median of the recent
@@ -85,11 +85,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import lanes
-from .lanes import LaneChecks, LaneSearch, LineFit
+from .checks import gap_problem, line_problem, pair_problem, pitched_pair_problem
+from .fit import least_squares_poly, normal_width_m, offset_line, offset_rows_px, parallel_fits, row_medians
+from .params import LaneChecks
 from .params.roads import TrackerConfig
 from .pipeline import LanePipeline
+from .records import NEAR_SHARE, LaneSearch, LineFit, Window, line_source
 from .result import FrameResult, Rejected
+from .roads.edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
+from .roads.stripes import stripe_spacing_px
+from .search import lane_pixels, lookahead_top_px, search_around
 
 
 @dataclass(frozen=True)
@@ -481,23 +486,23 @@ class LaneTracker:
             if not np.isnan(shoulder):
                 self._shoulders[i].append(round(shoulder, 4))
 
-    def _near_grid(self, raw: np.ndarray, bird: np.ndarray | None) -> lanes.VergeGrid:
-        """Return the verge features (``lanes.verge_grid``) of the bird's-eye view's rows within
+    def _near_grid(self, raw: np.ndarray, bird: np.ndarray | None) -> VergeGrid:
+        """Return the verge features (``roads.edge.verge_grid``) of the bird's-eye view's rows within
         ``shoulder_near_m`` of its bottom row, what ``_shoulder_beside`` reads: one row of each
-        ``EdgeConfig.scale`` (``lanes.grid_rows_px``; measured on every frame with both lines, so a
+        ``EdgeConfig.scale`` (``roads.edge.grid_rows_px``; measured on every frame with both lines, so a
         quarter of the rows), from ``bird`` or those rows of RAW alone remapped."""
         w, h = self.pipeline.size
         k = self.pipeline.config.edge.scale
         top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym))) // k * k
-        sample = lanes.grid_rows_px(top, h, k)  # one row of each k: read on every frame, so cheap
+        sample = grid_rows_px(top, h, k)  # one row of each k: read on every frame, so cheap
         rows = bird[sample] if bird is not None else self.pipeline.birdseye_rows(raw, sample)
-        return lanes.verge_grid(rows, k, top, h, sampled=True)
+        return verge_grid(rows, k, top, h, sampled=True)
 
-    def _shoulder_beside(self, grid: lanes.VergeGrid, fit: LineFit, other: LineFit, side: int,
+    def _shoulder_beside(self, grid: VergeGrid, fit: LineFit, other: LineFit, side: int,
                          pixels: tuple[np.ndarray, np.ndarray] | None = None) -> float:
         """Return the shoulder (m) beyond line ``fit`` on ``side`` (0 left, 1 right), NaN where not
         clearly found: the median distance (along the line's normal) from the line out to the
-        asphalt edge beyond it in ``grid`` (``_near_grid``) (``lanes.road_edge`` from 0 to ``EdgeConfig.max_shoulder_m``
+        asphalt edge beyond it in ``grid`` (``_near_grid``) (``roads.edge.road_edge`` from 0 to ``EdgeConfig.max_shoulder_m``
         beyond the line, the road surface read between ``fit`` and ``other``), on the rows within
         ``shoulder_near_m`` of the view's bottom row; clearly found: edge points on at least half
         of those rows (of the shrunk grid), their distances' robust spread (1.4826 x the median
@@ -508,9 +513,9 @@ class LaneTracker:
         cfg = replace(self.pipeline.config.edge, trace_margin_m=0.0)
         k = cfg.scale
         top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym)))
-        _, points = lanes.road_edge(None, other, ("left", "right")[side], self._xm, self._ym, self.checks,
-                                    cfg, top, guide_px=fit.coeffs_px, range_m=(0.0, cfg.max_shoulder_m),
-                                    grid=grid)
+        _, points = road_edge(None, other, ("left", "right")[side], self._xm, self._ym, self.checks,
+                              cfg, top, guide_px=fit.coeffs_px, range_m=(0.0, cfg.max_shoulder_m),
+                              grid=grid)
         if len(points) < 0.5 * (self._bottom + 1 - top) / k:
             return float("nan")
         ys = points[:, 1]
@@ -518,7 +523,7 @@ class LaneTracker:
         if pixels is not None and len(pixels[0]):
             bins = (np.asarray(pixels[0]) // k).astype(int)
             near = bins >= top // k
-            rows, paint = lanes.row_medians(bins[near], np.asarray(pixels[1], float)[near])
+            rows, paint = row_medians(bins[near], np.asarray(pixels[1], float)[near])
             if len(rows):  # the paint's x on each grid row it holds
                 grid_rows = (ys // k).astype(int)
                 at = np.minimum(np.searchsorted(rows, grid_rows), len(rows) - 1)
@@ -601,7 +606,7 @@ class LaneTracker:
         the look-ahead (from ``top_px``).
 
         One second-order fit to the paint's median x on each row it holds and to the placed line
-        on each row between the paint's nearest (all but ``lanes.NEAR_SHARE`` of its pixels lie
+        on each row between the paint's nearest (all but ``records.NEAR_SHARE`` of its pixels lie
         above it) and the view's bottom row: the paint where it is seen, the edge near the car,
         where the paint is missing. Extrapolated to the car, or joined to the line inferred from
         the other line, paint seen only a few metres ahead in a sag beyond a crest lies inside
@@ -613,13 +618,13 @@ class LaneTracker:
         ys, xs = ys[keep], xs[keep]
         if len(ys) < self.pipeline.config.search.min_line_pixels // 2:
             return None
-        near = float(np.quantile(ys, 1.0 - lanes.NEAR_SHARE))
+        near = float(np.quantile(ys, 1.0 - NEAR_SHARE))
         keep = ys <= near
-        rows, med = lanes.row_medians(ys[keep], xs[keep])
+        rows, med = row_medians(ys[keep], xs[keep])
         unseen = np.arange(np.floor(near) + 1.0, self._bottom + 1.0)
-        coeffs = lanes.least_squares_poly(np.concatenate([rows.astype(float), unseen]),
-                                          np.concatenate([med, np.polyval(placed.coeffs_px, unseen)]), 2,
-                                          float(self.pipeline.size[1]))
+        coeffs = least_squares_poly(np.concatenate([rows.astype(float), unseen]),
+                                    np.concatenate([med, np.polyval(placed.coeffs_px, unseen)]), 2,
+                                    float(self.pipeline.size[1]))
         top = min(float(rows[0]), self._bottom - placed.gap_px - placed.span_px)
         return replace(placed, coeffs_px=coeffs, n_pixels=placed.n_pixels + int(keep.sum()),
                        span_px=float(self._bottom - placed.gap_px - top))
@@ -656,13 +661,13 @@ class LaneTracker:
         The inference is moved across to the median distance of the lane pixels in the bin
         nearest it (bins ``prior_margin_px`` wide, every half margin, out to the band's half
         width) that holds ``min_line_pixels``, and the line is searched within ``prior_margin_px``
-        of it (``lanes.search_around``), its curvature shared with the other line when it is
-        short (``lanes.parallel_fits``). The band goes into the search's windows, so the line's
-        band checks (``lanes.line_problem``) compare it with the band it was searched in."""
+        of it (``search.search_around``), its curvature shared with the other line when it is
+        short (``fit.parallel_fits``). The band goes into the search's windows, so the line's
+        band checks (``checks.line_problem``) compare it with the band it was searched in."""
         cfg = self.pipeline.config.search
         half = self._reacquire_half_px(side)
         margin = cfg.prior_margin_px
-        ys, xs = lanes.lane_pixels(binary)
+        ys, xs = lane_pixels(binary)
         keep = ys >= top_px
         dx = xs[keep] - np.polyval(track[side], ys[keep])
         dx = dx[np.abs(dx) <= half]
@@ -680,32 +685,32 @@ class LaneTracker:
         name = ("left", "right")[side]
         priors = [LineFit(None), LineFit(None)]
         priors[side] = LineFit(tuple(moved))
-        found = lanes.search_around(binary, priors[0], priors[1], cfg, top_px)
+        found = search_around(binary, priors[0], priors[1], cfg, top_px)
         h = self.pipeline.size[1]
         slabs = np.linspace(float(h), float(top_px), cfg.n_windows + 1).round().astype(int)
-        band = tuple(lanes.Window(name, int(x - margin), int(x + margin), int(lo), int(hi))
+        band = tuple(Window(name, int(x - margin), int(x + margin), int(lo), int(hi))
                      for hi, lo in zip(slabs[:-1], slabs[1:])
                      for x in [float(np.polyval(moved, (lo + hi) / 2))])
         merged = replace(search, **{name: getattr(found, name), f"{name}_pixels": getattr(found, f"{name}_pixels")},
                          windows=tuple(w for w in search.windows if w.side != name) + band)
-        left, right = lanes.parallel_fits(merged.left, merged.right, merged.left_pixels,
-                                          merged.right_pixels, h, cfg)
+        left, right = parallel_fits(merged.left, merged.right, merged.left_pixels,
+                                    merged.right_pixels, h, cfg)
         return replace(merged, left=left, right=right)
 
     def lookahead_top_px(self, track: tuple[np.ndarray, np.ndarray]) -> int:
         """Return the first row (px) of this frame's look-ahead for the tracked lane ``track``.
 
-        Where the tracked lines stay in the view (``lanes.lookahead_top_px``), but no more than
+        Where the tracked lines stay in the view (``search.lookahead_top_px``), but no more than
         ``lookahead_growth_m`` beyond the rows the tracked fits were measured on.
         """
         measured = max(acc.top_px for acc in self._history)
         grow = int(round(self.config.lookahead_growth_m / self._ym))
-        top = lanes.lookahead_top_px(track, self.pipeline.size, self.pipeline.config.search)
+        top = lookahead_top_px(track, self.pipeline.size, self.pipeline.config.search)
         return max(top, measured - grow, 0)
 
     def road_view_top_px(self, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]) -> int:
         """Return the first row (px) of the road seen continuously from the car in a RAW frame,
-        between the tracked lines ``track`` (``lanes.road_view_top_px``), 0 for the whole view.
+        between the tracked lines ``track`` (``roads.edge.road_view_top_px``), 0 for the whole view.
 
         Only every ``road_view_step_px``-th row of the bird's-eye view, and only the columns the
         lane's interior covers on them, are remapped (``LanePipeline.birdseye_rows``); the
@@ -715,13 +720,13 @@ class LaneTracker:
         pipe = self.pipeline
         w, h = pipe.size
         rows = np.arange(h - 1, -1, -self.config.road_view_step_px)
-        lo, hi = lanes.road_view_interior(rows, track, w)
+        lo, hi = road_view_interior(rows, track, w)
         c0, c1 = int(lo.min()), int(max(hi.max(), lo.min() + 1))  # the columns an interior covers
         if c0 >= w:
             return 0
-        return lanes.road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, self._ym,
-                                      pipe.config.edge.min_saturation_step, self.config.road_view_run_m,
-                                      w, c0)
+        return road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, self._ym,
+                                pipe.config.edge.min_saturation_step, self.config.road_view_run_m,
+                                w, c0)
 
     def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
               band_px: float | tuple[float, float] | None = None
@@ -733,7 +738,7 @@ class LaneTracker:
         left, right : this frame's fits (bird's-eye pixels).
         track : the tracked pixel coefficients (left, right), or None without a track.
         band_px : width (px) of the band the lines' pixels were searched in, one for both or
-            (left, right) (``lanes.search_bands_px``); None: the band checks are skipped.
+            (left, right) (``checks.search_bands_px``); None: the band checks are skipped.
         """
         return self._check(left, right, track, band_px)[:3]
 
@@ -743,7 +748,7 @@ class LaneTracker:
         """Return ``check``'s answer and whether a check rejected a found line.
 
         The track checks and the pair's compare the lines over the look-ahead's rows, from
-        ``top_px`` down (``lanes.lookahead_top_px``). ``mask``: the frame's whole view under the
+        ``top_px`` down (``search.lookahead_top_px``). ``mask``: the frame's whole view under the
         fallback masks' rule, made when first called (``update``), for the grade pair check;
         None skips that check. ``candidates``: where ``update`` collects the lines this frame
         could restart the lane from (``_restart``); None (``check``) keeps the tracker as it is.
@@ -761,12 +766,12 @@ class LaneTracker:
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
                 continue
-            problem = lanes.line_problem(fit, bands[i], self.checks, self._xm, side)
+            problem = line_problem(fit, bands[i], self.checks, self._xm, side)
             if problem:
                 why.append(problem)
                 failed = True
                 continue
-            far = lanes.gap_problem(fit, self._ym, limits[i], side) if track is not None else ""
+            far = gap_problem(fit, self._ym, limits[i], side) if track is not None else ""
             if far:
                 if not self._confirms_track(fit, track[i], top_px, i):
                     why.append(far)
@@ -797,7 +802,7 @@ class LaneTracker:
                 near = kept[other] is not None and other not in distant
                 ref = self._inferred(np.array(kept[other].coeffs_px), track, i, top_px) if near else track[i]
                 kept[side] = replace(distant[side], coeffs_px=self._joined(distant[side], ref, top_px))
-                why.append(f"{lanes.gap_problem(distant[side], self._ym, limits[i], side)}; it lies "
+                why.append(f"{gap_problem(distant[side], self._ym, limits[i], side)}; it lies "
                            f"along its track there, and nearer the car "
                            + ("the line inferred from the other line is taken" if near else "its track is taken"))
         if len(bent) == 2 and self._pair_outvotes_track(bent, track, rows, top_px):
@@ -806,9 +811,9 @@ class LaneTracker:
                        "the road changed, the track lags")
         if kept["left"] is not None and kept["right"] is not None:
             reference = self._width_reference(track, rows)
-            problem = lanes.pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
-                                         self._xm, self._ym, self.checks, top_px,
-                                         width_reference_px=reference)
+            problem = pair_problem(kept["left"], kept["right"], self.pipeline.size[1],
+                                   self._xm, self._ym, self.checks, top_px,
+                                   width_reference_px=reference)
             if track is not None and reference is None and problem and not distant and not self._pair_alone(
                     kept["left"], kept["right"], top_px):
                 # checked on its own (a line inferred), both lines seen at the car: a pitched flat
@@ -818,7 +823,7 @@ class LaneTracker:
             graded_check = self.config.grade_pair_check and track is not None
             if graded_check and problem.startswith("lines not parallel"):
                 graded = self._graded_reference(kept["left"], kept["right"], rows, top_px, mask)
-                if graded is not None and not lanes.pair_problem(
+                if graded is not None and not pair_problem(
                         kept["left"], kept["right"], self.pipeline.size[1], self._xm, self._ym,
                         self.checks, top_px, width_reference_px=graded):
                     why.append(f"{problem} against the track, but parallel on the road ahead's grade "
@@ -912,8 +917,8 @@ class LaneTracker:
         if not cfg.pitched_start_frames or not problem.startswith("lines not parallel"):
             return False
         left, right = kept["left"], kept["right"]
-        if lanes.pitched_pair_problem(left, right, self.pipeline.size[1], self._xm, self._ym, self.checks,
-                                      top_px, cfg.max_pitch_change):
+        if pitched_pair_problem(left, right, self.pipeline.size[1], self._xm, self._ym, self.checks,
+                                top_px, cfg.max_pitch_change):
             return False
         pair = (np.array(left.coeffs_px, float), np.array(right.coeffs_px, float))
         run = 1 + max((n for n, *previous in self._pitched[0] if self._agree(pair, previous)), default=0)
@@ -953,7 +958,7 @@ class LaneTracker:
                   spread: np.ndarray | None = None) -> np.ndarray:
         """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
         ``seen`` line moved along its normal by the tracked lane's normal width on each row from
-        ``top_px`` down (``lanes.normal_width_m``, ``lanes.offset_line``): where a grade widens or
+        ``top_px`` down (``fit.normal_width_m``, ``fit.offset_line``): where a grade widens or
         narrows the flat view's lane ahead, the track's width carries that change. At the car the
         width is the one measured in the last frames that saw both lines there (``seen_width_m``),
         not the tracked lane's: the track holds the lines inferred in earlier frames, and a width
@@ -962,22 +967,22 @@ class LaneTracker:
         the seen width at the car times it. Without a ``track`` (a restart from one line, step 5)
         the width is the one seen at the car before the reset, on every row unless a ``spread``
         widens it; a restarted track goes on inferring at it until both lines are seen."""
-        rows = lanes.offset_rows_px(self.pipeline.size[1], top_px)
+        rows = offset_rows_px(self.pipeline.size[1], top_px)
         if track is None:  # a restart from one line (step 5): the width seen before the loss
             at_car = tracked = self._lost_track.width_m
         else:
-            tracked = lanes.normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
+            tracked = normal_width_m(track[0], track[1], self._bottom, self._xm, self._ym)
             at_car = (self.seen_width_m if self._seen_widths else
                       tracked if np.isnan(self._restart_width) else self._restart_width)
         if spread is not None:
             width = at_car * np.polyval(spread, self._bottom - rows)
         elif track is not None and tracked > 0.5 * at_car:
             # the track's change of width ahead, at the seen width at the car
-            width = lanes.normal_width_m(track[0], track[1], rows, self._xm, self._ym) * (at_car / tracked)
+            width = normal_width_m(track[0], track[1], rows, self._xm, self._ym) * (at_car / tracked)
         else:  # a restart, or a track whose width has collapsed: no shape ahead to keep
             width = np.full(len(rows), at_car)
-        return np.array(lanes.offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
-                                          self.pipeline.size[1], top_px))
+        return np.array(offset_line(seen, -width if side == 0 else width, self._xm, self._ym,
+                                    self.pipeline.size[1], top_px))
 
     def _pair_outvotes_track(self, bent: dict, track, rows: np.ndarray, top_px: int) -> bool:
         """Return whether two lines that both bent away from the track are the lane anyway.
@@ -996,18 +1001,18 @@ class LaneTracker:
 
     def _pair_alone(self, left: LineFit, right: LineFit, top_px: int) -> str:
         """Return why two lines checked on their own, not against the tracked width, are no lane
-        (``lanes.pair_problem``): with ``pitched_start_frames`` on, lines refused only as not
-        parallel are a lane when they are one in a pitched flat view (``lanes.pitched_pair_problem``):
+        (``checks.pair_problem``): with ``pitched_start_frames`` on, lines refused only as not
+        parallel are a lane when they are one in a pitched flat view (``checks.pitched_pair_problem``):
         the track that checks their positions was measured in the same view."""
         h = self.pipeline.size[1]
-        problem = lanes.pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px)
+        problem = pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px)
         if problem.startswith("lines not parallel") and self.config.pitched_start_frames:
-            return lanes.pitched_pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px,
-                                              self.config.max_pitch_change)
+            return pitched_pair_problem(left, right, h, self._xm, self._ym, self.checks, top_px,
+                                        self.config.max_pitch_change)
         return problem
 
     def _confirms_track(self, fit: LineFit, tracked: np.ndarray, top_px: int, side: int) -> bool:
-        """Return whether a line seen only far ahead (``lanes.gap_problem``) lies along its
+        """Return whether a line seen only far ahead (``checks.gap_problem``) lies along its
         tracked line where its pixels are: within ``max_jump_m`` (``_jump_limit_m``) of it on the
         rows from its nearest pixels (``LineFit.gap_px``) up by its span, inside the look-ahead."""
         near = self._bottom - fit.gap_px
@@ -1025,12 +1030,12 @@ class LaneTracker:
         unseen = np.arange(near, self._bottom + 1.0)
         ys = np.concatenate([seen, unseen])
         xs = np.concatenate([np.polyval(fit.coeffs_px, seen), np.polyval(reference, unseen)])
-        return lanes.least_squares_poly(ys, xs, 2, float(self.pipeline.size[1]))
+        return least_squares_poly(ys, xs, 2, float(self.pipeline.size[1]))
 
     def _stripe_spread(self, binary: np.ndarray, coeffs_px, top_px: int) -> np.ndarray | None:
         """Return the flat view's scale across the road relative to the bottom row's, as a
         straight line in (bottom row - row), from the stripes of a double line along the fit
-        ``coeffs_px`` (``lanes.stripe_spacing_px``), or None.
+        ``coeffs_px`` (``roads.stripes.stripe_spacing_px``), or None.
 
         None unless the stripes show on at least 4 bands of rows covering half the look-ahead
         (from ``top_px``), their spacing lies within an eighth of ``double_line_px`` (RMS) of
@@ -1046,7 +1051,7 @@ class LaneTracker:
         spacing = self.pipeline.config.search.double_line_px
         if not spacing:
             return None
-        ys, gaps = lanes.stripe_spacing_px(binary, coeffs_px, spacing, top_px)
+        ys, gaps = stripe_spacing_px(binary, coeffs_px, spacing, top_px)
         depth = self._bottom - max(float(top_px), self._in_view_top_px(coeffs_px, top_px))
         if len(ys) < 4 or ys.max() - ys.min() < 0.5 * depth:
             return None
@@ -1078,7 +1083,7 @@ class LaneTracker:
         there (step 2): ``_gap_limit_m`` (``near_gap_m``) for a line whose gap exceeds
         ``near_gap_m`` where its tracked line bends by more than ``near_gap_bend_m`` over the
         gap (|a| * gap**2: the curvature's share of the extrapolation) and the other line of
-        this frame reaches the car within ``near_gap_m`` and passes ``lanes.line_problem``: the
+        this frame reaches the car within ``near_gap_m`` and passes ``checks.line_problem``: the
         line is then joined near the car to the line inferred from that one, a measurement.
         Else ``max_gap_m``: on a straight road the extrapolation does not rest on the curvature
         (a dashed line's gaps), and where the other line stops short too the join would be to
@@ -1092,7 +1097,7 @@ class LaneTracker:
         if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
             return cfg.max_gap_m, cfg.max_gap_m
         near = [fit.found and fit.gap_px * self._ym <= cfg.near_gap_m
-                and not lanes.line_problem(fit, bands[i], self.checks, self._xm, ("left", "right")[i])
+                and not line_problem(fit, bands[i], self.checks, self._xm, ("left", "right")[i])
                 for i, fit in enumerate(fits)]
         return tuple(self._gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
                      for i in range(2))
@@ -1154,7 +1159,7 @@ class LaneTracker:
 
     def _width_reference(self, track, rows: np.ndarray) -> np.ndarray | None:
         """Return the tracked lane's width (px) on ``rows``, the reference the pair's width is
-        compared with (``lanes.pair_problem``), or None without a track or when the newest
+        compared with (``checks.pair_problem``), or None without a track or when the newest
         accepted frame inferred a line.
 
         An inferred line's width ahead is not a measurement: it is the tracked width carried
@@ -1168,7 +1173,7 @@ class LaneTracker:
         return np.polyval(track[1], rows) - np.polyval(track[0], rows)
 
     def _band_px(self, search: LaneSearch) -> tuple[float, float]:
-        """Return the width (px) of the band each line was searched in (``lanes.search_bands_px``)."""
+        """Return the width (px) of the band each line was searched in (``checks.search_bands_px``)."""
         return self.pipeline.search_bands_px(search)
 
     def _conf_of(self, fit: LineFit) -> float:
@@ -1229,8 +1234,8 @@ class LaneTracker:
             self._faded_run = [0 if near else run + 1 for run, near in zip(self._faded_run, at_car)]
             if (self._reach_car(seen[0]) and self._reach_car(seen[1])  # both seen at the car: measured there
                     and not any(self._bent_gap(fit, track, i) for i, fit in enumerate(seen))):
-                self._seen_widths.append(lanes.normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
-                                                              self._xm, self._ym))
+                self._seen_widths.append(normal_width_m(coeffs["left"], coeffs["right"], self._bottom,
+                                                        self._xm, self._ym))
             if self._base_history.maxlen:
                 self._base_history.append(self._bases((coeffs["left"], coeffs["right"])))
             self._lost = self._blind = 0
@@ -1240,7 +1245,7 @@ class LaneTracker:
             for i, fit in enumerate((left, right)):
                 if fit is not None:  # an inferred line keeps the side's kind
                     self._edge[i] = bool(search.edge[i])
-            kinds = tuple("inferred" if fit is None else lanes.line_source(search, i)
+            kinds = tuple("inferred" if fit is None else line_source(search, i)
                           for i, fit in enumerate((left, right)))
         elif track is not None and (note := self._hold(blind)):
             lc, rc = (round(c * self._hold_share(), 3) for c in self._conf)

@@ -12,11 +12,14 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import lanes
+from lanelib.checks import pair_problem
 from lanelib.config import PipelineConfig, load_config_or_preset, preset, preset_names
-from lanelib.lanes import LaneChecks, LineFit, SearchConfig
+from lanelib.fit import fit_line, parallel_fits
+from lanelib.params import LaneChecks, SearchConfig
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
+from lanelib.records import LineFit
+from lanelib.search import lookahead_top_px
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280
@@ -93,7 +96,7 @@ def test_the_tracker_keeps_a_50m_bend_in_a_shortened_look_ahead(pipe):
 
 def test_a_straight_road_keeps_the_whole_view(pipe):
     straight = (np.array([0.0, 0.0, 320.0]), np.array([0.0, 0.0, 960.0]))
-    assert lanes.lookahead_top_px(straight, (W, H)) == 0
+    assert lookahead_top_px(straight, (W, H)) == 0
     raw = pipe.perspective.unwarp(bend_birdseye(1e6, 3.7))
     tracker = LaneTracker(pipe)
     assert all(tracker.update(raw).search.top_px == 0 for _ in range(3))
@@ -104,10 +107,10 @@ def test_lookahead_ends_where_a_line_leaves_the_view_but_not_below_the_shortest(
     # a line drifting right by 1 px per row from x=900 at the bottom reaches W - margin/2 at
     # row 719 - (1280 - 1 - 40 - 900) = 380
     lines = (np.array([0.0, -1.0, 600.0 + 719.0]), np.array([0.0, -1.0, 900.0 + 719.0]))
-    top = lanes.lookahead_top_px(lines, (W, H), sc)
+    top = lookahead_top_px(lines, (W, H), sc)
     assert 375 <= top <= 390
     steep = (np.array([0.0, -5.0, 600.0 + 5 * 719.0]), np.array([0.0, -5.0, 900.0 + 5 * 719.0]))
-    assert lanes.lookahead_top_px(steep, (W, H), sc) == round(H * (1 - sc.min_view_fraction))
+    assert lookahead_top_px(steep, (W, H), sc) == round(H * (1 - sc.min_view_fraction))
 
 
 def test_a_short_line_takes_the_curvature_of_the_long_one():
@@ -117,10 +120,10 @@ def test_a_short_line_takes_the_curvature_of_the_long_one():
     dash = np.repeat(np.arange(620, 720, dtype=np.int32), 3)  # one dash: 100 rows, fitted straight alone
     right_xs = np.round(a * dash ** 2.0 - 0.5 * dash + 1000).astype(np.int32)
     sc = SearchConfig()
-    left = lanes.fit_line(ys, left_xs, H, sc)
-    right = lanes.fit_line(dash, right_xs, H, sc)
+    left = fit_line(ys, left_xs, H, sc)
+    right = fit_line(dash, right_xs, H, sc)
     assert right.coeffs_px[0] == 0.0  # alone: a straight line
-    left2, right2 = lanes.parallel_fits(left, right, (ys, left_xs), (dash, right_xs), H, sc)
+    left2, right2 = parallel_fits(left, right, (ys, left_xs), (dash, right_xs), H, sc)
     assert left2 == left
     assert right2.coeffs_px[0] == pytest.approx(left.coeffs_px[0])
     assert right2.x_at(300) == pytest.approx(a * 300 ** 2 - 0.5 * 300 + 1000, abs=2.0)
@@ -136,11 +139,11 @@ def test_the_country_preset_accepts_a_4_6m_lane_the_highway_preset_refuses():
     assert {"highway", "country"} <= set(preset_names())
     highway, country = preset("highway").checks, preset("country").checks
     left, right = straight_pair(4.6)
-    assert "lane width 4.60 m" in lanes.pair_problem(left, right, H, XM, YM, highway)
-    assert lanes.pair_problem(left, right, H, XM, YM, country) == ""
+    assert "lane width 4.60 m" in pair_problem(left, right, H, XM, YM, highway)
+    assert pair_problem(left, right, H, XM, YM, country) == ""
     # both refuse what is no lane at all
     for width in (1.5, 6.5):
-        assert lanes.pair_problem(*straight_pair(width), H, XM, YM, country).startswith("lane width")
+        assert pair_problem(*straight_pair(width), H, XM, YM, country).startswith("lane width")
 
 
 def test_the_country_preset_allows_the_curvature_difference_of_a_hairpin():
@@ -164,7 +167,7 @@ def test_a_shorter_look_ahead_allows_its_share_of_the_width_spread():
     left = LineFit((0.0, 0.0, 320.0), 2000, 700.0)
     right = LineFit((0.0, -1.4 / XM / 719, 960.0 + 1.4 / XM), 2000, 700.0)
     top = round(H * 0.6)
-    problem = lanes.pair_problem(left, right, H, XM, YM, LaneChecks(), top)
+    problem = pair_problem(left, right, H, XM, YM, LaneChecks(), top)
     assert problem.startswith("lines not parallel")
 
 
@@ -211,7 +214,7 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # the 9.4 m look-ahead differ by more than the highway's 0.004 1/m while the bend tightens
     # (both lines within 0.1 m of the truth): refused by it, the pair of the sliding windows
     # (0.27-0.34 m off the lines) was taken instead in 3 frames and the right line inferred in
-    # 8 more. The allowance grows as the look-ahead shortens (``lanes.pair_problem``). A dash of
+    # 8 more. The allowance grows as the look-ahead shortens (``checks.pair_problem``). A dash of
     # the right line seen only from 2-7 m ahead on the bend is joined near the car to the line
     # inferred from the left one (``TrackerConfig.near_gap_m``); such a joined line's curvature
     # may differ by more (one frame, 0.0105 1/m): it is refused and the right line inferred, as
@@ -245,7 +248,7 @@ def test_the_lines_of_a_35m_hairpin_leaving_the_view_keep_their_bend(pipe):
     # less than ``min_span_fraction`` of the view (7 m). Fitted straight in the tracked 9.4 m
     # look-ahead, the lines were 0.46-0.91 m off in the view (and the straight track refused
     # the bowed lines as bent); their resolved bend is kept (``short_bend_resolution``), both
-    # short lines share one curvature (``lanes.shared_curvature``) and the bend against the
+    # short lines share one curvature (``fit.shared_curvature``) and the bend against the
     # track is read where both lie in the view (``LaneTracker._bend_rows``): 2-3 cm.
     raw = pipe.perspective.unwarp(bend_birdseye(35.0, 3.4))
     tracker = LaneTracker(pipe)

@@ -1,4 +1,4 @@
-"""The plausibility checks every found lane passes (lanes.LaneChecks), in one image or a video.
+"""The plausibility checks every found lane passes (params.LaneChecks), in one image or a video.
 
 Known answers on drawn masks and fits (width, parallel, curvature, band fill, scatter), the
 result a rejected frame gives (not found, the reason, the rejected measurement kept apart), and
@@ -15,13 +15,18 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import draw, io, lanes
+from lanelib import draw, io
+from lanelib.checks import LaneCheck, check_lane, line_problem, pair_problem, search_bands_px
 from lanelib.config import PipelineConfig
 from lanelib.errors import ConfigError
-from lanelib.lanes import LaneChecks, LineFit, SearchConfig
+from lanelib.fit import fit_line
+from lanelib.params import LaneChecks, SearchConfig
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
+from lanelib.records import LaneSearch, LineFit, Window
+from lanelib.roads.stripes import two_stripes
 from lanelib.runs import process_images
+from lanelib.search import lane_pixels, search_around, sliding_windows
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280
@@ -44,11 +49,11 @@ def lane_mask(left, right, thickness: int = 20) -> np.ndarray:
     return m
 
 
-def check_mask(mask: np.ndarray) -> lanes.LaneCheck:
+def check_mask(mask: np.ndarray) -> LaneCheck:
     """Return the checks of the sliding-window search of a bird's-eye mask (default geometry)."""
-    s = lanes.sliding_windows(mask, car_x=CAR_X)
+    s = sliding_windows(mask, car_x=CAR_X)
     assert s.left.found and s.right.found
-    return lanes.check_lane(s.left, s.right, lanes.search_bands_px(s, (W, H)), H, XM, YM)
+    return check_lane(s.left, s.right, search_bands_px(s, (W, H)), H, XM, YM)
 
 
 def parabolas(width_m: float, a: float = 1.5e-4, b: float = -0.2):
@@ -88,11 +93,11 @@ def test_crossing_lines_are_refused_where_they_cross():
     lean = (3.7 / XM) / (H - 1)
     left = LineFit((0.0, -lean, 320.0 + lean * (H - 1)), 5000, 700.0)
     right = LineFit((0.0, lean, 960.0 - lean * (H - 1)), 5000, 700.0)
-    problem = lanes.pair_problem(left, right, H, XM, YM)
+    problem = pair_problem(left, right, H, XM, YM)
     assert problem.startswith("lines cross ") and problem.endswith(" m ahead of the view's bottom row")
     assert number_after(problem, "lines cross ") == pytest.approx((H - 1 - 359.5) * YM, abs=0.05)
     # beyond a shorter look-ahead they do not cross there: only not parallel
-    assert lanes.pair_problem(left, right, H, XM, YM, top_px=400).startswith("lines not parallel")
+    assert pair_problem(left, right, H, XM, YM, top_px=400).startswith("lines not parallel")
 
 
 def test_curved_lines_that_cross_ahead_are_refused():
@@ -102,7 +107,7 @@ def test_curved_lines_that_cross_ahead_are_refused():
     a = (3.7 / XM) / (H - 1 - y0) ** 2
     left = LineFit((0.0, 0.0, 320.0), 5000, 700.0)
     right = LineFit((a, -2 * a * y0, 320.0 + a * y0 ** 2 - 0.3 / XM), 5000, 700.0)
-    problem = lanes.pair_problem(left, right, H, XM, YM)
+    problem = pair_problem(left, right, H, XM, YM)
     assert number_after(problem, "lines cross ") == pytest.approx(15.0 * (1 - math.sqrt(0.3 / 3.7)), abs=0.05)
 
 
@@ -113,15 +118,15 @@ def test_a_fit_that_hooks_back_beyond_its_pixels_is_refused_and_a_curve_passes()
     a = 0.8 / XM / 300.0 ** 2
     hooked = LineFit((a, -2 * a * 300, 400.0), 3000, 300.0)
     right = LineFit((a, -2 * a * 300, 400.0 + 3.6 / XM), 3000, 700.0)
-    check = lanes.check_lane(hooked, right, (160.0, 160.0), H, XM, YM, width_px=W)
+    check = check_lane(hooked, right, (160.0, 160.0), H, XM, YM, width_px=W)
     assert check.left.startswith("left line hooks back ")
     assert number_after(check.left, "hooks back ") == pytest.approx(0.8, abs=0.01)
     assert check.right == ""
-    assert lanes.check_lane(hooked, right, (160.0, 160.0), H, XM, YM).ok  # not asked for
-    assert lanes.check_lane(replace(hooked, span_px=719.0), right, (160.0, 160.0), H, XM, YM, width_px=W).ok
+    assert check_lane(hooked, right, (160.0, 160.0), H, XM, YM).ok  # not asked for
+    assert check_lane(replace(hooked, span_px=719.0), right, (160.0, 160.0), H, XM, YM, width_px=W).ok
     a_px = YM ** 2 / (2 * 300.0) / XM  # x = y**2 / (2 R) in metres, straight ahead at the top row
     curve = (LineFit((a_px, 0.0, 400.0), 3000, 300.0), LineFit((a_px, 0.0, 400.0 + 3.6 / XM), 3000, 300.0))
-    assert lanes.check_lane(*curve, (160.0, 160.0), H, XM, YM, width_px=W).ok
+    assert check_lane(*curve, (160.0, 160.0), H, XM, YM, width_px=W).ok
 
 
 def test_lines_of_different_curvature_fail_even_when_nearly_parallel():
@@ -132,7 +137,7 @@ def test_lines_of_different_curvature_fail_even_when_nearly_parallel():
     mid = (H - 1) / 2
     left = LineFit((0.0, 0.0, 320.0), 5000, 700.0)
     right = LineFit((da_px, -2 * da_px * mid, 960.0 - da_px * mid ** 2), 5000, 700.0)
-    problem = lanes.pair_problem(left, right, H, XM, YM)
+    problem = pair_problem(left, right, H, XM, YM)
     assert da_m * (length_m / 2) ** 2 < LaneChecks().max_width_spread_m
     assert problem.startswith("curvatures differ by ")
     assert number_after(problem, "curvatures differ by ") == pytest.approx(2 * da_m, abs=2e-4)
@@ -174,7 +179,7 @@ def double_line(spacing_px: float, width_px: int, rows=slice(None)) -> np.ndarra
 
 def band_pixels(mask: np.ndarray, half_px: float) -> tuple[np.ndarray, np.ndarray]:
     """Return (ys, xs) of the mask's pixels within ``half_px`` of the curve ``BEND``."""
-    ys, xs = lanes.lane_pixels(mask)
+    ys, xs = lane_pixels(mask)
     near = np.abs(xs - np.polyval(BEND, ys)) < half_px
     return ys[near], xs[near]
 
@@ -182,8 +187,8 @@ def band_pixels(mask: np.ndarray, half_px: float) -> tuple[np.ndarray, np.ndarra
 def as_two_stripes(ys: np.ndarray, xs: np.ndarray) -> LineFit:
     """Return ``fit_line`` of the pixels with their spread about two stripes (``two_stripes``), as
     the search records it for a line it does not narrow to an inner stripe."""
-    within = lanes.two_stripes(ys, xs, 2, H)[3]
-    return replace(lanes.fit_line(ys, xs, H), stripe_scatter_px=math.sqrt(within / len(ys)))
+    within = two_stripes(ys, xs, 2, H)[3]
+    return replace(fit_line(ys, xs, H), stripe_scatter_px=math.sqrt(within / len(ys)))
 
 
 @pytest.mark.parametrize("spacing_m", [0.12, 0.22, 0.3])
@@ -203,13 +208,13 @@ def test_a_double_line_is_not_texture_but_noise_in_its_band_is(spacing_m):
     if spacing_m >= 0.22:
         assert fit.scatter_px / even > LaneChecks().max_band_scatter
         one = replace(fit, stripe_scatter_px=None)  # one fit only: texture
-        assert lanes.line_problem(one, band, LaneChecks(), XM, "left").startswith("left line is texture")
+        assert line_problem(one, band, LaneChecks(), XM, "left").startswith("left line is texture")
     assert fit.stripe_scatter_px / (even / 2) < 0.6
-    assert lanes.line_problem(fit, band, LaneChecks(), XM, "left") == ""
+    assert line_problem(fit, band, LaneChecks(), XM, "left") == ""
     rng = np.random.default_rng(4)
     noise = np.where(rng.random((H, W)) < 0.3, 255, 0).astype(np.uint8)
     gravel = as_two_stripes(*band_pixels(noise, band / 2))
-    problem = lanes.line_problem(gravel, band, LaneChecks(), XM, "left")
+    problem = line_problem(gravel, band, LaneChecks(), XM, "left")
     assert problem.startswith("left line is texture, not a line (its pixels scatter ")
     assert number_after(problem, "as two stripes ") > 90
 
@@ -225,10 +230,10 @@ def test_a_double_line_in_a_prior_band_is_a_line_at_its_inner_stripe(spacing_m):
     width = int(round(min(spacing_m / 2, 0.12) / XM))
     mask = double_line(spacing, width)
     prior = LineFit(BEND)
-    s = lanes.search_around(mask, prior, LineFit(None), SearchConfig(prior_margin_px=40))
-    band = lanes.search_bands_px(s, (W, H), SearchConfig(prior_margin_px=40))[0]
+    s = search_around(mask, prior, LineFit(None), SearchConfig(prior_margin_px=40))
+    band = search_bands_px(s, (W, H), SearchConfig(prior_margin_px=40))[0]
     assert band == 80.0
-    assert lanes.line_problem(s.left, band, LaneChecks(), XM, "left") == ""
+    assert line_problem(s.left, band, LaneChecks(), XM, "left") == ""
     inner = np.polyval(BEND, H - 1) + spacing / 2
     expected = inner if spacing_m >= 0.22 else np.polyval(BEND, H - 1)
     assert s.left.x_at(H - 1) == pytest.approx(expected, abs=3)
@@ -239,7 +244,7 @@ def test_a_double_line_in_a_prior_band_is_a_line_at_its_inner_stripe(spacing_m):
 def test_scatter_is_compared_with_an_even_spread_over_the_band(share, problem):
     even_px = 160.0 / math.sqrt(12.0)  # pixels spread evenly over a 160 px window
     fit = LineFit((0.0, 0.0, 320.0), 20000, 719.0, scatter_px=share * even_px)
-    text = lanes.line_problem(fit, 160.0, LaneChecks(), XM, "right")
+    text = line_problem(fit, 160.0, LaneChecks(), XM, "right")
     if problem:
         metres = share * even_px * XM
         assert text == (f"right line is texture, not a line (its pixels scatter {metres:.2f} m, "
@@ -252,7 +257,7 @@ def test_scatter_is_the_rms_distance_of_the_pixels_from_the_fit():
     rng = np.random.default_rng(1)
     ys = np.sort(rng.integers(0, H, 5000))
     xs = (300 + 0.1 * ys + 2e-4 * ys ** 2 + rng.normal(0, 8, ys.size)).round().astype(np.int32)
-    fit = lanes.fit_line(ys, xs, H)
+    fit = fit_line(ys, xs, H)
     rms = np.sqrt(np.mean((xs - np.polyval(np.polyfit(ys, xs, 2), ys)) ** 2))
     assert fit.scatter_px == pytest.approx(rms, rel=1e-6)
     assert 7.5 < fit.scatter_px < 8.5
@@ -262,17 +267,17 @@ def test_bands_are_measured_inside_the_view():
     # texture along the view's edge fills only the part of its window inside the view
     empty = (np.empty(0, np.int32), np.empty(0, np.int32))
     fit = LineFit((0.0, 0.0, 20.0), 5000, 700.0)
-    wins = (lanes.Window("left", -40, 120, 0, 80), lanes.Window("left", -100, 60, 80, 160),
-            lanes.Window("right", 1200, 1360, 0, 80))
-    s = lanes.LaneSearch(fit, fit, "windows", empty, empty, wins)
-    assert lanes.search_bands_px(s, (W, H)) == (90.0, 80.0)  # (120 + 60) / 2, 1280 - 1200
-    prior = lanes.LaneSearch(fit, LineFit(None), "prior", empty, empty)
-    assert lanes.search_bands_px(prior, (W, H), SearchConfig(prior_margin_px=60)) == (80.0, 120.0)
+    wins = (Window("left", -40, 120, 0, 80), Window("left", -100, 60, 80, 160),
+            Window("right", 1200, 1360, 0, 80))
+    s = LaneSearch(fit, fit, "windows", empty, empty, wins)
+    assert search_bands_px(s, (W, H)) == (90.0, 80.0)  # (120 + 60) / 2, 1280 - 1200
+    prior = LaneSearch(fit, LineFit(None), "prior", empty, empty)
+    assert search_bands_px(prior, (W, H), SearchConfig(prior_margin_px=60)) == (80.0, 120.0)
 
 
 def test_a_missing_line_is_not_checked():
-    check = lanes.check_lane(LineFit(None, reason="no pixels"), LineFit((0.0, 0.0, 960.0), 5000, 700.0),
-                             (160.0, 160.0), H, XM, YM)
+    check = check_lane(LineFit(None, reason="no pixels"), LineFit((0.0, 0.0, 960.0), 5000, 700.0),
+                       (160.0, 160.0), H, XM, YM)
     assert check.ok
 
 

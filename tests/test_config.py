@@ -8,7 +8,7 @@ import pytest
 from lanelib import config
 from lanelib.config import PipelineConfig, from_dict, load_config, override, save_config, to_dict
 from lanelib.errors import ConfigError, InputError
-from lanelib.lanes import SearchConfig
+from lanelib.params import SearchConfig
 from lanelib.thresholds import ChannelMask
 
 

@@ -6,11 +6,12 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import draw, lanes
+from lanelib import draw
 from lanelib.camera import Calibration, distort_points
+from lanelib.checks import holds_from_px
 from lanelib.errors import InputError
-from lanelib.lanes import LineFit
 from lanelib.pipeline import FrameResult, LanePipeline
+from lanelib.records import LineFit
 
 YELLOW = (255, 255, 0)
 
@@ -187,7 +188,7 @@ def test_the_overlay_through_transform_objects_is_the_old_drawing(fits):
     result = FrameResult(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits),
                          pipe.measure(*(LineFit(np.array(c, float), 1000, 700.0) for c in fits)),
                          "windows", 1.0, 1.0)
-    top = lanes.holds_from_px(result.left, result.right, 720, 1280, pipe.perspective.xm_per_px)
+    top = holds_from_px(result.left, result.right, 720, 1280, pipe.perspective.xm_per_px)
     assert top == (0 if fits is not FITS[3] else 719)  # lines 3000 px beside the view hold nowhere
     for raw, (to_image, _) in zip((False, True), cases):
         expected = draw.lane_overlay(image, *fits, to_image, cfg, 720, top_px=top)
@@ -208,7 +209,7 @@ def test_a_lane_is_drawn_only_below_the_row_where_it_holds():
              "lines cross": ((0, -1.0, 1040.0), 719.0, (0, 0, 960.0), 81)}
     for name, (lc, span, rc, top) in cases.items():
         left, right = LineFit(np.array(lc, float), 1000, span), LineFit(np.array(rc, float), 1000, 719.0)
-        assert lanes.holds_from_px(left, right, 720, 1280, xm) == top, name
+        assert holds_from_px(left, right, 720, 1280, xm) == top, name
         bird = draw.lane_overlay(black, left.coeffs_px, right.coeffs_px, None, cfg, 720, top_px=top)
         drawn = np.flatnonzero(bird.any(axis=(1, 2)))
         assert top - cfg.line_thickness_px <= drawn.min() <= top + 1, name

@@ -14,8 +14,8 @@ from lanelib import cli
 from lanelib.evaluate import (MATCH_ACCURACY, SUMMARY_KEYS, EvalReport, calibration_from_truth,
                               fit_x_in_raw, in_view, line_accuracy, line_threshold_px, score_frame,
                               score_lines, truth_calibration)
-from lanelib.lanes import LineFit
 from lanelib.pipeline import LanePipeline
+from lanelib.records import LineFit
 from lanelib.result import FrameResult
 from lanelib.synth.camera import Camera
 from lanelib.synth.truth import LaneTruth, camera_truth, load_image_truth, load_video_truth

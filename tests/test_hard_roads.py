@@ -10,11 +10,14 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import lanes
+from lanelib.checks import pair_problem
 from lanelib.config import PipelineConfig, override
 from lanelib.evaluate import _truth_x, calibration_from_truth, evaluate_video, score_frame
+from lanelib.fit import normal_width_m
 from lanelib.io import VideoReader, read_frame
+from lanelib.params import EdgeConfig
 from lanelib.pipeline import LanePipeline
+from lanelib.roads.edge import road_edge
 from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
 from lanelib.synth.sets import SUNNY, country_layout
 from lanelib.synth.truth import lane_truth, load_video_truth
@@ -48,7 +51,7 @@ def test_a_double_yellow_centre_line_is_read_at_its_inner_stripe():
     inner stripe of a double yellow line (0.22 m centre to centre), as the truth marks it. Fitted
     to its inner stripe (``SearchConfig.double_line_px``) the left line scores about 30 % of its
     points and 15 % of the lines found are false (14 % before the stripes were fitted with a
-    shared curve, ``lanes.two_stripes``: more frames are taken, one more line is false); fitted
+    shared curve, ``roads.stripes.two_stripes``: more frames are taken, one more line is false); fitted
     between the stripes, about 25 % and 18 %. (Per frame, not tracked: the tracker's choices on
     this clip's hairpins blur the comparison.)"""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
@@ -126,8 +129,8 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
         fits.append(np.polyfit(bird[inside, 1], bird[inside, 0], 2))
     rows = np.array([500.0, 300.0, 100.0])
     xm, ym = pipe.perspective.xm_per_px, pipe.perspective.ym_per_px
-    width = lanes.normal_width_m(fits[0], fits[1], rows, xm, ym)
-    true_scale = width / lanes.normal_width_m(fits[0], fits[1], h - 1.0, xm, ym)
+    width = normal_width_m(fits[0], fits[1], rows, xm, ym)
+    true_scale = width / normal_width_m(fits[0], fits[1], h - 1.0, xm, ym)
     assert true_scale == pytest.approx(rows_scale[::-1], abs=0.02)
     spread = LaneTracker(pipe)._stripe_spread(pipe.binary(pipe.birdseye(raw), fallback=True), fits[0], 0)
     assert spread is not None
@@ -154,21 +157,20 @@ def _edge_view(beyond_rgb, edge_m: float = 3.6, seed: int = 5, texture: float = 
 
 
 def _left_line() -> "LineFit":
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
     return LineFit((0.0, 0.0, 300.0), 5000, 719.0)
 
 
 def test_the_asphalt_edge_is_found_within_a_few_cm():
     """Grass (96, 120, 60) beyond grey asphalt, 3.6 m from the left line and no paint on the right:
-    ``lanes.road_edge`` puts the right line on the asphalt edge within 3 cm on every row, and the
+    ``roads.edge.road_edge`` puts the right line on the asphalt edge within 3 cm on every row, and the
     pair passes the lane checks."""
-    from lanelib import lanes
     bird, edge_x = _edge_view((96, 120, 60))
-    fit, points = lanes.road_edge(bird, _left_line(), "right", XM, YM)
+    fit, points = road_edge(bird, _left_line(), "right", XM, YM)
     assert fit.found and len(points) >= 100
     rows = np.linspace(0, 719, 8)
     assert np.abs(fit.x_at(rows) - edge_x).max() * XM <= 0.03
-    assert not lanes.pair_problem(_left_line(), fit, 720, XM, YM)
+    assert not pair_problem(_left_line(), fit, 720, XM, YM)
 
 
 @pytest.mark.parametrize("beyond, what", [((80, 80, 80), "a darker repaved strip"),
@@ -178,9 +180,8 @@ def test_the_asphalt_edge_is_found_within_a_few_cm():
 def test_no_asphalt_edge_where_grey_road_like_surface_lies_beyond(beyond, what):
     """Beyond the step is grey and smooth like the road (a repaved strip, a concrete barrier, a
     shadow): no edge candidate, however strong the step in brightness."""
-    from lanelib import lanes
     bird, _ = _edge_view(beyond)
-    fit, points = lanes.road_edge(bird, _left_line(), "right", XM, YM)
+    fit, points = road_edge(bird, _left_line(), "right", XM, YM)
     assert not fit.found, what
     assert "asphalt edge" in fit.reason
 
@@ -190,7 +191,7 @@ def test_no_asphalt_edge_on_the_seams_and_barrier_stills(name):
     """The bundled seams and barrier stills (test_images/hard): both lines are painted; looked for
     beside either line all the same, no asphalt edge is found on either side (the seams, the
     repaved strips' edges and the barrier are grey like the road)."""
-    from lanelib import io, lanes
+    from lanelib import io
     image = REPO / "test_images" / "hard" / f"{name}.jpg"
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(image.parent))
     raw = io.read_image(image)
@@ -199,7 +200,7 @@ def test_no_asphalt_edge_on_the_seams_and_barrier_stills(name):
     assert search.left.found and search.right.found
     p = pipe.perspective
     for other, side in ((search.left, "right"), (search.right, "left")):
-        fit, _ = lanes.road_edge(bird, other, side, p.xm_per_px, p.ym_per_px)
+        fit, _ = road_edge(bird, other, side, p.xm_per_px, p.ym_per_px)
         assert not fit.found, (name, side)
 
 
@@ -207,7 +208,7 @@ def test_a_lane_whose_right_side_is_only_the_asphalt_edge_is_found_and_says_so()
     """A still whose right side has no paint, only the asphalt edge and grass: ``detect`` finds the
     lane with the edge as its right line, and the result's ``sources`` say so ("seen", "edge");
     with ``edge.enabled=false`` the right line is not found, as before."""
-    from lanelib.lanes import LaneSearch
+    from lanelib.records import LaneSearch
     bird, edge_x = _edge_view((96, 120, 60))
     pipe = LanePipeline(PipelineConfig())
     raw = pipe.perspective.unwarp(bird)
@@ -234,7 +235,7 @@ def test_the_shoulder_beyond_a_painted_line_is_measured_within_a_few_cm():
     shoulder from the line out to the edge (``LaneTracker._shoulder_beside``, the rows within
     ``shoulder_near_m`` of the car) within 2 cm, from the line's fit or its pixels; with grey,
     road-like surface beyond (a barrier) no shoulder is measured."""
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
     pipe = LanePipeline(PipelineConfig())
     tracker = LaneTracker(pipe)
     bird, line_x, _ = _painted_edge_view()
@@ -384,7 +385,7 @@ def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_e
     one, which does not follow the flat view's widening in a sag), 9-19 px off on rows 200-350.
     The joined line (``LaneTracker._joined_paint``) lies within 3 px of the line on every row,
     and counts the paint's pixels and rows with the edge's; too few paint pixels give none."""
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
     tracker = LaneTracker(LanePipeline(PipelineConfig()))
     line = np.array([3e-4, -0.3, 1050.0])  # the true line, in the view's pixels
     ys = np.repeat(np.arange(200, 451), 4)
@@ -407,7 +408,7 @@ def test_the_asphalt_edge_is_followed_where_the_flat_view_widens_ahead():
     width from the left line (3.0-4.5 m), the edge is found only up to where it lies 4.7 m out;
     followed from the car (``EdgeConfig.trace_margin_m``) it is found to the view's top and its
     fit lies within 3 cm of the edge on every row."""
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
     rng = np.random.default_rng(5)
     h, w = 720, 1280
     rows = np.arange(h, dtype=float)
@@ -418,9 +419,9 @@ def test_the_asphalt_edge_is_followed_where_the_flat_view_widens_ahead():
     bird[:, 93:108] = 225.0
     bird = np.clip(bird, 0, 255).astype(np.uint8)
     left = LineFit((0.0, 0.0, 100.0), 5000, 719.0)
-    _, points = lanes.road_edge(bird, left, "right", XM, YM)
+    _, points = road_edge(bird, left, "right", XM, YM)
     assert points[:, 1].min() > 120  # the edge lies 4.7 m (and its windows) out near row 170
-    traced, points = lanes.road_edge(bird, left, "right", XM, YM, config=lanes.EdgeConfig(trace_margin_m=0.3))
+    traced, points = road_edge(bird, left, "right", XM, YM, config=EdgeConfig(trace_margin_m=0.3))
     assert traced.found and points[:, 1].min() < 20
     check = np.linspace(0, 719, 12)
     assert np.abs(traced.x_at(check) - np.interp(check, rows, edge_x)).max() * XM <= 0.03

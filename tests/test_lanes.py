@@ -7,9 +7,14 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import lanes
+from lanelib.checks import pair_problem
 from lanelib.errors import ConfigError
-from lanelib.lanes import LineFit, SearchConfig
+from lanelib.fit import RADIUS_MAX_M, curvature, fit_line, fit_to_metres, measure, normal_width_m, offset_line, offset_rows_px, parallel_fits, radius, shared_curvature
+from lanelib.params import LaneChecks, SearchConfig
+from lanelib.records import LineFit
+from lanelib.roads.edge import road_view_interior, road_view_top_px
+from lanelib.roads.stripes import inner_stripe, stripe_spacing_px, two_stripes
+from lanelib.search import base_peak_confidence, candidate_bases, find_bases, fit_side, histogram, lane_pixels, search_around, sliding_windows
 
 H, W = 720, 1280
 
@@ -30,7 +35,7 @@ def lane_mask(left, right, thickness=20):
 
 def test_parabolas_drawn_into_a_mask_are_recovered():
     left, right = (2e-4, -0.1, 340.0), (2e-4, -0.1, 980.0)
-    search = lanes.sliding_windows(lane_mask(left, right))
+    search = sliding_windows(lane_mask(left, right))
     ys = np.arange(0, H, 40)
     for fit, truth in ((search.left, left), (search.right, right)):
         assert fit.found
@@ -41,7 +46,7 @@ def test_parabolas_drawn_into_a_mask_are_recovered():
 def test_search_around_previous_fit_follows_a_moved_lane():
     old = (LineFit((1e-4, 0.0, 300.0)), LineFit((1e-4, 0.0, 950.0)))
     moved = lane_mask((1e-4, 0.0, 330.0), (1e-4, 0.0, 980.0))
-    search = lanes.search_around(moved, *old, SearchConfig(prior_margin_px=60))
+    search = search_around(moved, *old, SearchConfig(prior_margin_px=60))
     assert search.method == "prior"
     assert search.left.x_at(H - 1) == pytest.approx(330 + 1e-4 * (H - 1) ** 2, abs=1.5)
     assert search.right.x_at(0) == pytest.approx(980, abs=1.5)
@@ -53,7 +58,7 @@ def test_metric_coefficients_are_an_exact_scaling():
     ys = np.linspace(0, H, 50)
     xs = np.polyval(coeffs, ys)
     refit = np.polyfit(ys * ym, xs * xm, 2)
-    np.testing.assert_allclose(lanes.fit_to_metres(coeffs, xm, ym), refit, rtol=1e-8)
+    np.testing.assert_allclose(fit_to_metres(coeffs, xm, ym), refit, rtol=1e-8)
 
 
 @pytest.mark.parametrize("radius_m,direction", [(300.0, 1), (1000.0, -1), (150.0, -1)])
@@ -65,59 +70,59 @@ def test_radius_of_a_circle_is_returned_in_metres(radius_m, direction):
     dy = y_car - y_m
     x_m = 3.0 + direction * (radius_m - np.sqrt(radius_m ** 2 - dy ** 2))
     coeffs_px = np.polyfit(np.arange(H), x_m / xm, 2)
-    k = lanes.curvature(lanes.fit_to_metres(coeffs_px, xm, ym), y_car)
+    k = curvature(fit_to_metres(coeffs_px, xm, ym), y_car)
     assert k == pytest.approx(direction / radius_m, rel=0.02)
-    assert lanes.radius(k) == pytest.approx(radius_m, rel=0.02)
+    assert radius(k) == pytest.approx(radius_m, rel=0.02)
 
 
 def test_offset_width_and_sign_conventions():
     xm, ym = 3.7 / 640, 23.5 / 720
     # lane from x=300 to x=940: centre 620; the car at 640 is 20 px right of centre
     left, right = LineFit((0.0, 0.0, 300.0), 1000, 700.0), LineFit((0.0, 0.0, 940.0), 1000, 700.0)
-    m = lanes.measure(left, right, H, 640.0, xm, ym)
+    m = measure(left, right, H, 640.0, xm, ym)
     assert m.offset_m == pytest.approx(20 * xm) and m.offset_m > 0
     assert m.lane_width_m == pytest.approx(3.7)
-    assert m.curvature_per_m == 0 and m.radius_m == lanes.RADIUS_MAX_M
+    assert m.curvature_per_m == 0 and m.radius_m == RADIUS_MAX_M
 
 
 def test_missing_line_is_reported_not_raised():
     m = np.zeros((H, W), np.uint8)
     draw_curve(m, (0.0, 0.0, 350.0))
-    search = lanes.sliding_windows(m)
+    search = sliding_windows(m)
     assert search.left.found and not search.right.found
     assert "no lane pixels right of the car" in search.right.reason
-    meas = lanes.measure(search.left, search.right, H, 640.0, 0.005, 0.03)
+    meas = measure(search.left, search.right, H, 640.0, 0.005, 0.03)
     assert math.isnan(meas.offset_m) and math.isnan(meas.radius_m) and not math.isnan(meas.left_curvature_per_m)
 
 
 def test_too_few_pixels_and_short_span_are_not_found():
     cfg = SearchConfig(min_line_pixels=150)
     ys, xs = np.arange(700, 710), np.full(10, 300)
-    fit = lanes.fit_line(ys, xs, H, cfg)
+    fit = fit_line(ys, xs, H, cfg)
     assert not fit.found and "only 10 lane pixels" in fit.reason
     ys, xs = np.repeat(np.arange(700, 720), 20), np.tile(np.arange(300, 320), 20)
-    fit = lanes.fit_line(ys, xs, H, cfg)
+    fit = fit_line(ys, xs, H, cfg)
     assert not fit.found and "span only" in fit.reason
 
 
 def test_short_span_is_fitted_straight():
     ys = np.repeat(np.arange(500, 640), 5)  # 140 px: above min_found_span, below min_span
     xs = 300 + 0.1 * ys
-    fit = lanes.fit_line(ys, xs, H)
+    fit = fit_line(ys, xs, H)
     assert fit.found and fit.coeffs_px[0] == 0.0 and fit.coeffs_px[1] == pytest.approx(0.1)
 
 
 def test_empty_mask_finds_nothing_and_says_why():
-    search = lanes.sliding_windows(np.zeros((H, W), np.uint8))
+    search = sliding_windows(np.zeros((H, W), np.uint8))
     assert not search.left.found and not search.right.found
     assert search.bases_px == (None, None)
 
 
 def test_histogram_and_bases():
     m = lane_mask((0, 0, 300.0), (0, 0, 1000.0), thickness=1)
-    hist = lanes.histogram(m, 0.5)
+    hist = histogram(m, 0.5)
     assert hist[300] == H // 2 and hist[1000] == H // 2
-    assert lanes.find_bases(hist, 640) == (300.0, 1000.0)
+    assert find_bases(hist, 640) == (300.0, 1000.0)
 
 
 def test_offset_is_read_on_the_bottom_row():
@@ -126,14 +131,14 @@ def test_offset_is_read_on_the_bottom_row():
     b = 0.05
     left = LineFit((0.0, b, 320.0 - b * (H - 1)), 1000, 700.0)
     right = LineFit((0.0, b, 960.0 - b * (H - 1)), 1000, 700.0)
-    assert lanes.measure(left, right, H, 640.0, xm, ym).offset_m == pytest.approx(0.0, abs=1e-9)
+    assert measure(left, right, H, 640.0, xm, ym).offset_m == pytest.approx(0.0, abs=1e-9)
 
 
 def test_lane_curvature_follows_the_better_supported_line():
     xm, ym = 3.7 / 640, 23.5 / 720
     strong = LineFit((2e-4, -0.3, 300.0), 20000, 719.0)
     weak = LineFit((-6e-4, 0.5, 700.0), 200, 90.0)  # one dash, fitted with the wrong bend
-    m = lanes.measure(strong, weak, H, 640.0, xm, ym)
+    m = measure(strong, weak, H, 640.0, xm, ym)
     assert m.curvature_per_m == pytest.approx(m.left_curvature_per_m, rel=0.02)
     assert np.sign(m.curvature_per_m) == np.sign(m.left_curvature_per_m) != np.sign(m.right_curvature_per_m)
 
@@ -142,7 +147,7 @@ def test_a_line_with_no_pixels_in_the_lower_half_is_searched_from_the_whole_hist
     m = np.zeros((H, W), np.uint8)
     draw_curve(m, (0.0, 0.0, 320.0))
     cv2.line(m, (960, 100), (960, 300), 255, 24)  # one far dash, nothing below row 300
-    search = lanes.sliding_windows(m)
+    search = sliding_windows(m)
     assert search.bases_px[1] == pytest.approx(960, abs=12)
     assert search.right.found and search.right.x_at(200) == pytest.approx(960, abs=2)
 
@@ -154,14 +159,14 @@ def test_outlier_trimming_recovers_a_parabola_that_the_plain_fit_misses():
     ys = np.repeat(np.arange(H), 2).astype(np.float64)
     xs = np.polyval(truth, ys)
     xs[::20] += 250.0  # 5 % far outliers, all on one side
-    plain = lanes.fit_line(ys, xs, H)
-    trimmed = lanes.fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=95))
+    plain = fit_line(ys, xs, H)
+    trimmed = fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=95))
     assert abs(plain.coeffs_px[2] - truth[2]) > 5  # the plain fit is pulled 12 px aside
     np.testing.assert_allclose(trimmed.coeffs_px, truth, rtol=1e-6, atol=1e-9)
     assert trimmed.n_pixels == len(ys) - len(ys[::20]) and trimmed.scatter_px < 1e-6
     # 0 and 100 keep every pixel: the plain fit
     for pct in (0.0, 100.0):
-        assert lanes.fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=pct)) == plain
+        assert fit_line(ys, xs, H, SearchConfig(trim_outliers_pct=pct)) == plain
 
 
 def test_window_histogram_recentres_on_the_line_not_on_clutter_beside_it():
@@ -171,7 +176,7 @@ def test_window_histogram_recentres_on_the_line_not_on_clutter_beside_it():
     m[:, 992:1008] = 255
 
     def centres(cfg):
-        search = lanes.sliding_windows(m, cfg, bases=(400.0, 1000.0))
+        search = sliding_windows(m, cfg, bases=(400.0, 1000.0))
         return [(w.x_low + w.x_high) // 2 for w in search.windows if w.side == "left"]
 
     assert centres(SearchConfig())[1:] == [436] * 8                     # the mean x of line + clutter
@@ -194,7 +199,7 @@ def test_centre_first_and_a_growing_margin_recover_a_line_after_a_gap():
     m = gap_mask()
 
     def upper(cfg):  # the left line's pixels found above the gap
-        search = lanes.sliding_windows(m, cfg, bases=(300.0, 1000.0))
+        search = sliding_windows(m, cfg, bases=(300.0, 1000.0))
         ys, xs = search.left_pixels
         return search, ys[ys < 240], xs[ys < 240]
 
@@ -216,33 +221,32 @@ def test_centre_first_takes_the_cluster_nearest_the_lane_centre():
     m[:, 240:250] = 255        # a kerb further out, inside the same windows
     m[:, 980:990] = 255        # right line
     m[:, 1030:1040] = 255      # a kerb further out
-    search = lanes.sliding_windows(m, SearchConfig(centre_first=True), bases=(280.0, 1000.0))
+    search = sliding_windows(m, SearchConfig(centre_first=True), bases=(280.0, 1000.0))
     assert set(np.unique(search.left_pixels[1])) == set(range(290, 300))
     assert set(np.unique(search.right_pixels[1])) == set(range(980, 990))
-    plain = lanes.sliding_windows(m, SearchConfig(double_line_px=0), bases=(280.0, 1000.0))
+    plain = sliding_windows(m, SearchConfig(double_line_px=0), bases=(280.0, 1000.0))
     assert set(np.unique(plain.left_pixels[1])) == set(range(240, 250)) | set(range(290, 300))
     # two stripes 50 px apart on every row also pass for a double line: its inner stripe is kept
-    double = lanes.sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
+    double = sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
     assert set(np.unique(double.left_pixels[1])) == set(range(290, 300))
 
 
 def test_base_peak_confidence():
     hist = np.zeros(10, np.int32)
     hist[2] = 10
-    assert lanes.base_peak_confidence(hist, 2.0) == pytest.approx(9.0)  # mean 1: (10 - 1) / 1
-    assert lanes.base_peak_confidence(hist, 5.0) == pytest.approx(-1.0)
-    assert lanes.base_peak_confidence(hist, None) is None
-    assert lanes.base_peak_confidence(np.zeros(10), 3.0) == 0.0
+    assert base_peak_confidence(hist, 2.0) == pytest.approx(9.0)  # mean 1: (10 - 1) / 1
+    assert base_peak_confidence(hist, 5.0) == pytest.approx(-1.0)
+    assert base_peak_confidence(hist, None) is None
+    assert base_peak_confidence(np.zeros(10), 3.0) == 0.0
     m = lane_mask((0, 0, 300.0), (0, 0, 1000.0), thickness=1)
-    search = lanes.sliding_windows(m)
+    search = sliding_windows(m)
     # two one-pixel lines of 360 rows in the lower half: mean 720 / 1280
     expected = (360 - 720 / W) / (720 / W)
     assert search.base_confidence == pytest.approx((expected, expected))
-    assert lanes.sliding_windows(m, bases=(300.0, 1000.0)).base_confidence == (None, None)
+    assert sliding_windows(m, bases=(300.0, 1000.0)).base_confidence == (None, None)
 
 
 def test_bad_search_switches():
-    from lanelib.errors import ConfigError
 
     with pytest.raises(ConfigError, match="trim_outliers_pct"):
         SearchConfig(trim_outliers_pct=120)
@@ -255,11 +259,10 @@ def test_candidate_bases_are_the_strongest_peaks_each_side_one_per_line():
     for x, height, width in ((100, 50, 20), (300, 80, 20), (700, 60, 20), (900, 90, 20), (1100, 20, 20)):
         hist[x - width // 2:x + width // 2] = height
         hist[x] = height + 1  # each line's own peak column
-    left, right = lanes.candidate_bases(hist, 640.0, 2, 80)
+    left, right = candidate_bases(hist, 640.0, 2, 80)
     assert left == [300.0, 100.0] and right == [900.0, 700.0]
-    assert lanes.candidate_bases(hist, 640.0, 5, 80) == ([300.0, 100.0], [900.0, 700.0, 1100.0])
-    assert lanes.candidate_bases(np.zeros(100, np.int64), 50.0, 3, 10) == ([], [])
-    from lanelib.errors import ConfigError
+    assert candidate_bases(hist, 640.0, 5, 80) == ([300.0, 100.0], [900.0, 700.0, 1100.0])
+    assert candidate_bases(np.zeros(100, np.int64), 50.0, 3, 10) == ([], [])
     with pytest.raises(ConfigError, match="candidates 0 must be 1"):
         SearchConfig(candidates=0)
 
@@ -285,7 +288,7 @@ def test_offset_line_is_the_concentric_arc_not_a_shifted_copy():
     cx = 1.85 + 80.0
     line = circle_fit_px(cx, 80.0)
     truth = circle_fit_px(cx, 80.0 - 3.7)
-    moved = lanes.offset_line(line, 3.7, XM_DEFAULT, YM_DEFAULT, H)
+    moved = offset_line(line, 3.7, XM_DEFAULT, YM_DEFAULT, H)
     ys = np.arange(0, H, 10, dtype=np.float64)
     err_m = np.abs(np.polyval(moved, ys) - np.polyval(truth, ys)) * XM_DEFAULT
     assert err_m.max() < 0.03
@@ -293,9 +296,9 @@ def test_offset_line_is_the_concentric_arc_not_a_shifted_copy():
     assert shifted_err_m > 0.15
     # a straight line is moved by exactly its offset; moving back returns it
     straight = (0.0, 0.0, 320.0)
-    assert lanes.offset_line(straight, 3.7, XM_DEFAULT, YM_DEFAULT, H) == pytest.approx(
+    assert offset_line(straight, 3.7, XM_DEFAULT, YM_DEFAULT, H) == pytest.approx(
         (0.0, 0.0, 320.0 + 3.7 / XM_DEFAULT), abs=1e-6)
-    back = lanes.offset_line(moved, -3.7, XM_DEFAULT, YM_DEFAULT, H)
+    back = offset_line(moved, -3.7, XM_DEFAULT, YM_DEFAULT, H)
     assert np.abs(np.polyval(back, ys) - np.polyval(line, ys)).max() * XM_DEFAULT < 0.01
 
 
@@ -305,7 +308,7 @@ def test_normal_width_is_the_width_across_a_slanted_lane():
     slope_px = math.tan(0.3) * YM_DEFAULT / XM_DEFAULT  # dx/dy in px per px
     gap_px = 3.5 / math.cos(0.3) / XM_DEFAULT
     left, right = (0.0, -slope_px, 400.0), (0.0, -slope_px, 400.0 + gap_px)
-    assert lanes.normal_width_m(left, right, H - 1, XM_DEFAULT, YM_DEFAULT) == pytest.approx(3.5, abs=1e-6)
+    assert normal_width_m(left, right, H - 1, XM_DEFAULT, YM_DEFAULT) == pytest.approx(3.5, abs=1e-6)
     assert (right[2] - left[2]) * XM_DEFAULT == pytest.approx(3.66, abs=0.01)
 
 
@@ -322,17 +325,17 @@ def test_a_double_line_is_fitted_to_its_inner_stripe():
     """Stripes 38 px apart (0.22 m): the left line is fitted to the stripe nearer the lane, as the
     truth marks a double centre line; with the switch off the fit runs between the stripes."""
     mask = double_line_mask(338.0, 300.0)
-    on = lanes.sliding_windows(mask)
+    on = sliding_windows(mask)
     assert on.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
     assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
-    off = lanes.sliding_windows(mask, SearchConfig(double_line_px=0))
+    off = sliding_windows(mask, SearchConfig(double_line_px=0))
     assert off.left.x_at(H - 1) == pytest.approx(319.0, abs=3)
     # a double line on the right: its inner stripe is its left one
-    ys, xs = lanes.lane_pixels(double_line_mask(960.0, 998.0, right_x=320.0))
+    ys, xs = lane_pixels(double_line_mask(960.0, 998.0, right_x=320.0))
     keep = xs > 640
-    iy, ix = lanes.inner_stripe(ys[keep], xs[keep], "right", 38.0, H)
-    assert lanes.fit_line(iy, ix, H).x_at(H - 1) == pytest.approx(960.0, abs=2)
-    assert lanes.fit_line(ys[keep], xs[keep], H).x_at(H - 1) == pytest.approx(979.0, abs=3)
+    iy, ix = inner_stripe(ys[keep], xs[keep], "right", 38.0, H)
+    assert fit_line(iy, ix, H).x_at(H - 1) == pytest.approx(960.0, abs=2)
+    assert fit_line(ys[keep], xs[keep], H).x_at(H - 1) == pytest.approx(979.0, abs=3)
 
 
 @pytest.mark.parametrize("spacing_m", [0.22, 0.3])
@@ -351,10 +354,10 @@ def test_a_double_line_on_a_hairpin_is_split_at_its_stripes(spacing_m):
         for side in (-0.5, 0.5):
             lo = int(round(np.polyval(bend, y) + side * spacing - width / 2))
             m[y, lo:lo + width] = 255
-    ys, xs = lanes.lane_pixels(m)
-    iy, ix = lanes.inner_stripe(ys, xs, "left", 38.0, H)
+    ys, xs = lane_pixels(m)
+    iy, ix = inner_stripe(ys, xs, "left", 38.0, H)
     assert len(iy) == len(ys) // 2 and (ix > np.polyval(bend, iy)).all()
-    coeffs, spaced, upper, rss = lanes.two_stripes(ys, xs, 2, H)
+    coeffs, spaced, upper, rss = two_stripes(ys, xs, 2, H)
     assert np.median(spaced) == pytest.approx(spacing, abs=1.5)
     assert math.sqrt(rss / len(ys)) == pytest.approx(width / math.sqrt(12), abs=0.5)
 
@@ -367,8 +370,8 @@ def test_one_line_or_stripes_too_far_apart_are_left_whole(gap_px):
     draw_curve(m, (0.0, 0.0, 400.0), 21)
     if gap_px:
         draw_curve(m, (0.0, 0.0, 400.0 - gap_px), 21)
-    ys, xs = lanes.lane_pixels(m)
-    out = lanes.inner_stripe(ys, xs, "left", 38.0, H)
+    ys, xs = lane_pixels(m)
+    out = inner_stripe(ys, xs, "left", 38.0, H)
     assert len(out[0]) == len(ys)
 
 
@@ -404,9 +407,9 @@ def test_a_double_line_blurred_ahead_is_fitted_to_its_inner_stripe_at_the_car(cl
     the fit 7 px, 0.04 m, off at the car): the fit lies within 2 px (0.012 m) of the inner
     stripe on the bottom row and on the rows it rests on."""
     mask = blurred_double_line(338.0, clear_from)
-    between = lanes.sliding_windows(mask, SearchConfig(double_line_px=0))
+    between = sliding_windows(mask, SearchConfig(double_line_px=0))
     assert abs(between.left.x_at(H - 1) - 338.0) * XM_DEFAULT > 0.1
-    on = lanes.sliding_windows(mask)
+    on = sliding_windows(mask)
     assert abs(on.left.x_at(H - 1) - 338.0) < 2
     assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
     ys, xs = on.left_pixels
@@ -421,13 +424,13 @@ def test_a_stub_of_inner_stripe_does_not_replace_the_whole_line():
     """Resolved only on the lowest 180 rows (a quarter of the view, under ``min_span_fraction``),
     a double line's inner stripe would be fitted straight, its curve unmeasured: ``fit_side``
     keeps the fit of the whole line (between the stripes, as before) rather than that stub."""
-    ys, xs = lanes.lane_pixels(blurred_double_line(338.0, 540))
+    ys, xs = lane_pixels(blurred_double_line(338.0, 540))
     keep = xs < 640
     ys, xs = ys[keep], xs[keep]
-    assert len(lanes.inner_stripe(ys, xs, "left", 38.0, H)[0]) < len(ys)  # a stub of inner stripe
-    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    assert len(inner_stripe(ys, xs, "left", 38.0, H)[0]) < len(ys)  # a stub of inner stripe
+    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none")
     assert len(used[0]) == len(ys)
-    assert fit.coeffs_px == lanes.fit_line(ys, xs, H).coeffs_px
+    assert fit.coeffs_px == fit_line(ys, xs, H).coeffs_px
 
 
 @pytest.mark.parametrize("lean_px", [40.0, -40.0])
@@ -438,10 +441,10 @@ def test_near_rows_are_judged_on_their_own_stripes_when_the_blur_bends_the_curve
     its own pixels (two straight stripes fitted to them): the near rows are resolved, and the
     line is fitted to its inner stripe within 1 px at the car (through the blob and both
     stripes before: 36 and 3 px off)."""
-    ys, xs = lanes.lane_pixels(blurred_double_line(338.0, 420, lean_px=lean_px))
+    ys, xs = lane_pixels(blurred_double_line(338.0, 420, lean_px=lean_px))
     keep = xs < 640
     ys, xs = ys[keep], xs[keep]
-    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none")
     assert used[0].min() >= 420  # the blob is left out
     assert abs(fit.x_at(H - 1) - 338.0) < 1
 
@@ -457,11 +460,11 @@ def test_a_short_patch_of_double_line_is_not_fitted_through_both_stripes():
         for stripe in (338.0, 300.0):
             mask[y, int(round(stripe - 10.5)):int(round(stripe + 10.5))] = 255
     mask[H - 1, 300] = 255
-    ys, xs = lanes.lane_pixels(mask)
-    whole = lanes.fit_line(ys, xs, H)
+    ys, xs = lane_pixels(mask)
+    whole = fit_line(ys, xs, H)
     assert whole.found  # the stray pixel lends the patch a span of 119 px
-    assert lanes.inner_stripe(ys, xs, "left", 38.0, H)[0].max() < 650  # resolved as a whole
-    fit, used = lanes.fit_side((ys, xs), "left", H, SearchConfig(), "none", top_px=432)
+    assert inner_stripe(ys, xs, "left", 38.0, H)[0].max() < 650  # resolved as a whole
+    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none", top_px=432)
     assert not fit.found and "span" in fit.reason
     assert (np.abs(used[1] - 338) <= 11).all()
 
@@ -471,11 +474,11 @@ def test_a_single_line_or_a_double_line_blurred_at_the_car_is_left_whole():
     but the lowest band of rows shows no resolved run of rows at the car: both are returned
     whole (no stripe is guessed where the stripes are not resolved)."""
     for mask in (blurred_double_line(338.0, 300, single=True), blurred_double_line(338.0, 680)):
-        ys, xs = lanes.lane_pixels(mask)
+        ys, xs = lane_pixels(mask)
         keep = xs < 640
-        out = lanes.inner_stripe(ys[keep], xs[keep], "left", 38.0, H)
+        out = inner_stripe(ys[keep], xs[keep], "left", 38.0, H)
         assert len(out[0]) == np.count_nonzero(keep)
-    single = lanes.sliding_windows(blurred_double_line(338.0, 300, single=True))
+    single = sliding_windows(blurred_double_line(338.0, 300, single=True))
     assert single.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
 
 
@@ -489,28 +492,28 @@ def test_a_grade_spread_that_the_track_already_has_passes_the_pair_check():
     the parallel check on their own, and pass it against a tracked width that spreads alike."""
     spread = 1.0 / XM_DEFAULT  # 1 m in px, from the bottom row to the top
     left, right = LineFit((0.0, 0.0, 320.0)), LineFit((0.0, -spread / (H - 1), 960.0 + spread))
-    checks = lanes.LaneChecks()
-    alone = lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks)
+    checks = LaneChecks()
+    alone = pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks)
     assert alone.startswith("lines not parallel")
     rows = np.linspace(0.0, H - 1.0, checks.check_rows)
     reference = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
-    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
-                              width_reference_px=reference) == ""
+    assert pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                        width_reference_px=reference) == ""
     # a reference that does not spread: refused as before
     flat = np.full(len(rows), 640.0)
-    assert lanes.pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
-                              width_reference_px=flat).startswith("lines not parallel")
+    assert pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                        width_reference_px=flat).startswith("lines not parallel")
 
 
 def test_offset_line_takes_a_distance_per_row():
     """A straight line moved by a distance that grows from 3.5 m on the bottom row to 4.5 m on
     the top one (a lane the flat view widens ahead) is the straight line through those points."""
-    rows = lanes.offset_rows_px(H)
+    rows = offset_rows_px(H)
     offset = 3.5 + (H - 1 - rows) / (H - 1)
-    moved = lanes.offset_line((0.0, 0.0, 320.0), offset, XM_DEFAULT, YM_DEFAULT, H)
+    moved = offset_line((0.0, 0.0, 320.0), offset, XM_DEFAULT, YM_DEFAULT, H)
     assert np.polyval(moved, H - 1) == pytest.approx(320.0 + 3.5 / XM_DEFAULT, abs=0.5)
     assert np.polyval(moved, 0.0) == pytest.approx(320.0 + 4.5 / XM_DEFAULT, abs=0.5)
-    widths = lanes.normal_width_m((0.0, 0.0, 320.0), moved, rows, XM_DEFAULT, YM_DEFAULT)
+    widths = normal_width_m((0.0, 0.0, 320.0), moved, rows, XM_DEFAULT, YM_DEFAULT)
     assert np.abs(widths - offset).max() < 0.01
 
 
@@ -523,12 +526,12 @@ def test_stripe_spacing_is_measured_per_band_of_rows():
     outer = 400.0 - (38.0 + 19.0 * (H - 1 - ys) / (H - 1))
     pts = np.column_stack([outer, ys]).round().astype(np.int32)
     cv2.polylines(m, [pts.reshape(-1, 1, 2)], False, 255, 15)
-    rows, gaps = lanes.stripe_spacing_px(m, (0.0, 0.0, 400.0), 38.0)
+    rows, gaps = stripe_spacing_px(m, (0.0, 0.0, 400.0), 38.0)
     assert len(rows) == 8
     assert gaps == pytest.approx(38.0 + 19.0 * (H - 1 - rows) / (H - 1), abs=2.0)
     single = np.zeros((H, W), np.uint8)
     draw_curve(single, (0.0, 0.0, 400.0), 15)
-    assert len(lanes.stripe_spacing_px(single, (0.0, 0.0, 400.0), 38.0)[0]) == 0
+    assert len(stripe_spacing_px(single, (0.0, 0.0, 400.0), 38.0)[0]) == 0
 
 
 # --------------------------------------------------------------------------- the road seen from the car
@@ -566,7 +569,7 @@ def test_the_road_view_ends_at_a_drawn_crest_and_a_shadowed_road_keeps_the_whole
     rows = np.arange(719, -1, -8)
     for crest in (crest_px, None):
         view = _drawn_view(crest, shadows)
-        top = lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0)
+        top = road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0)
         if crest is None:
             assert top == 0
         else:
@@ -581,13 +584,13 @@ def test_the_road_view_reads_only_the_lane_interior_and_needs_a_run_of_rows():
     view[:, 900:] = (96, 120, 60)
     view[300:316] = (140, 110, 60)  # 0.5 m of dirt across the road
     rows = np.arange(719, -1, -8)
-    assert lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0) == 0
-    assert lanes.road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 0.3) == 319  # the row below it
-    lo, hi = lanes.road_view_interior(rows, LANE_LINES, 1280)
+    assert road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 1.0) == 0
+    assert road_view_top_px(view[rows], rows, LANE_LINES, YM_VIEW, 0.15, 0.3) == 319  # the row below it
+    lo, hi = road_view_interior(rows, LANE_LINES, 1280)
     assert lo.min() == 530 and hi.max() == 750
     crest = _drawn_view(400, False)
     part = crest[rows, 500:800]
-    assert lanes.road_view_top_px(part, rows, LANE_LINES, YM_VIEW, 0.15, 1.0, 1280, 500) == 407
+    assert road_view_top_px(part, rows, LANE_LINES, YM_VIEW, 0.15, 1.0, 1280, 500) == 407
 
 
 def _arc_pixels(radius_m: float, rows: np.ndarray, x0_px: float = 900.0, thickness_px: int = 20):
@@ -605,16 +608,16 @@ def test_a_short_line_keeps_a_resolved_bend_in_a_look_ahead_and_a_dash_stays_str
     rows = np.arange(520, H)  # 200 rows, 6.5 m: below min_span_fraction (216 rows)
     ys, xs, x = _arc_pixels(35.0, rows)
     sc = SearchConfig()
-    bowed = lanes.fit_line(ys, xs, H, sc, top_px=432)
+    bowed = fit_line(ys, xs, H, sc, top_px=432)
     assert bowed.coeffs_px[0] > 0
     assert np.abs(bowed.x_at(rows) - x).max() < 2.0  # px: the arc over its span
-    whole = lanes.fit_line(ys, xs, H, sc)  # the whole view (no look-ahead): straight as before
+    whole = fit_line(ys, xs, H, sc)  # the whole view (no look-ahead): straight as before
     assert whole.coeffs_px[0] == 0.0 and np.abs(whole.x_at(rows) - x).max() > 8.0
-    off = lanes.fit_line(ys, xs, H, SearchConfig(short_bend_resolution=0.0), top_px=432)
+    off = fit_line(ys, xs, H, SearchConfig(short_bend_resolution=0.0), top_px=432)
     assert off.coeffs_px[0] == 0.0
     # a dash on a gentle 1 km bend bows by a fraction of a pixel over its 3 m: straight
     ys, xs, _ = _arc_pixels(1000.0, np.arange(628, H))
-    assert lanes.fit_line(ys, xs, H, sc, top_px=432).coeffs_px[0] == 0.0
+    assert fit_line(ys, xs, H, sc, top_px=432).coeffs_px[0] == 0.0
 
 
 def test_two_short_lines_share_one_curvature_fitted_to_both():
@@ -624,13 +627,13 @@ def test_two_short_lines_share_one_curvature_fitted_to_both():
     rx = a * right_rows ** 2.0 - 3.3 * right_rows + 2200.0
     left = LineFit((0.0, 0.1, 10.0), len(left_rows), 159.0)
     right = LineFit((1e-3, 0.0, 0.0), len(right_rows), 199.0)
-    l2, r2 = lanes.shared_curvature(left, right, (left_rows, lx), (right_rows, rx), H)
+    l2, r2 = shared_curvature(left, right, (left_rows, lx), (right_rows, rx), H)
     assert l2.coeffs_px == pytest.approx((a, -3.0, 1400.0), rel=1e-6)
     assert r2.coeffs_px == pytest.approx((a, -3.3, 2200.0), rel=1e-6)
     assert l2.scatter_px == pytest.approx(0.0, abs=1e-4) and l2.n_pixels == left.n_pixels
     # parallel_fits: two short lines of which one bows share the curvature; two straight
     # short lines are left as they are
-    s2 = lanes.parallel_fits(left, right, (left_rows, lx), (right_rows, rx), H)
+    s2 = parallel_fits(left, right, (left_rows, lx), (right_rows, rx), H)
     assert s2[0].coeffs_px[0] == s2[1].coeffs_px[0] == pytest.approx(a)
     straight = (LineFit((0.0, 0.1, 10.0), 100, 159.0), LineFit((0.0, 0.0, 900.0), 100, 199.0))
-    assert lanes.parallel_fits(*straight, (left_rows, lx), (right_rows, rx), H) == straight
+    assert parallel_fits(*straight, (left_rows, lx), (right_rows, rx), H) == straight

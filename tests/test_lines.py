@@ -1,4 +1,4 @@
-"""Tests of the multi-line search ``lanes.find_lines`` (issue 17, every line in view): known
+"""Tests of the multi-line search ``lines.trace.find_lines`` (issue 17, every line in view): known
 answers on synthetic lines-view masks (perspective.LinesView's default size)."""
 from __future__ import annotations
 
@@ -6,8 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import lanes
 from lanelib.errors import ConfigError
+from lanelib.lines.trace import find_lines
+from lanelib.params import LinesConfig
 
 
 # --------------------------------------------------------------------------- every line (find_lines)
@@ -35,7 +36,7 @@ def test_find_lines_known_answer(a):
     bases = (420.0, 651.0, 882.0, 1113.0)
     fs = [lambda y, b=b: b + a * (h - y) ** 2 for b in bases]
     mask = _lines_mask(fs, (False, True, True, False))
-    found = lanes.find_lines(mask, lanes.LinesConfig(extend_m=0.0))
+    found = find_lines(mask, LinesConfig(extend_m=0.0))
     assert len(found) == 4
     for line, f, dashed in zip(found, fs, (False, True, True, False)):  # left to right
         rows = np.arange(line.y_top_px, line.y_bottom_px + 1)
@@ -57,15 +58,15 @@ def test_find_lines_spans_merge_and_noise():
     mask = np.maximum(mask, _lines_mask([lambda y: 1400.0, lambda y: 1402.0], (True, True)))
     rng = np.random.default_rng(0)
     mask[rng.integers(0, h, 300), rng.integers(0, LINES_SIZE[0], 300)] = 255
-    found = lanes.find_lines(mask, lanes.LinesConfig(extend_m=0.0))
+    found = find_lines(mask, LinesConfig(extend_m=0.0))
     assert [round(float(line.x_at(line.y_bottom_px))) for line in found] == [300, 900, 1401]
     assert found[0].y_bottom_px < h - 249 and found[0].y_top_px < 5
     assert found[1].y_top_px > h - 215
-    extended = lanes.find_lines(mask, lanes.LinesConfig(extend_m=9.0))
+    extended = find_lines(mask, LinesConfig(extend_m=9.0))
     assert extended[0].y_bottom_px == pytest.approx(found[0].y_bottom_px + 45)
 
 
 def test_find_lines_empty_and_config():
-    assert lanes.find_lines(np.zeros(LINES_SIZE[::-1], np.uint8)) == []
+    assert find_lines(np.zeros(LINES_SIZE[::-1], np.uint8)) == []
     with pytest.raises(ConfigError):
-        lanes.LinesConfig(bands=0)
+        LinesConfig(bands=0)

@@ -1,4 +1,4 @@
-"""Known-answer tests of the vote over straight lines (``linevote``) on drawn lines-view masks,
+"""Known-answer tests of the vote over straight lines (``lines.vote``) on drawn lines-view masks,
 and of the benchmark cameras' presets (their bird's-eye points make the label lines parallel)."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 
 from lanelib import data
 from lanelib.config import preset
-from lanelib.lanes import LinesConfig
-from lanelib.linevote import reported, run_centres, vote_candidates, vote_lines
+from lanelib.lines.vote import reported, run_centres, vote_candidates, vote_lines
+from lanelib.params import LinesConfig
 from lanelib.perspective import Perspective
 
 XM, YM = 0.02, 0.1          # m per view px across and along

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from lanelib import io
-from lanelib.errors import ConfigError, InputError
-from lanelib.lanes import SearchConfig
 from lanelib.camera import Calibration, Lens, distort_points, undistort_points
+from lanelib.errors import ConfigError, InputError
+from lanelib.params import SearchConfig
 from lanelib.perspective import (Chain, Homography, LinesView, Perspective, PerspectiveConfig, StraightLineCheck,
                                  scaled, straight_line_check, trapezoid_src)
 from lanelib.pipeline import LanePipeline

@@ -147,7 +147,7 @@ def test_udacity_radius(udacity_results):
 
 def test_lane_drawn_on_the_raw_frame_lands_where_the_undistorted_drawing_does():
     from lanelib.camera import Calibration
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
     from lanelib.result import FrameResult
 
     K = np.array([[1000.0, 0, 640.0], [0, 1000.0, 360.0], [0, 0, 1]])

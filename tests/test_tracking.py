@@ -9,10 +9,11 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import lanes
+from lanelib.checks import gap_problem, pitched_pair_problem
 from lanelib.config import PipelineConfig
-from lanelib.perspective import PerspectiveConfig
 from lanelib.errors import ConfigError
+from lanelib.fit import fit_line, least_squares_poly, normal_width_m, offset_line
+from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.tracking import LaneTracker, TrackerConfig
 
@@ -423,17 +424,16 @@ def _tracked(pipe: LanePipeline, config: TrackerConfig | None = None) -> LaneTra
 def test_fit_line_measures_how_far_short_of_the_car_a_line_stops():
     """``gap_px``: rows from the view's bottom row to where all but 2 % of the pixels lie above,
     so a few stray pixels near the car do not make a far line reach it."""
-    from lanelib import lanes
     ys = np.repeat(np.arange(0, 121), 20)
-    far = lanes.fit_line(ys, np.full(ys.shape, 960), H)
+    far = fit_line(ys, np.full(ys.shape, 960), H)
     assert far.gap_px == pytest.approx(H - 1 - 120, abs=3)
-    stray = lanes.fit_line(np.concatenate([ys, [715] * 8]), np.full(ys.size + 8, 960), H)
+    stray = fit_line(np.concatenate([ys, [715] * 8]), np.full(ys.size + 8, 960), H)
     assert stray.span_px > 700 and stray.gap_px == pytest.approx(far.gap_px, abs=3)
-    full = lanes.fit_line(np.repeat(np.arange(H), 5), np.full(5 * H, 960), H)
+    full = fit_line(np.repeat(np.arange(H), 5), np.full(5 * H, 960), H)
     assert full.gap_px < 0.03 * H
-    assert lanes.gap_problem(far, 0.0326, 12.0, "right").startswith(
+    assert gap_problem(far, 0.0326, 12.0, "right").startswith(
         "right line seen only from 19.6 m ahead of the view's bottom row (limit 12.0 m)")
-    assert lanes.gap_problem(full, 0.0326, 12.0, "right") == ""
+    assert gap_problem(full, 0.0326, 12.0, "right") == ""
 
 
 def test_a_line_seen_only_far_ahead_is_joined_to_the_line_inferred_near_the_car(pipe):
@@ -497,7 +497,7 @@ def _sweep_fit_at_car(x0: float, sweep_px: float = 200.0) -> float:
     """The x (px) on the bottom row of the second-order fit to ``_sweeping_frame``'s whole line
     starting at ``x0``: the best a fit of the lane seen down to the car can do."""
     ys = np.arange(H, dtype=float)
-    coeffs = lanes.least_squares_poly(ys, x0 + sweep_px * ((H - 1 - ys) / (H - 1)) ** 3, 2, float(H))
+    coeffs = least_squares_poly(ys, x0 + sweep_px * ((H - 1 - ys) / (H - 1)) ** 3, 2, float(H))
     return float(np.polyval(coeffs, H - 1))
 
 
@@ -638,7 +638,7 @@ def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
 def _turning_frame(pipe: LanePipeline, n: int, right: bool = True) -> np.ndarray:
     """Frame ``n`` of a bend that turns and tightens from frame to frame: the left line is
     x = a*d**2 + b*d + LEFT_X (d = H - 1 - y, a and b growing with n) and the right line its
-    parallel curve 3.7 m to the right along the normal (``lanes.offset_line``)."""
+    parallel curve 3.7 m to the right along the normal (``fit.offset_line``)."""
     bird = np.full((H, W, 3), 70, np.uint8)
     ys = np.arange(0, H, 4, dtype=float)
     d = H - 1 - ys
@@ -646,7 +646,7 @@ def _turning_frame(pipe: LanePipeline, n: int, right: bool = True) -> np.ndarray
     curves = [xl]
     if right:
         ym = pipe.perspective.ym_per_px
-        rc = lanes.offset_line(np.polyfit(ys, xl, 2), 3.7, XM, ym, H)
+        rc = offset_line(np.polyfit(ys, xl, 2), 3.7, XM, ym, H)
         curves.append(np.polyval(rc, ys))
     for xs in curves:
         cv2.polylines(bird, [np.round(np.column_stack([xs, ys])).astype(np.int32)], False,
@@ -668,7 +668,7 @@ def test_an_inferred_line_keeps_the_width_seen_at_the_car(pipe):
     for n in range(1, 25):
         r = tracker.update(_turning_frame(pipe, n, right=False))
         assert r.found and "right line inferred from the left line" in r.reason
-        widths.append(lanes.normal_width_m(r.left.coeffs_px, r.right.coeffs_px, H - 1.0, XM, ym))
+        widths.append(normal_width_m(r.left.coeffs_px, r.right.coeffs_px, H - 1.0, XM, ym))
     assert tracker.seen_width_m == pytest.approx(3.7, abs=0.02)  # inferred frames add nothing
     assert max(abs(w - 3.7) for w in widths) < 0.05
 
@@ -945,8 +945,8 @@ def test_a_pitched_views_lane_starts_the_track_on_its_third_frame(pipe, top_m, s
     if not starts:
         assert not any(r.found for r in results)
         assert "even in a pitched view" not in results[-1].reason  # tried only on the flat check's word
-        assert lanes.pitched_pair_problem(results[-1].rejected.left, results[-1].rejected.right, H, XM,
-                                          PerspectiveConfig().ym_per_px).startswith(
+        assert pitched_pair_problem(results[-1].rejected.left, results[-1].rejected.right, H, XM,
+                                    PerspectiveConfig().ym_per_px).startswith(
             "lines not parallel even in a pitched view")
         return
     assert results[2].found and "a lane in a pitched flat view" in results[2].reason

@@ -317,7 +317,7 @@ PRIORS = {  # (left, right) bird's-eye fits: ordinary, curved, at the image's ed
 @pytest.mark.parametrize("config_name", [*BAND_CONFIGS, *BAND_WHOLE_VIEW_CONFIGS])
 def test_band_detection_sees_the_same_pixels_as_the_full_view(config_name):
     from lanelib.config import from_dict
-    from lanelib.lanes import LineFit
+    from lanelib.records import LineFit
 
     cfg = from_dict(PipelineConfig, {**BAND_CONFIGS, **BAND_WHOLE_VIEW_CONFIGS}[config_name])
     pipe = LanePipeline(cfg)
@@ -382,7 +382,7 @@ def test_band_detection_on_real_frames(udacity_advanced, udacity_calibration):
 
 @pytest.mark.parametrize("degree", [1, 2])
 def test_the_moment_fit_is_numpys_least_squares_fit(degree):
-    from lanelib.lanes import least_squares_poly
+    from lanelib.fit import least_squares_poly
 
     rng = np.random.default_rng(degree)
     for n, lo, hi in [(20000, 0, 720), (300, 500, 720), (5, 10, 600)]:

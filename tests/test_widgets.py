@@ -17,7 +17,7 @@ from lanelib import draw, io, perspective, thresholds, widgets
 from lanelib.config import PipelineConfig, load_config, save_config, to_dict
 from lanelib.errors import CalibrationError, ConfigError, InputError
 from lanelib.hough import HoughConfig
-from lanelib.lanes import SearchConfig
+from lanelib.params import SearchConfig
 from lanelib.perspective import PerspectiveConfig, implied_focal_px, road_length_m, trapezoid_src
 from lanelib.pipeline import LanePipeline
 

@@ -11,7 +11,7 @@ import pytest
 from lanelib import io, widgets
 from lanelib.config import PipelineConfig, load_config, save_config
 from lanelib.errors import InputError
-from lanelib.lanes import SearchConfig
+from lanelib.params import SearchConfig
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]

@@ -13,7 +13,7 @@ for TuSimple) and gives each label line one class (``classify``):
   the label's rows below ``NEAR_PX``, scaled to the frame's width) but fails the match: it stops
   short of the label's extent, or runs beside it;
 - **refused**: no reported line lies on it, but a line the vote weighed and refused does
-  (``linevote.vote_candidates``; or a line seen but not written, beyond the lines a side that
+  (``lines.vote.vote_candidates``; or a line seen but not written, beyond the lines a side that
   CULane labels): the refusal's reason;
 - **missed**: nothing near it. The label mapped into the lines view says where it was lost
   (``paint_share``): no paint in the mask along it (the mask lost it), a mask as busy beside it as
@@ -36,11 +36,11 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from . import culane, metrics, tusimple
 from .. import data, io, runs
 from ..config import PipelineConfig, benchmark_config
 from ..errors import InputError
 from ..pipeline import LanePipeline
-from . import culane, metrics, tusimple
 
 FOUND, OFF, REFUSED, MISSED, FALSE = "found", "reported but off", "refused", "missed", "false line"
 CLASSES = (FOUND, OFF, REFUSED, MISSED, FALSE)

@@ -1,7 +1,7 @@
 """Every frozen parameter record of lanelib, in a leaf package: it imports nothing of lanelib but ``errors``.
 
 The stage modules import their records from here and keep them as their public names
-(``lanelib.lanes.SearchConfig``, ``lanelib.thresholds.ThresholdConfig``, ...); ``config``
+(``lanelib.search.SearchConfig``, ``lanelib.thresholds.ThresholdConfig``, ...); ``config``
 nests them into ``PipelineConfig``. Nothing here imports a stage, so neither the stages nor
 ``config`` form a cycle through their parameters.
 

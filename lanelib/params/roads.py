@@ -1,11 +1,11 @@
 """The parameter records beyond one clean frame: the asphalt edge, every line in view, the tracker.
 
-``EdgeConfig`` (``lanes.road_edge``), ``LinesConfig`` (``lanes.find_lines``,
-``linevote.vote_lines``, ``pipeline.LanePipeline.detect_lines``) and ``TrackerConfig``
+``EdgeConfig`` (``roads.edge.road_edge``), ``LinesConfig`` (``lines.trace.find_lines``,
+``lines.vote.vote_lines``, ``pipeline.LanePipeline.detect_lines``) and ``TrackerConfig``
 (``tracking.LaneTracker``; its steps are numbered in ``tracking``'s module docstring). Frozen
 dataclasses with units in their field names; ``__post_init__`` refuses a value out of range with a
 ``ConfigError`` naming the key. A function a docstring names without its module is its stage's
-(``lanes.road_edge``, ``lanes.fit_line``, ...).
+(``roads.edge.road_edge``, ``fit.fit_line``, ...).
 """
 from __future__ import annotations
 
@@ -116,7 +116,7 @@ class LinesConfig:
         A camera that sees the road only some tens of metres ahead (a low camera in traffic)
         needs a shorter, finer view than a highway camera.
     method : how lines are found in the view: "trace" (``find_lines``: histogram peaks, then
-        windows that follow each line) or "vote" (``linevote.vote_lines``: narrow runs of
+        windows that follow each line) or "vote" (``lines.vote.vote_lines``: narrow runs of
         paint vote for straight lines, so a line seen in pieces between vehicles or as sparse
         dashes is one line).
     max_paint_width_m, vote_tolerance_m, max_lines : the vote's widest run of paint, how far
@@ -125,12 +125,12 @@ class LinesConfig:
         the common heading of the lines in it (lane lines are parallel).
     min_offset_m, near_paint_m : a line nearer than ``min_offset_m`` to the car's centre line on
         the view's bottom row (0: off) is reported only when its paint reaches within
-        ``near_paint_m`` of that row (``linevote``): a lane line runs under the car only during a
+        ``near_paint_m`` of that row (``lines.vote``): a lane line runs under the car only during a
         lane change, and then its paint is seen beside the car, while the edge of a vehicle ahead
         looks like a line there in the view but starts where the vehicle is.
     follow_bends : a voted line is also traced by windows (``window_m``, ``max_empty_windows``)
         from its paint near the car, and the traced paint is kept where it fits tighter
-        (``linevote``): a bend of the road or the lens bends a line away from a straight one.
+        (``lines.vote``): a bend of the road or the lens bends a line away from a straight one.
     row_weight_power, row_weight_full : how much a row of the lines view counts in the vote
         (``LanePipeline.lines_row_weights``; power 0: every row alike): the raw frame's rows it
         sees over ``row_weight_full``, at most 1, to this power. Far rows are stretched from a
@@ -192,7 +192,7 @@ class LinesConfig:
 
 @dataclass(frozen=True)
 class TrackerConfig:
-    """Parameters of ``LaneTracker`` (the checks every lane passes are ``lanes.LaneChecks``); the
+    """Parameters of ``LaneTracker`` (the checks every lane passes are ``params.LaneChecks``); the
     steps named are those of ``tracking``'s module docstring.
 
     Parameters
@@ -217,14 +217,14 @@ class TrackerConfig:
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
         the lane is held for, beside ``hold_frames`` (step 5); they do not count toward it.
     max_gap_m : largest distance (m of road) between the view's bottom row and a line's pixels
-        nearest it (``lanes.LineFit.gap_px``) for the line to be taken as seen at the car (step
+        nearest it (``records.LineFit.gap_px``) for the line to be taken as seen at the car (step
         2). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
         away, a stray edge far ahead) is an extrapolation at the car: a heading error of a degree
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
         has paint within it.
     grade_pair_check : with a track, a pair whose width changes along the view otherwise than the
-        tracked width's does (``lanes.pair_problem``: "lines not parallel") is checked again
+        tracked width's does (``checks.pair_problem``: "lines not parallel") is checked again
         against the width the road ahead's grade gives it in the flat view: its width at the car
         times the view's scale across the road read from a double line's stripes in this frame
         (``stripe_spread``'s measure, along either line), and kept when it passes. The tracked
@@ -233,7 +233,7 @@ class TrackerConfig:
         track: a pair that only this check keeps, with nothing to compare it with, is more often
         false than the lane.
     stripe_spread : while one line is inferred (step 4), take the change of the lane's width
-        ahead from the seen line's double stripes (``lanes.stripe_spacing_px``) when they show on
+        ahead from the seen line's double stripes (``roads.stripes.stripe_spacing_px``) when they show on
         enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
         the stripes' spacing with it, so the lane's width on a row is its tracked width at the car
         times the stripes' spacing there over their spacing at the car (a straight line fitted in
@@ -259,7 +259,7 @@ class TrackerConfig:
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
     road_view_run_m : 0 (off), or the least run (m of road) of rows whose lane interior does not
         look like the road near the car that ends the look-ahead of a frame whose lines were
-        refused (step 1, ``lanes.road_view_top_px``). 1 m: a patch of dirt or a shadow's tinted
+        refused (step 1, ``roads.edge.road_view_top_px``). 1 m: a patch of dirt or a shadow's tinted
         edge across one or two rows does not; a crest's grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
@@ -296,7 +296,7 @@ class TrackerConfig:
         missing too is worse. The same rule keeps a frame whose line is so extrapolated out of
         the width seen at the car (step 3, ``seen_width_m``).
     pitched_start_frames : 0 (off), or the frames in a row, without a track, whose pair is refused
-        only as not parallel but is a lane in a pitched flat view (``lanes.pitched_pair_problem``:
+        only as not parallel but is a lane in a pitched flat view (``checks.pitched_pair_problem``:
         its width changes linearly along the view by at most ``max_pitch_change``, and is
         parallel about that trend) and agrees with the previous frame's such pair (each line
         within ``max_jump_m`` at the car and ``max_bend_m`` in shape) that start the track with

@@ -2,9 +2,9 @@
 
 Each record is a frozen dataclass with defaults and units in its field names; its
 ``__post_init__`` refuses a value out of range with a ``ConfigError`` naming the key. The stage
-modules import their records from here (``lanelib.lanes.SearchConfig`` is this
+modules import their records from here (``lanelib.search.SearchConfig`` is this
 ``SearchConfig``), and ``config.PipelineConfig`` nests them, so a record depends on nothing above it.
-A function a record's docstring names without its module is its stage's (``lanes.check_lane``,
+A function a record's docstring names without its module is its stage's (``checks.check_lane``,
 ``perspective.Perspective``, ...).
 """
 from __future__ import annotations

@@ -8,14 +8,15 @@ from dataclasses import replace
 import ipywidgets as widgets
 import numpy as np
 
-from .. import draw, lanes, thresholds
+from .. import draw, thresholds
 from ..camera import Calibration
 from ..config import PipelineConfig
 from ..pipeline import LanePipeline
+from ..search import search_around, sliding_windows
 from .base import Tuner, fmt, row, sized
 
 LIMITS = {"n_windows": (1, 30), "margin_px": (5, 300), "minpix": (0, 5000), "prior_margin_px": (5, 300)}
-# the published tricks (``lanes.SearchConfig``), all off by default: key -> (kind, low, high, step)
+# the published tricks (``params.SearchConfig``), all off by default: key -> (kind, low, high, step)
 SWITCHES = {"trim_outliers_pct": ("float", 0.0, 100.0, 0.5), "grow_margin_px": ("int", 0, 100, 5),
             "window_histogram": ("bool",), "centre_first": ("bool",)}
 
@@ -25,7 +26,7 @@ class FitTuner(Tuner):
 
     Sliders ``n_windows``, ``margin_px``, ``minpix`` (the sliding windows) and
     ``prior_margin_px`` (the band searched around a previous fit; here the windows' own fits
-    stand in for the previous frame's); the published tricks of ``lanes.SearchConfig`` as
+    stand in for the previous frame's); the published tricks of ``params.SearchConfig`` as
     switches (all off by default): ``trim_outliers_pct`` (0: off; else the share of each line's
     pixels kept for the refit), ``grow_margin_px`` (0: off), ``window_histogram`` and
     ``centre_first``. The preview shows the windows and fits, the band search and the lane drawn
@@ -77,8 +78,8 @@ class FitTuner(Tuner):
     def _update(self, key: str | None) -> None:
         """Search the lane mask with the current search parameters (windows, then around them)."""
         sc = self.config.search
-        self.windows = lanes.sliding_windows(self.binary, sc, car_x=self.pipeline.car_x_px)
-        self.around = lanes.search_around(self.binary, self.windows.left, self.windows.right, sc)
+        self.windows = sliding_windows(self.binary, sc, car_x=self.pipeline.car_x_px)
+        self.around = search_around(self.binary, self.windows.left, self.windows.right, sc)
         self.measurement = self.pipeline.measure(self.windows.left, self.windows.right)
 
     def render(self) -> dict[str, np.ndarray | None]:

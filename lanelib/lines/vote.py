@@ -32,7 +32,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .lanes import LinesConfig, ViewLine, least_squares_poly, trace_line
+from ..fit import least_squares_poly
+from ..params import LinesConfig
+from .trace import ViewLine, trace_line
 
 
 @dataclass(frozen=True)
@@ -219,7 +221,7 @@ def _followed(v: _Votes, near: np.ndarray, voted: tuple, s: float, config: Lines
     bends, with their fit.
 
     A line bends away from the straight line the vote found (a curve of the road, the lens): it
-    is traced by windows (``lanes.trace_line``) from its paint in the near half of the view. The
+    is traced by windows (``lines.trace.trace_line``) from its paint in the near half of the view. The
     traced runs replace the voted ones when their fit scatters less, over at least the same span
     of the road, and they hold at least half of the voted runs of the near half (the trace has
     not wandered off to other paint).

@@ -1,0 +1,362 @@
+"""The asphalt edge of a side without paint, and the stretch of road the camera sees ahead.
+
+A verge (grass, dirt, gravel) differs from the road surface in saturation or grain, both free of
+the light's brightness (``verge_features``): ``road_edge`` finds the road-to-verge step row by row
+on a shrunk bird's-eye view (``verge_grid``) and fits it like a line. ``road_view_top_px`` ends the
+look-ahead where the lane's interior stops looking like the road near the car (a crest, a vehicle
+ahead).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import cv2
+import numpy as np
+
+from ..fit import fit_line
+from ..params import EdgeConfig, LaneChecks, SearchConfig
+from ..records import LineFit
+
+
+TRACE_START = 4  # edge points the trace starts from and extends by a straight line (``road_edge``)
+DARK_V = 80.0  # saturation below this value (V, 0-255) is measured against it: a shadow's tint is not colour
+
+
+def saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the saturation ((max - min) / max of R, G, B, 0-1, the max taken as at least
+    ``DARK_V``: the tint of a shadow or the noise of a dark pixel is not colour) and the value
+    (max of R, G, B, 0-255) of each pixel of an RGB image, float32."""
+    r, g, b = cv2.split(np.ascontiguousarray(rgb))
+    hi = cv2.max(cv2.max(r, g), b).astype(np.float32)
+    return (hi - cv2.min(cv2.min(r, g), b)) / np.maximum(hi, DARK_V), hi
+
+
+def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the per-pixel features that tell a verge from the road surface in a (shrunk)
+    bird's-eye image: saturation (``saturation``: the bluish tint of a shadow or the noise of a
+    dark pixel is not colour), grain (local std / mean of V over 3 x 3 px) and where the camera
+    sees (not black). Both are free of the light's brightness, so a shadow on
+    the road, a repaved strip, a tar seam and a concrete barrier (grey and smooth like the road)
+    look like road; grass and dirt differ in saturation, gravel in grain."""
+    sat, hi = saturation(rgb)
+    mean = cv2.blur(hi, (3, 3))
+    var = np.maximum(cv2.blur(hi * hi, (3, 3)) - mean * mean, 0.0)
+    return sat, np.sqrt(var) / np.maximum(mean, 8.0), hi > 0
+
+
+ROAD_VIEW_INSET = 0.25      # share of the lane's width left out inside each line (``road_view_top_px``)
+ROAD_VIEW_REFERENCE_M = 1.5  # road (m) above the view's bottom row whose surface is the reference
+ROAD_VIEW_OFF_SHARE = 0.5   # share of a row's interior pixels unlike the road for the row to be off it
+
+
+def road_view_interior(rows_px: np.ndarray, lines, width_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return the first and last-plus-one column (px, int) of the lane interior that
+    ``road_view_top_px`` reads on each row of ``rows_px``: ``ROAD_VIEW_INSET`` of the lane's width
+    inside each of the ``lines`` (pixel coefficients), clipped to a view ``width_px`` wide."""
+    xl, xr = np.polyval(lines[0], rows_px), np.polyval(lines[1], rows_px)
+    inset = ROAD_VIEW_INSET * (xr - xl)
+    return (np.clip(np.round(xl + inset), 0, width_px).astype(int),
+            np.clip(np.round(xr - inset), 0, width_px).astype(int))
+
+
+def road_view_top_px(rows_rgb: np.ndarray, rows_px: np.ndarray, lines, ym_per_px: float,
+                     min_saturation_step: float, run_m: float, width_px: int | None = None,
+                     col0_px: int = 0) -> int:
+    """Return the first row (px) of the look-ahead over the road seen continuously from the car:
+    the row just below the lowest run of ``run_m`` of road whose lane interior does not look like
+    the road near the car; 0 when the whole view does.
+
+    Beyond a crest, or a car or anything else standing on the road ahead, the bird's-eye view's
+    far rows hold what the camera sees there (grass, a barrier, other stretches of the road
+    farther round a bend), and the lines' fits follow it. Each sampled row's lane interior (between
+    the ``lines``, ``ROAD_VIEW_INSET`` of the lane's width inside each: no paint, a few pixels of
+    a track's error) is compared with the road's surface just ahead of the car (the interior of
+    the rows within ``ROAD_VIEW_REFERENCE_M`` of the bottom row): a pixel is unlike the road when
+    its saturation (``saturation``: a shadow's dark tint is not colour) exceeds the
+    reference's median by ``min_saturation_step`` (``EdgeConfig``'s: grass, dirt, a painted car),
+    and a row is off the road when ``ROAD_VIEW_OFF_SHARE`` of its seen interior pixels are. A
+    shadow, a repaved strip or a tar seam keeps the road's low saturation and never ends the
+    view, however dark. A row whose interior is not in the view (the lines crossing or leaving
+    it) ends the scan (``lookahead_top_px`` handles lines leaving the view).
+
+    Parameters
+    ----------
+    rows_rgb : (n, W, 3) uint8 RGB rows of the bird's-eye view, in the order of ``rows_px``, or
+        of its columns from ``col0_px`` on (at least those of ``road_view_interior``).
+    rows_px : the view's rows sampled, from the bottom up (decreasing y).
+    lines : pixel coefficients (a, b, c) of the tracked left and right lines.
+    ym_per_px : metres of road per view row.
+    min_saturation_step : saturation (0-1) above the road's that is unlike it.
+    run_m : least run (m of road) of rows off the road that ends the view (a shadow's tinted
+        edge, a patch of dirt on one row does not).
+    width_px : the view's width (default: that of ``rows_rgb``); col0_px : the view's column of
+        ``rows_rgb``'s first one.
+    """
+    rows_px = np.asarray(rows_px, np.float64)
+    lo, hi = road_view_interior(rows_px, lines, rows_rgb.shape[1] if width_px is None else width_px)
+    sat, top_v = saturation(rows_rgb)
+    cols = np.arange(col0_px, col0_px + rows_rgb.shape[1])
+    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
+    seen = inside & (top_v > 0)
+    n_seen = seen.sum(axis=1)
+    # the interior must be in the view: wide enough and mostly seen, from the bottom row on
+    valid = (hi - lo >= 4) & (n_seen * 2 >= np.maximum(hi - lo, 1))
+    stop = int(np.argmin(valid)) if not valid.all() else len(rows_px)
+    ref = seen[:stop] & ((rows_px[0] - rows_px[:stop]) <= ROAD_VIEW_REFERENCE_M / ym_per_px)[:, None]
+    if not ref.any():
+        return 0
+    limit = float(np.median(sat[:stop][ref])) + min_saturation_step
+    off = ((sat[:stop] > limit) & seen[:stop]).sum(axis=1) >= ROAD_VIEW_OFF_SHARE * np.maximum(n_seen[:stop], 1)
+    step_m = ym_per_px * abs(rows_px[0] - rows_px[-1]) / max(len(rows_px) - 1, 1)
+    need = max(1, int(np.ceil(run_m / max(step_m, 1e-9))))
+    run, prev = 0, -2
+    for i in np.flatnonzero(off):  # the first run of ``need`` rows off the road, from the bottom
+        run = run + 1 if run and i == prev + 1 else 1
+        prev = i
+        if run >= need:
+            first = i - need + 1
+            return 0 if first == 0 else int(rows_px[first - 1])
+    return 0
+
+
+@dataclass(frozen=True)
+class VergeGrid:
+    """The verge features (``verge_features``) of a bird's-eye view shrunk by ``scale`` each way,
+    of its rows from ``row0`` (shrunk rows) down to the bottom: what ``road_edge`` reads, made
+    once for several edges of one frame (``verge_grid``). ``height_px`` is the whole view's."""
+
+    sat: np.ndarray
+    grain: np.ndarray
+    seen: np.ndarray
+    row0: int
+    height_px: int
+    scale: int
+
+
+def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None,
+               sampled: bool = False) -> VergeGrid:
+    """Return the ``VergeGrid`` of a bird's-eye image, or of its rows from ``row0_px`` (a multiple
+    of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height).
+    ``sampled``: ``bird`` holds one row of each ``scale`` rows (``grid_rows_px``), shrunk only
+    across (a quarter of the remap and of the features for a grid read on every frame)."""
+    h, w = bird.shape[:2]
+    rows = h if sampled else h // scale
+    small = cv2.resize(bird, (w // scale, rows), interpolation=cv2.INTER_AREA) if scale > 1 else bird
+    sat, grain, seen = verge_features(small)
+    return VergeGrid(sat, grain, seen, row0_px // scale, h if height_px is None else height_px, scale)
+
+
+def grid_rows_px(row0_px: int, height_px: int, scale: int) -> np.ndarray:
+    """Return the one row of each ``scale`` rows from ``row0_px`` (a multiple of ``scale``) to
+    ``height_px`` that a sampled ``verge_grid`` reads: the middle one of each."""
+    return np.arange(row0_px + scale // 2, height_px - scale + 1 + scale // 2, scale)
+
+
+def _edge_step(sat_row, grain_row, a: int, b: int, pad: tuple[int, int], win: int, sign: float,
+               road_sat: float, road_grain: float, config: EdgeConfig) -> int | None:
+    """Return the column (shrunk grid) of the road-to-verge step between columns ``a`` and ``b``
+    of one row (``road_edge``'s test: the mean verge score of the ``2 * step_m`` window beyond it
+    less that of the ``step_m`` window inside, largest, with the inside road and the outside
+    verge), or None where there is none."""
+    lo, hi = a - pad[0], b + pad[1]
+    score = np.clip((sat_row[lo:hi] - road_sat) / config.min_saturation_step, 0, 1)
+    if config.min_texture_ratio > 0:
+        score = np.maximum(score, np.clip((grain_row[lo:hi] / road_grain - 1.0)
+                                          / config.min_texture_ratio, 0, 1))
+    if sign < 0:
+        score = score[::-1]
+    c = np.concatenate([[0.0], np.cumsum(score)])
+    idx = np.arange(win, len(score) - 2 * win + 1)
+    if not len(idx):
+        return None
+    inner = (c[idx] - c[idx - win]) / win
+    outer = (c[idx + 2 * win] - c[idx]) / (2 * win)
+    step = outer - inner
+    j = int(np.argmax(step))
+    if step[j] < config.min_step or inner[j] > config.max_inner or outer[j] < config.min_outer:
+        return None
+    # the boundary between the last inner and the first outer column
+    return (lo + int(idx[j])) if sign > 0 else (hi - int(idx[j]))
+
+
+def _edge_steps(sat, grain, seen, rows, a, b, pad: tuple[int, int], win: int, sign: float,
+                road_sat: np.ndarray, road_grain: np.ndarray, config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Return which of ``rows`` (indices into them) have a road-to-verge step between their
+    columns ``a`` and ``b`` and its column (shrunk grid, float): ``_edge_step`` on every row at
+    once (the same sums in the same order, so the same columns)."""
+    lo, hi = a - pad[0], b + pad[1]
+    length = hi - lo
+    keep = b > a
+    if keep.any():
+        offs = np.arange(int(length[keep].max()))
+        inside = offs[None, :] < length[:, None]
+        cols = (lo[:, None] + offs[None, :]) if sign > 0 else (hi[:, None] - 1 - offs[None, :])
+        cols = np.clip(cols, 0, sat.shape[1] - 1)
+        rr = rows[:, None]
+        keep &= np.all(seen[rr, cols] | ~inside, axis=1)
+    if not keep.any():
+        return np.zeros(0, int), np.zeros(0)
+    idx_rows = np.flatnonzero(keep)
+    rr, cols, inside, length = rows[keep][:, None], cols[keep], inside[keep], length[keep]
+    score = np.clip((sat[rr, cols] - road_sat[keep][:, None]) / config.min_saturation_step, 0, 1)
+    if config.min_texture_ratio > 0:
+        score = np.maximum(score, np.clip((grain[rr, cols] / road_grain[keep][:, None] - 1.0)
+                                          / config.min_texture_ratio, 0, 1))
+    score = np.where(inside, score, 0.0)
+    c = np.concatenate([np.zeros((len(score), 1)), np.cumsum(score, axis=1)], axis=1)
+    n = c.shape[1]
+    j = np.arange(win, max(win + 1, n - 2 * win))
+    valid = (j[None, :] <= (length - 2 * win)[:, None])
+    jj = np.clip(j, 0, n - 1 - 2 * win) if n - 1 - 2 * win >= 0 else np.zeros_like(j)
+    inner = (c[:, jj] - c[:, np.maximum(jj - win, 0)]) / win
+    outer = (c[:, np.minimum(jj + 2 * win, n - 1)] - c[:, jj]) / (2 * win)
+    step = np.where(valid, outer - inner, -np.inf)
+    best = np.argmax(step, axis=1)
+    pick = np.arange(len(step))
+    ok = valid.any(axis=1) & (step[pick, best] >= config.min_step) & (inner[pick, best] <= config.max_inner) \
+        & (outer[pick, best] >= config.min_outer)
+    x = np.where(sign > 0, lo[keep] + j[best], hi[keep] - j[best]).astype(float)
+    return idx_rows[ok], x[ok]
+
+
+def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,
+              checks: LaneChecks = LaneChecks(), config: EdgeConfig = EdgeConfig(),
+              top_px: int = 0, guide_px=None, range_m: tuple[float, float] | None = None,
+              bottom_px: int | None = None, grid: VergeGrid | None = None) -> tuple[LineFit, np.ndarray]:
+    """Return the fit of the asphalt edge on ``side`` ("left"/"right") of the lane whose other
+    line is ``other``, and its edge points ((N, 2) x, y px); a not-found fit says why.
+
+    In the bird's-eye view shrunk by ``config.scale``, each pixel of a row gets a 0-1 verge
+    score: its saturation above the road surface's (``verge_features``; the road is that row's
+    median between ``other`` and the nearest the edge can be) over ``min_saturation_step``, or
+    its grain's ratio to the road's, less 1, over ``min_texture_ratio``, whichever is larger
+    (per row: the view blurs with distance, the grain with it). On each row, from the bottom up,
+    between ``range_m`` (along the normal, default ``checks.min_width_m`` - 0.2 to
+    ``max_width_m`` + 0.2 m) from ``guide_px`` (pixel coefficients; default ``other``'s fit),
+    the edge is the column where the mean score of the ``2 * step_m`` window beyond it minus
+    that of the ``step_m`` window inside is largest, kept when the inside is road (``max_inner``),
+    the outside verge (``min_outer``) and the rise at least ``min_step``. With
+    ``config.trace_margin_m``, once ``TRACE_START`` rows have an edge point the edge is followed
+    instead: each row is searched within ``trace_margin_m`` (along the row, one shrunk pixel
+    more per row without a point) of the straight line through the last ``TRACE_START`` points,
+    so the edge is followed over the view where it is seen, however the flat view's width from
+    ``other`` changes with distance (a pitched road, an S-bend beyond the other line's pixels);
+    the road surface of a row whose reference lies out of the view is the last row's, and the
+    trace ends after ``trace_gap_m`` of road without a point. The points are fitted
+    by ``fit_line`` with ``trim_outliers_pct``, then refitted up to three times without the
+    points beyond 3 robust standard deviations (1.4826 x the median distance) of the fit (a
+    robust fit: a patch of darker grass or a shadow does not bend it). A seam, a repaved strip's
+    edge, a shadow's edge or a concrete barrier's has grey road-like surface beyond it and gives
+    no edge. ``bottom_px``: the rows below it are not read (default: the view's bottom row).
+    ``grid``: the view's ``verge_grid`` made already (``bird`` is then not read).
+    """
+    if grid is None:
+        grid = verge_grid(bird, config.scale)
+    k, h, row0 = grid.scale, grid.height_px, grid.row0
+    sat, grain, seen = grid.sat, grid.grain, grid.seen
+    sh, sw = row0 + sat.shape[0], sat.shape[1]
+    sign = 1.0 if side == "right" else -1.0
+    last_row = sh if bottom_px is None else min(sh, int(np.ceil((bottom_px + 1) / k)))
+    rows = np.arange(max(row0, top_px // k), last_row)[::-1]  # from the bottom up
+    yf = rows * k + (k - 1) / 2.0  # the full view's rows at the shrunk rows' centres
+    x_line = np.polyval(other.coeffs_px, yf)
+    guide = np.asarray(other.coeffs_px if guide_px is None else guide_px, float)
+    x_guide = np.polyval(guide, yf)
+
+    def stretch_of(coeffs) -> np.ndarray:  # px across per metre along the normal
+        slope = np.polyval(np.polyder(coeffs), yf) * xm_per_px / ym_per_px
+        return np.sqrt(1.0 + slope * slope) / xm_per_px
+
+    stretch, stretch_g = stretch_of(np.asarray(other.coeffs_px, float)), stretch_of(guide)
+    near_m, far_m = (checks.min_width_m - 0.2, checks.max_width_m + 0.2) if range_m is None else range_m
+    win = max(2, int(round(config.step_m / xm_per_px / k)))
+    pad = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
+    trace_half = config.trace_margin_m / xm_per_px / k
+    gap_rows = max(1, int(round(config.trace_gap_m / ym_per_px / k)))
+    # the road surface of each row: between the line and the nearest the edge may be (medians
+    # of the windows on all rows at once, NaN where a row's window is short or not all seen)
+    near = np.round((x_line + sign * 0.3 * checks.min_width_m * stretch) / k).astype(int)
+    far = np.round((x_line + sign * (checks.min_width_m - 0.3) * stretch) / k).astype(int)
+    p0, p1 = np.maximum(0, np.minimum(near, far)), np.minimum(sw, np.maximum(near, far) + 1)
+    span = p1 - p0
+    refs = np.full((len(rows), 2), np.nan)
+    if len(rows) and span.max() > 0:
+        offs = np.arange(int(span.max()))
+        inside = offs[None, :] < span[:, None]
+        cols = np.clip(p0[:, None] + offs[None, :], 0, sw - 1)
+        rr = (rows - row0)[:, None]
+        ok = (span >= win) & np.all(seen[rr, cols] | ~inside, axis=1)
+        if ok.any():
+            lo_i, hi_i = (span[ok] - 1) // 2, span[ok] // 2
+            pick = np.arange(int(ok.sum()))
+            for j, feature in enumerate((sat, grain)):
+                vals = np.sort(np.where(inside, feature[rr, cols], np.nan)[ok], axis=1)  # NaN last
+                refs[ok, j] = (vals[pick, lo_i] + vals[pick, hi_i]) / 2  # np.median's, in float32
+    ys, xs = [], []
+    road_sat, road_grain, missed = None, 1e-3, 0
+    if trace_half <= 0:  # every row at once: its own road surface, its range from the guide
+        use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
+        x0 = x_guide + sign * near_m * stretch_g
+        x1 = x_guide + sign * far_m * stretch_g
+        a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
+        a, b = np.maximum(np.minimum(a, b), pad[0]), np.minimum(np.maximum(a, b), sw - pad[1])
+        ys_a, xs_a = _edge_steps(sat, grain, seen, rows[use] - row0, a[use], b[use], pad, win, sign,
+                                 refs[use, 0].astype(sat.dtype),
+                                 np.maximum(refs[use, 1], 1e-3).astype(grain.dtype), config)
+        ys_a = yf[use][ys_a] if len(ys_a) else np.zeros(0)
+        xs_a = xs_a * float(k)
+        rows = rows[:0]  # the loop below is the trace's
+    for i, r in enumerate(rows):
+        tracing = trace_half > 0 and len(xs) >= TRACE_START
+        if not np.isnan(refs[i, 0]):
+            if refs[i, 0] > config.max_road_saturation:
+                missed += 1
+                continue
+            road_sat, road_grain = float(refs[i, 0]), max(float(refs[i, 1]), 1e-3)
+        elif not tracing or road_sat is None:
+            continue
+        if tracing:
+            if missed > gap_rows:
+                break  # the edge is no longer seen: the trace ends
+            last_y, last_x = np.asarray(ys[-TRACE_START:]) / k, np.asarray(xs[-TRACE_START:]) / k
+            slope, at = np.polyfit(last_y, last_x, 1)
+            centre = slope * r + at
+            half = trace_half + missed
+            a, b = int(np.floor(centre - half)), int(np.ceil(centre + half))
+        else:
+            x0 = x_guide[i] + sign * near_m * stretch_g[i]
+            x1 = x_guide[i] + sign * far_m * stretch_g[i]
+            a, b = sorted((int(x0 // k), int(np.ceil(x1 / k))))
+        a, b = max(a, pad[0]), min(b, sw - pad[1])
+        if b <= a or not seen[r - row0, a - pad[0]:b + pad[1]].all():
+            missed += 1
+            continue
+        x = _edge_step(sat[r - row0], grain[r - row0], a, b, pad, win, sign, road_sat, road_grain, config)
+        if x is None:
+            missed += 1
+            continue
+        missed = 0
+        ys.append(yf[i])
+        xs.append(float(x * k))
+    if trace_half > 0:
+        ys_a, xs_a = np.asarray(ys, float), np.asarray(xs, float)
+    order = np.argsort(ys_a, kind="stable")  # the points from the view's top down
+    ys_a, xs_a = ys_a[order], xs_a[order]
+    depth = (h if bottom_px is None else bottom_px + 1) - top_px
+    fit_cfg = SearchConfig(min_line_pixels=config.min_points, min_span_fraction=0.3,
+                           min_found_span_fraction=config.min_span_fraction * depth / h,
+                           trim_outliers_pct=config.trim_outliers_pct)
+    fit = fit_line(ys_a, xs_a, h, fit_cfg, missing=f"no {side} asphalt edge (no road-to-verge step)")
+    for _ in range(3):  # refit without the points far from the fit (robust: a patch, a shadow)
+        if not fit.found:
+            break
+        res = np.abs(xs_a - fit.x_at(ys_a))
+        keep = res <= max(2.0 * k, 3.0 * 1.4826 * float(np.median(res)))
+        if keep.all():
+            break
+        ys_a, xs_a = ys_a[keep], xs_a[keep]
+        fit = fit_line(ys_a, xs_a, h, replace(fit_cfg, trim_outliers_pct=0.0),
+                       missing=f"no {side} asphalt edge (no road-to-verge step)")
+    if not fit.found:
+        fit = replace(fit, reason=f"{side} asphalt edge: {fit.reason}")
+    return fit, np.column_stack([xs_a, ys_a])

@@ -1,0 +1,267 @@
+"""Lane-pixel search in the bird's-eye mask: the histogram and its bases, sliding windows, the
+search around a prior fit, and the look-ahead that keeps a tracked lane in the view.
+
+Every search fits its lines through ``fit_side``: ``fit.fit_line`` of the line's pixels, narrowed
+to a double line's inner stripe where the pixels scatter like one (``roads.stripes``, switched on
+by ``SearchConfig.double_line_px``). Each returns a ``records.LaneSearch``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from .fit import fit_line, fit_line_with_first, parallel_fits
+from .params import SearchConfig
+from .records import LaneSearch, LineFit, Window
+from .roads.stripes import inner_stripe_mask, two_stripes
+
+
+def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y (int32 arrays)."""
+    pts = cv2.findNonZero(binary)
+    if pts is None:
+        return np.empty(0, np.int32), np.empty(0, np.int32)
+    pts = pts.reshape(-1, 2)
+    return pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+
+
+def histogram(binary: np.ndarray, fraction: float = 0.5) -> np.ndarray:
+    """Return the count of mask pixels per column over the lower ``fraction`` of the image."""
+    h = binary.shape[0]
+    start = int(h * (1 - fraction))
+    return cv2.reduce(binary[start:], 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel() // 255
+
+
+def find_bases(hist: np.ndarray, car_x: float | None = None) -> tuple[float | None, float | None]:
+    """Return the x of the strongest column left and right of ``car_x`` (None where empty)."""
+    mid = int(car_x if car_x is not None else len(hist) / 2)
+    left = int(np.argmax(hist[:mid])) if hist[:mid].any() else None
+    right = mid + int(np.argmax(hist[mid:])) if hist[mid:].any() else None
+    return (None if left is None else float(left), None if right is None else float(right))
+
+
+def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
+                    min_gap_px: float) -> tuple[list[float], list[float]]:
+    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``.
+
+    A peak is a column that holds the most pixels within ``min_gap_px`` either side (one per
+    line, however wide); columns with no pixels are never peaks.
+    """
+    mid = int(car_x if car_x is not None else len(hist) / 2)
+    r = max(1, int(min_gap_px))
+    kernel = np.ones((1, 2 * r + 1), np.uint8)
+    local_max = cv2.dilate(hist.astype(np.float32).reshape(1, -1), kernel).ravel()
+    peaks = np.flatnonzero((hist > 0) & (hist >= local_max))
+    out = []
+    for side in (peaks[peaks < mid], peaks[peaks >= mid]):
+        chosen: list[float] = []
+        for x in side[np.argsort(-hist[side], kind="stable")]:
+            if all(abs(x - c) >= min_gap_px for c in chosen):
+                chosen.append(float(x))
+            if len(chosen) == count:
+                break
+        out.append(chosen)
+    return out[0], out[1]
+
+
+def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
+    """Return how much the histogram's peak at column ``x`` stands out: (peak - mean) / mean.
+
+    0 for a flat histogram, large for one strong line on an empty view; None for no base, 0.0
+    for an empty histogram.
+    """
+    if x is None:
+        return None
+    mean = float(np.mean(hist)) if len(hist) else 0.0
+    if mean <= 0:
+        return 0.0
+    return (float(hist[int(x)]) - mean) / mean
+
+
+def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
+    """Return the indices into ``xs`` of each run of occupied columns (split at empty columns)."""
+    order = np.argsort(xs, kind="stable")
+    sx = xs[order]
+    cuts = np.nonzero(np.diff(sx) > 1)[0] + 1
+    return np.split(order, cuts)
+
+
+def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
+                    bases: tuple[float | None, float | None] | None = None,
+                    car_x: float | None = None, top_px: int = 0) -> LaneSearch:
+    """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
+
+    With ``top_px`` > 0 the search reads only the rows from ``top_px`` down (a shorter
+    look-ahead, ``lookahead_top_px``): the histogram covers the lower ``histogram_fraction`` of
+    those rows and the windows, as tall as in the whole view, stop there. The fits stay in the
+    view's coordinates and their span rules in its rows (``fit_line``).
+    """
+    h = binary.shape[0]
+    top_px = int(min(max(top_px, 0), h - 1))
+    ys, xs = lane_pixels(binary)
+    if top_px:
+        first = int(np.searchsorted(ys, top_px))
+        ys, xs = ys[first:], xs[first:]
+    seen = binary[top_px:] if top_px else binary
+    confidence: tuple[float | None, float | None] = (None, None)
+    if bases is None:
+        hist = histogram(seen, config.histogram_fraction)
+        bases = find_bases(hist, car_x)
+        confidence = tuple(base_peak_confidence(hist, b) for b in bases)
+        if None in bases:  # a dashed line may have no dash in the lower part: look at all rows
+            whole_hist = histogram(seen, 1.0)
+            whole = find_bases(whole_hist, car_x)
+            confidence = tuple(c if b is not None else base_peak_confidence(whole_hist, w)
+                               for b, c, w in zip(bases, confidence, whole))
+            bases = tuple(b if b is not None else w for b, w in zip(bases, whole))
+    win_h = h / config.n_windows
+    windows: list[Window] = []
+    picked = {}
+    for side, base in zip(("left", "right"), bases):
+        chosen = []
+        x = base
+        margin = config.margin_px
+        toward_centre = 1 if side == "left" else -1  # the lane centre lies right of the left line
+        for i in range(config.n_windows):
+            if x is None:
+                break
+            y_high = int(round(h - i * win_h))
+            y_low = max(top_px, int(round(h - (i + 1) * win_h)))
+            if y_high <= top_px:
+                break
+            lo, hi = np.searchsorted(ys, [y_low, y_high])
+            row_xs = xs[lo:hi]
+            inside = np.nonzero((row_xs >= x - margin) & (row_xs < x + margin))[0]
+            windows.append(Window(side, int(x - margin), int(x + margin), y_low, y_high))
+            if config.centre_first and len(inside) >= config.minpix:
+                full = [c for c in _window_clusters(row_xs[inside]) if len(c) >= config.minpix]
+                if full:
+                    near = max(full, key=lambda c: toward_centre * float(row_xs[inside[c[0]]]))
+                    inside = np.sort(inside[near])
+            chosen.append(inside + lo)
+            if len(inside) >= config.minpix:
+                if config.window_histogram:
+                    wx = row_xs[inside]
+                    x0 = int(wx.min())
+                    x = float(x0 + int(np.argmax(np.bincount(wx - x0))))
+                else:
+                    x = float(row_xs[inside].mean())
+                margin = config.margin_px
+            elif config.grow_margin_px:
+                margin += config.grow_margin_px
+        idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
+        picked[side] = (ys[idx], xs[idx])
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car", top_px)
+    right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car",
+                                      top_px)
+    left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
+    return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
+                      confidence, top_px)
+
+
+def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
+                  config: SearchConfig = SearchConfig(), top_px: int = 0) -> LaneSearch:
+    """Return the lane pixels within ``prior_margin_px`` of previous fits, and their new fits.
+
+    With ``top_px`` > 0 only the rows from ``top_px`` down are read (as in ``sliding_windows``).
+    """
+    h, w = binary.shape[:2]
+    top_px = int(min(max(top_px, 0), h - 1))
+    # only the columns that the bands around the found fits reach hold pixels the search reads
+    found = [p.x_at(np.arange(top_px, h, dtype=np.float64)) for p in (left, right) if p.found]
+    lo = min(float(x.min()) for x in found) - config.prior_margin_px if found else 0.0
+    hi = max(float(x.max()) for x in found) + config.prior_margin_px if found else 0.0
+    if math.isfinite(lo) and math.isfinite(hi):
+        c0 = min(w, max(0, math.floor(lo) - 1))
+        c1 = max(c0, min(w, math.ceil(hi) + 2))
+    else:
+        c0, c1 = 0, w
+    if c1 > c0:
+        ys, xs = lane_pixels(binary[top_px:, c0:c1])
+        ys += top_px
+        xs += c0
+    else:
+        ys, xs = np.empty(0, np.int32), np.empty(0, np.int32)
+    picked = {}
+    for side, prior in (("left", left), ("right", right)):
+        if not prior.found:
+            picked[side] = (ys[:0], xs[:0])
+            continue
+        near = np.abs(xs - prior.x_at(ys)) < config.prior_margin_px
+        picked[side] = (ys[near], xs[near])
+    new_left, picked["left"] = fit_side(
+        picked["left"], "left", h, config, "no previous left fit to search around" if not left.found
+        else "no lane pixels near the previous left fit", top_px)
+    new_right, picked["right"] = fit_side(
+        picked["right"], "right", h, config, "no previous right fit to search around" if not right.found
+        else "no lane pixels near the previous right fit", top_px)
+    new_left, new_right = parallel_fits(new_left, new_right, picked["left"], picked["right"], h, config)
+    return LaneSearch(new_left, new_right, "prior", picked["left"], picked["right"], top_px=top_px)
+
+
+def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = SearchConfig()) -> int:
+    """Return the first row (px) of the look-ahead that keeps the tracked lines in the view.
+
+    On a tight bend the lane leaves the bird's-eye view sideways long before its top row (the
+    view is about 7.4 m wide: a line 1.9 m from its side leaves it after sqrt(2 * R * 1.9 m) of
+    road, 15 m on a 60 m bend); above that row the other line sweeps across into its search
+    windows and every check compares a line with the extrapolation of one that is gone. The
+    look-ahead ends on the lowest row where a line comes within ``margin_px / 2`` of the view's
+    side (about to leave it), but keeps at least ``min_view_fraction`` of the view's height. It
+    is a band of rows of the same view, not a second warp: the metric scale (``ym_per_px``) and
+    the fits' coordinates stay those of the view, so radius, offset and width read the same,
+    and the overlay and the evaluation map the fits as before.
+
+    Parameters
+    ----------
+    lines : pixel coefficients (a, b, c) of each tracked line (e.g. the tracked lane's two).
+    size_px : (width, height) of the bird's-eye view.
+    config : ``margin_px`` and ``min_view_fraction``.
+    """
+    w, h = size_px
+    rows = np.arange(h - 1, -1, -8, dtype=np.float64)  # bottom to top, every 8 rows
+    edge = config.margin_px / 2
+    out = np.zeros(len(rows), bool)
+    for coeffs in lines:
+        x = np.polyval(coeffs, rows)
+        out |= (x < edge) | (x > w - 1 - edge)
+    if not out.any():
+        return 0
+    top = int(rows[int(np.argmax(out))]) + 1
+    return int(min(top, round(h * (1.0 - config.min_view_fraction))))
+
+
+def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
+              missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+    """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
+    stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
+    quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
+    lines here (``side``: "left" or "right", the side of the lane they bound). A line resolved
+    as a double line as a whole is its inner stripe's fit, found or not: a fit through both
+    stripes runs between them, never on the line (a patch of double line too short to fit, with
+    a stray pixel further on lending the whole its span, is not found rather than fitted through
+    both stripes and bent by that pixel). An inner stripe resolved only on the rows nearest the
+    car is taken when its fit is found and as well founded as the fit of the whole line (second
+    order where that one is: spanning ``min_span_fraction`` of the view); a short stub of it is
+    not worth the line, which was not shown to be two stripes beyond it. A line that
+    scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
+    (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
+    at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
+    fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
+    if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
+        stripes = two_stripes(*pixels, 2, height_px, first=first)
+        keep, whole = inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
+        if keep is not None:
+            inner = (pixels[0][keep], pixels[1][keep])
+            narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
+            curved = config.min_span_fraction * height_px
+            if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
+                return narrowed, inner
+        n = len(pixels[0])
+        right = int(np.count_nonzero(stripes[2]))
+        if min(right, n - right) >= 0.2 * n:
+            fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
+    return fit, pixels
