@@ -9,6 +9,7 @@ ahead).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -252,9 +253,41 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
     """
     if grid is None:
         grid = verge_grid(bird, config.scale)
-    k, h, row0 = grid.scale, grid.height_px, grid.row0
-    sat, grain, seen = grid.sat, grid.grain, grid.seen
-    sh, sw = row0 + sat.shape[0], sat.shape[1]
+    s = _edge_search(grid, other, side, xm_per_px, ym_per_px, checks, config, top_px, guide_px, range_m,
+                     bottom_px)
+    refs = _road_references(grid, s, checks)
+    if s.trace_half <= 0:  # every row at once: its own road surface, its range from the guide
+        ys, xs = _edge_points_every_row(grid, s, refs, config)
+    else:
+        ys, xs = _edge_points_traced(grid, s, refs, config)
+    return _fit_edge(ys, xs, side, grid, top_px, bottom_px, config)
+
+
+class _EdgeSearch(NamedTuple):
+    """What ``road_edge`` reads on the shrunk grid's rows, from the bottom up (``_edge_search``)."""
+
+    rows: np.ndarray       # the shrunk grid's rows, from the bottom up
+    yf: np.ndarray         # the full view's rows at the shrunk rows' centres
+    x_line: np.ndarray     # the other line's x (px) on them
+    stretch: np.ndarray    # px across per metre along the other line's normal
+    x_guide: np.ndarray    # the guide's x (px) on them
+    stretch_g: np.ndarray  # px across per metre along the guide's normal
+    sign: float            # +1: the edge lies right of the other line; -1: left
+    near_m: float          # the range (m along the normal from the guide) searched for the edge
+    far_m: float
+    win: int               # the inner window (shrunk px, ``step_m``); the outer one is twice as wide
+    pad: tuple[int, int]   # the columns the windows reach beyond a search range, inside and outside
+    trace_half: float      # half the width (shrunk px) a traced row is searched in (0: no trace)
+    gap_rows: int          # rows without a point that end a trace
+
+
+def _edge_search(grid: VergeGrid, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,
+                 checks: LaneChecks, config: EdgeConfig, top_px: int, guide_px, range_m,
+                 bottom_px: int | None) -> _EdgeSearch:
+    """Return the rows ``road_edge`` reads (from ``top_px`` to ``bottom_px``), the other line and
+    the guide on them, and its windows in shrunk pixels."""
+    k, row0 = grid.scale, grid.row0
+    sh = row0 + grid.sat.shape[0]
     sign = 1.0 if side == "right" else -1.0
     last_row = sh if bottom_px is None else min(sh, int(np.ceil((bottom_px + 1) / k)))
     rows = np.arange(max(row0, top_px // k), last_row)[::-1]  # from the bottom up
@@ -267,16 +300,23 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
         slope = np.polyval(np.polyder(coeffs), yf) * xm_per_px / ym_per_px
         return np.sqrt(1.0 + slope * slope) / xm_per_px
 
-    stretch, stretch_g = stretch_of(np.asarray(other.coeffs_px, float)), stretch_of(guide)
     near_m, far_m = (checks.min_width_m - 0.2, checks.max_width_m + 0.2) if range_m is None else range_m
     win = max(2, int(round(config.step_m / xm_per_px / k)))
     pad = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
-    trace_half = config.trace_margin_m / xm_per_px / k
-    gap_rows = max(1, int(round(config.trace_gap_m / ym_per_px / k)))
-    # the road surface of each row: between the line and the nearest the edge may be (medians
-    # of the windows on all rows at once, NaN where a row's window is short or not all seen)
-    near = np.round((x_line + sign * 0.3 * checks.min_width_m * stretch) / k).astype(int)
-    far = np.round((x_line + sign * (checks.min_width_m - 0.3) * stretch) / k).astype(int)
+    return _EdgeSearch(rows, yf, x_line, stretch_of(np.asarray(other.coeffs_px, float)), x_guide,
+                       stretch_of(guide), sign, near_m, far_m, win, pad,
+                       config.trace_margin_m / xm_per_px / k,
+                       max(1, int(round(config.trace_gap_m / ym_per_px / k))))
+
+
+def _road_references(grid: VergeGrid, s: _EdgeSearch, checks: LaneChecks) -> np.ndarray:
+    """Return the road surface of each row, (saturation, grain): the medians of the row between
+    the other line and the nearest the edge may be, for all rows at once; NaN where a row's
+    window is shorter than the inner window or not all seen."""
+    k, row0, sw = grid.scale, grid.row0, grid.sat.shape[1]
+    rows, win = s.rows, s.win
+    near = np.round((s.x_line + s.sign * 0.3 * checks.min_width_m * s.stretch) / k).astype(int)
+    far = np.round((s.x_line + s.sign * (checks.min_width_m - 0.3) * s.stretch) / k).astype(int)
     p0, p1 = np.maximum(0, np.minimum(near, far)), np.minimum(sw, np.maximum(near, far) + 1)
     span = p1 - p0
     refs = np.full((len(rows), 2), np.nan)
@@ -285,29 +325,43 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
         inside = offs[None, :] < span[:, None]
         cols = np.clip(p0[:, None] + offs[None, :], 0, sw - 1)
         rr = (rows - row0)[:, None]
-        ok = (span >= win) & np.all(seen[rr, cols] | ~inside, axis=1)
+        ok = (span >= win) & np.all(grid.seen[rr, cols] | ~inside, axis=1)
         if ok.any():
             lo_i, hi_i = (span[ok] - 1) // 2, span[ok] // 2
             pick = np.arange(int(ok.sum()))
-            for j, feature in enumerate((sat, grain)):
+            for j, feature in enumerate((grid.sat, grid.grain)):
                 vals = np.sort(np.where(inside, feature[rr, cols], np.nan)[ok], axis=1)  # NaN last
                 refs[ok, j] = (vals[pick, lo_i] + vals[pick, hi_i]) / 2  # np.median's, in float32
+    return refs
+
+
+def _edge_points_every_row(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
+                           config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Return the edge points (y, x in view px) of every row with a road reference, each searched
+    over the range from the guide (``road_edge`` without a trace)."""
+    k, row0, sw = grid.scale, grid.row0, grid.sat.shape[1]
+    use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
+    x0 = s.x_guide + s.sign * s.near_m * s.stretch_g
+    x1 = s.x_guide + s.sign * s.far_m * s.stretch_g
+    a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
+    a, b = np.maximum(np.minimum(a, b), s.pad[0]), np.minimum(np.maximum(a, b), sw - s.pad[1])
+    ys, xs = _edge_steps(grid.sat, grid.grain, grid.seen, s.rows[use] - row0, a[use], b[use], s.pad, s.win,
+                         s.sign, refs[use, 0].astype(grid.sat.dtype),
+                         np.maximum(refs[use, 1], 1e-3).astype(grid.grain.dtype), config)
+    ys = s.yf[use][ys] if len(ys) else np.zeros(0)
+    return ys, xs * float(k)
+
+
+def _edge_points_traced(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
+                        config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Return the edge points (y, x in view px) found row by row from the bottom up, followed
+    along the straight line through the last ``TRACE_START`` of them once there are so many
+    (``road_edge`` with ``trace_margin_m``)."""
+    k, row0, sw = grid.scale, grid.row0, grid.sat.shape[1]
     ys, xs = [], []
     road_sat, road_grain, missed = None, 1e-3, 0
-    if trace_half <= 0:  # every row at once: its own road surface, its range from the guide
-        use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
-        x0 = x_guide + sign * near_m * stretch_g
-        x1 = x_guide + sign * far_m * stretch_g
-        a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
-        a, b = np.maximum(np.minimum(a, b), pad[0]), np.minimum(np.maximum(a, b), sw - pad[1])
-        ys_a, xs_a = _edge_steps(sat, grain, seen, rows[use] - row0, a[use], b[use], pad, win, sign,
-                                 refs[use, 0].astype(sat.dtype),
-                                 np.maximum(refs[use, 1], 1e-3).astype(grain.dtype), config)
-        ys_a = yf[use][ys_a] if len(ys_a) else np.zeros(0)
-        xs_a = xs_a * float(k)
-        rows = rows[:0]  # the loop below is the trace's
-    for i, r in enumerate(rows):
-        tracing = trace_half > 0 and len(xs) >= TRACE_START
+    for i, r in enumerate(s.rows):
+        tracing = len(xs) >= TRACE_START
         if not np.isnan(refs[i, 0]):
             if refs[i, 0] > config.max_road_saturation:
                 missed += 1
@@ -316,47 +370,53 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
         elif not tracing or road_sat is None:
             continue
         if tracing:
-            if missed > gap_rows:
+            if missed > s.gap_rows:
                 break  # the edge is no longer seen: the trace ends
             last_y, last_x = np.asarray(ys[-TRACE_START:]) / k, np.asarray(xs[-TRACE_START:]) / k
             slope, at = np.polyfit(last_y, last_x, 1)
             centre = slope * r + at
-            half = trace_half + missed
+            half = s.trace_half + missed
             a, b = int(np.floor(centre - half)), int(np.ceil(centre + half))
         else:
-            x0 = x_guide[i] + sign * near_m * stretch_g[i]
-            x1 = x_guide[i] + sign * far_m * stretch_g[i]
+            x0 = s.x_guide[i] + s.sign * s.near_m * s.stretch_g[i]
+            x1 = s.x_guide[i] + s.sign * s.far_m * s.stretch_g[i]
             a, b = sorted((int(x0 // k), int(np.ceil(x1 / k))))
-        a, b = max(a, pad[0]), min(b, sw - pad[1])
-        if b <= a or not seen[r - row0, a - pad[0]:b + pad[1]].all():
+        a, b = max(a, s.pad[0]), min(b, sw - s.pad[1])
+        if b <= a or not grid.seen[r - row0, a - s.pad[0]:b + s.pad[1]].all():
             missed += 1
             continue
-        x = _edge_step(sat[r - row0], grain[r - row0], a, b, pad, win, sign, road_sat, road_grain, config)
+        x = _edge_step(grid.sat[r - row0], grid.grain[r - row0], a, b, s.pad, s.win, s.sign, road_sat,
+                       road_grain, config)
         if x is None:
             missed += 1
             continue
         missed = 0
-        ys.append(yf[i])
+        ys.append(s.yf[i])
         xs.append(float(x * k))
-    if trace_half > 0:
-        ys_a, xs_a = np.asarray(ys, float), np.asarray(xs, float)
-    order = np.argsort(ys_a, kind="stable")  # the points from the view's top down
-    ys_a, xs_a = ys_a[order], xs_a[order]
+    return np.asarray(ys, float), np.asarray(xs, float)
+
+
+def _fit_edge(ys: np.ndarray, xs: np.ndarray, side: str, grid: VergeGrid, top_px: int,
+              bottom_px: int | None, config: EdgeConfig) -> tuple[LineFit, np.ndarray]:
+    """Return ``road_edge``'s robust fit of the edge points and the points it kept ((N, 2) x, y)."""
+    k, h = grid.scale, grid.height_px
+    order = np.argsort(ys, kind="stable")  # the points from the view's top down
+    ys, xs = ys[order], xs[order]
     depth = (h if bottom_px is None else bottom_px + 1) - top_px
     fit_cfg = SearchConfig(min_line_pixels=config.min_points, min_span_fraction=0.3,
                            min_found_span_fraction=config.min_span_fraction * depth / h,
                            trim_outliers_pct=config.trim_outliers_pct)
-    fit = fit_line(ys_a, xs_a, h, fit_cfg, missing=f"no {side} asphalt edge (no road-to-verge step)")
+    fit = fit_line(ys, xs, h, fit_cfg, missing=f"no {side} asphalt edge (no road-to-verge step)")
     for _ in range(3):  # refit without the points far from the fit (robust: a patch, a shadow)
         if not fit.found:
             break
-        res = np.abs(xs_a - fit.x_at(ys_a))
+        res = np.abs(xs - fit.x_at(ys))
         keep = res <= max(2.0 * k, 3.0 * 1.4826 * float(np.median(res)))
         if keep.all():
             break
-        ys_a, xs_a = ys_a[keep], xs_a[keep]
-        fit = fit_line(ys_a, xs_a, h, replace(fit_cfg, trim_outliers_pct=0.0),
+        ys, xs = ys[keep], xs[keep]
+        fit = fit_line(ys, xs, h, replace(fit_cfg, trim_outliers_pct=0.0),
                        missing=f"no {side} asphalt edge (no road-to-verge step)")
     if not fit.found:
         fit = replace(fit, reason=f"{side} asphalt edge: {fit.reason}")
-    return fit, np.column_stack([xs_a, ys_a])
+    return fit, np.column_stack([xs, ys])
