@@ -182,8 +182,8 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     Why the curvature allowance grows as the look-ahead shortens: a curvature read from a fit
     over fewer metres of line is measured less well (for the same pixel noise its error grows as
     1 / span**2, and a parabola fitted to a circle's arc reads a curvature that depends on how
-    much of the arc it spans: on a drawn 40 m bend the outer line, seen longer, read 0.0253 and
-    the inner one 0.0224 1/m). Divided by the share, the two lines may still part by a
+    much of the arc it spans, so the outer line of a bend, seen longer, reads another curvature
+    than the inner one). Divided by the share, the two lines may still part by a
     curvature difference's dk * L**2 / 2 over the look-ahead's L that shrinks with L, as the
     width spread's limit does: a fixed limit refuses the true lane of a tight bend seen only
     in a short look-ahead.

@@ -46,8 +46,8 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
     coefficient of the other line when that one spans enough for a second-order fit, and only
     its slope and position are fitted to its own pixels. Two short lines of which one kept its
     bend share one second-order coefficient fitted to both lines' pixels (``shared_curvature``):
-    the two stubs of a hairpin's lines each read the bend from 5-6 m of line, with their own
-    pixel noise, and two curvatures read apart make lines that part ahead. Two long lines, or
+    two stubs each read the bend from a few metres of line, with their own pixel noise, and two
+    curvatures read apart make lines that part ahead. Two long lines, or
     two short straight ones, are left as they are.
     """
     if not (left.found and right.found):

@@ -205,15 +205,15 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
 def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = SearchConfig()) -> int:
     """Return the first row (px) of the look-ahead that keeps the tracked lines in the view.
 
-    On a tight bend the lane leaves the bird's-eye view sideways long before its top row (the
-    view is about 7.4 m wide: a line 1.9 m from its side leaves it after sqrt(2 * R * 1.9 m) of
-    road, 15 m on a 60 m bend); above that row the other line sweeps across into its search
+    On a tight bend the lane leaves the bird's-eye view sideways long before its top row (a
+    line ``d`` m from the view's side leaves it after sqrt(2 * R * d) of road on a bend of radius
+    ``R``); above that row the other line sweeps across into its search
     windows and every check compares a line with the extrapolation of one that is gone. The
     look-ahead ends on the lowest row where a line comes within ``margin_px / 2`` of the view's
     side (about to leave it), but keeps at least ``min_view_fraction`` of the view's height. It
     is a band of rows of the same view, not a second warp: the metric scale (``ym_per_px``) and
     the fits' coordinates stay those of the view, so radius, offset and width read the same,
-    and the overlay and the evaluation map the fits as before.
+    and the overlay and the evaluation map the fits as they map those of the whole view.
 
     Parameters
     ----------

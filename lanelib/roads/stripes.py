@@ -34,8 +34,8 @@ def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
 
     Far ahead the two stripes blur into one blob (a few raw pixels hold both, stretched by the
     bird's-eye view) that fills the gap, and a line whose blurred rows hold many of its pixels
-    is not resolved as a whole; fitted through them it runs between the stripes, 0.11 m off
-    the inner one at the car. Its near rows may still be resolved: the eight bands are then
+    is not resolved as a whole; fitted through them it runs between the stripes, off the inner
+    one even at the car. Its near rows may still be resolved: the eight bands are then
     judged one by one from the car's end (each narrow stripe and a clear gap, as above, about
     the curve; a band where one stripe is worn away counts, as which stripe its pixels lie on is
     clear; so does a band whose own pixels form two resolved stripes, ``_band_resolved_alone``,
