@@ -30,6 +30,7 @@ from lanelib.search import lane_pixels, search_around, sliding_windows
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280
+XM_DEFAULT, YM_DEFAULT = 0.00578125, 0.03263888888888889  # the default 1280x720 view (m/px)
 XM, YM = PerspectiveConfig().xm_per_px, PerspectiveConfig().ym_per_px
 CAR_X = 640.0
 
@@ -428,3 +429,21 @@ def test_images_without_a_lane_are_never_found(pipe, name):
         assert r.reason
         assert all(math.isnan(v) for v in (r.radius_m, r.offset_m, r.lane_width_m))
         assert r.summary()["found"] is False
+
+
+def test_a_grade_spread_that_the_track_already_has_passes_the_pair_check():
+    """Lines that spread 1 m apart over the view (the flat view of a road climbing ahead) fail
+    the parallel check on their own, and pass it against a tracked width that spreads alike."""
+    spread = 1.0 / XM_DEFAULT  # 1 m in px, from the bottom row to the top
+    left, right = LineFit((0.0, 0.0, 320.0)), LineFit((0.0, -spread / (H - 1), 960.0 + spread))
+    checks = LaneChecks()
+    alone = pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks)
+    assert alone.startswith("lines not parallel")
+    rows = np.linspace(0.0, H - 1.0, checks.check_rows)
+    reference = np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)
+    assert pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                        width_reference_px=reference) == ""
+    # a reference that does not spread: refused as before
+    flat = np.full(len(rows), 640.0)
+    assert pair_problem(left, right, H, XM_DEFAULT, YM_DEFAULT, checks,
+                        width_reference_px=flat).startswith("lines not parallel")
