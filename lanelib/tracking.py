@@ -502,14 +502,15 @@ class LaneTracker:
                          pixels: tuple[np.ndarray, np.ndarray] | None = None) -> float:
         """Return the shoulder (m) beyond line ``fit`` on ``side`` (0 left, 1 right), NaN where not
         clearly found: the median distance (along the line's normal) from the line out to the
-        asphalt edge beyond it in ``grid`` (``_near_grid``) (``roads.edge.road_edge`` from 0 to ``EdgeConfig.max_shoulder_m``
-        beyond the line, the road surface read between ``fit`` and ``other``), on the rows within
-        ``shoulder_near_m`` of the view's bottom row; clearly found: edge points on at least half
-        of those rows (of the shrunk grid), their distances' robust spread (1.4826 x the median
-        distance from their median) within ``shoulder_spread_m``. With the line's ``pixels``
-        ((ys, xs) of the search) the distance on a row is from the median of its pixels on that
-        row of the shrunk grid, where it has some: the paint where it is, not a fit of the whole
-        look-ahead (on a tight bend a fit can lie centimetres outside its paint at the car)."""
+        asphalt edge beyond it in ``grid`` (``_near_grid``) (``roads.edge.road_edge`` from 0 to
+        ``EdgeConfig.max_shoulder_m`` beyond the line, the road surface read between ``fit`` and
+        ``other``), on the rows within ``shoulder_near_m`` of the view's bottom row; clearly found:
+        edge points on at least half of those rows (of the shrunk grid), their distances' robust
+        spread (1.4826 x the median distance from their median) within ``shoulder_spread_m``. With
+        the line's ``pixels`` ((ys, xs) of the search) the distance on a row is from the median of
+        its pixels on that row of the shrunk grid, where it has some: the paint where it is, not a
+        fit of the whole look-ahead (on a tight bend a fit can lie centimetres outside its paint at
+        the car)."""
         cfg = replace(self.pipeline.config.edge, trace_margin_m=0.0)
         k = cfg.scale
         top = max(0, int(round(self._bottom - self.config.shoulder_near_m / self._ym)))

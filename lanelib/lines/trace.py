@@ -143,12 +143,12 @@ def find_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
     """Return every line of a (wide, long) bird's-eye lane mask, left to right, with its span.
 
     Lines start at the peaks of column histograms of ``config.bands`` horizontal bands from the
-    bottom up (a line needs pixels within the lowest ``bands * band_m``), strongest first; a peak within ``min_gap_fraction`` of a lane width of a line
-    already traced there is skipped. Each line is traced up and down by windows that follow its
-    slope, fitted with x = a*y**2 + b*y + c (straight when short), refitted once on the pixels
-    near the fit, and kept with the rows where it has pixels. Traces nearer than that gap over
-    their common rows are merged (refitted on both pixel sets). Left to right is compared where
-    two lines are both seen.
+    bottom up (a line needs pixels within the lowest ``bands * band_m``), strongest first; a peak
+    within ``min_gap_fraction`` of a lane width of a line already traced there is skipped. Each line
+    is traced up and down by windows that follow its slope, fitted with x = a*y**2 + b*y + c
+    (straight when short), refitted once on the pixels near the fit, and kept with the rows where it
+    has pixels. Traces nearer than that gap over their common rows are merged (refitted on both
+    pixel sets). Left to right is compared where two lines are both seen.
 
     Parameters
     ----------
