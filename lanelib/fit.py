@@ -34,6 +34,113 @@ from .records import NEAR_SHARE, LaneMeasurement, LineFit
 RADIUS_MAX_M = 100_000.0
 
 
+def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig = SearchConfig(),
+             missing: str = "no lane pixels", top_px: int = 0) -> LineFit:
+    """Return the 2nd-order fit x = f(y) of a line's pixels, or a not-found LineFit saying why.
+
+    Pixels spanning less than ``min_span_fraction`` of the height are fitted straight, unless
+    the search read a look-ahead (``top_px`` > 0, its first row) and the 2nd-order fit bows over
+    the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
+    resolved bend: a tight bend's line that leaves the view sideways).
+    """
+    return fit_line_with_first(ys, xs, height_px, config, missing, top_px)[0]
+
+
+def fit_line_with_first(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
+              top_px: int) -> tuple[LineFit, tuple | None]:
+    """Return ``fit_line``'s fit and its first fit: ``least_squares_rss`` of degree 2 of all the
+    pixels and the sums it read (a, b, c, rss, ``normal_sums``; None when the line was turned
+    down before it), which ``fit_side`` hands on to the stripe test rather than fit the same
+    pixels again."""
+    n = len(ys)
+    if n == 0:
+        return LineFit(None, 0, 0.0, missing), None
+    span = float(ys.max() - ys.min())
+    if n < config.min_line_pixels:
+        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})"), None
+    if span < config.min_found_span_fraction * height_px:
+        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height"), None
+    degree = 2
+    sums = normal_sums(ys, xs, float(height_px))
+    a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px), sums)
+    first = (a, b, c, rss, sums)
+    if span < config.min_span_fraction * height_px and not (
+            top_px > 0 and config.short_bend_resolution > 0
+            and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
+        degree = 1
+        a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px))
+    if 0 < config.trim_outliers_pct < 100:
+        keep = max(degree + 1, int(round(n * config.trim_outliers_pct / 100)))
+        if keep < n:
+            residual = np.abs(xs - np.polyval((a, b, c), ys))
+            idx = np.sort(np.argpartition(residual, keep - 1)[:keep])
+            ys, xs, n = ys[idx], xs[idx], keep
+            span = float(ys.max() - ys.min())
+            a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px))
+    gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
+    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap), first
+
+
+def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
+    """Return (a, b, c) of the least-squares x = a*y**2 + b*y + c (a = 0 for degree 1).
+
+    The same fit as ``np.polyfit`` (to rounding), from the normal equations in y centred on its
+    mean and divided by ``scale`` (e.g. the image height), which keeps them well conditioned; it
+    costs a few sums instead of an SVD of an n x 3 matrix (the video hot path).
+    """
+    return least_squares_rss(ys, xs, degree, scale)[:3]
+
+
+def least_squares_rss(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
+                   sums: tuple | None = None) -> tuple[float, float, float, float]:
+    """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).
+
+    The residual comes from the same sums: for the least-squares solution p of G p = s it is
+    sum(x**2) - p . s, with x taken about its mean so that the difference keeps its digits.
+    ``sums``: ``normal_sums(ys, xs, scale)`` when already made.
+    """
+    _, m, _, _, _, st, x0, x, _, sx = normal_sums(ys, xs, scale) if sums is None else sums
+    k = degree + 1
+    gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
+    p = np.linalg.solve(gram, np.array(sx[:k]))  # x - x0 = p0 + p1*t (+ p2*t**2)
+    rss = max(0.0, float((x * x).sum()) - sum(float(p[i]) * sx[i] for i in range(k)))
+    p2 = p[2] if degree == 2 else 0.0
+    a = p2 / scale ** 2
+    b = p[1] / scale - 2 * p2 * m / scale ** 2
+    c = x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2
+    return float(a), float(b), float(c), rss
+
+
+def normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
+    """Return what ``least_squares_rss`` fits from: y (float), its mean m, t = (y - m) / ``scale``,
+    t**2, t**3, the sums of t**0..4, x's mean x0, x - x0, (x - x0) * t and the sums of (x - x0) *
+    t**0..2; ``two_stripes`` starts from the same arrays and sums."""
+    y = ys.astype(np.float64)
+    x = xs.astype(np.float64)
+    m = float(y.mean())
+    t = (y - m) / scale
+    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
+    t2 = t * t
+    t3 = t2 * t
+    st = [float(len(t)), float(t.sum()), float(t2.sum()), float(t3.sum()), float((t2 * t2).sum())]
+    x0 = float(x.mean())
+    x -= x0
+    xt = x * t
+    sx = [float(x.sum()), float(xt.sum()), float((x * t2).sum())]
+    return y, m, t, t2, t3, st, x0, x, xt, sx
+
+
+def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return each distinct key of ``keys`` (a row, or a shrunk grid's row; ascending) and the
+    median of the ``xs`` that share it (``np.median``'s, for all rows at once)."""
+    keys, xs = np.asarray(keys), np.asarray(xs, float)
+    order = np.lexsort((xs, keys))
+    k, v = keys[order], xs[order]
+    rows, first, counts = np.unique(k, return_index=True, return_counts=True)
+    lo, hi = first + (counts - 1) // 2, first + counts // 2
+    return rows, (v[lo] + v[hi]) / 2
+
+
 def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, height_px: int,
                   config: SearchConfig = SearchConfig()) -> tuple[LineFit, LineFit]:
     """Return the two fits with a short line's curvature taken from the other, longer line.
@@ -110,161 +217,6 @@ def shared_curvature(left: LineFit, right: LineFit, left_pixels, right_pixels,
     return fits[0], fits[1]
 
 
-def offset_line(coeffs_px, offset_m, xm_per_px: float, ym_per_px: float, height_px: int,
-                top_px: int = 0) -> tuple[float, float, float]:
-    """Return the pixel fit (a, b, c) of the curve parallel to a line at ``offset_m`` along its normal.
-
-    The lines of a lane are parallel curves: the other line lies a lane width away along the
-    normal, not at the same x shift on every row (on a 35 m bend, 23 m ahead, the two differ by
-    over half a metre). The line is sampled on the rows from ``top_px`` to the bottom, each
-    point moved ``offset_m`` along the normal in metres (positive: to the right of the line as
-    the car drives, larger x) and the second-order fit x = f(y) refitted to the moved points.
-
-    Parameters
-    ----------
-    coeffs_px : (a, b, c) of the line in bird's-eye pixels.
-    offset_m : signed normal distance (m); + to the right. One value, or one per sampled row
-        (``offset_rows_px``): a distance that changes along the view, as a tracked lane's width
-        does where a grade widens or narrows the flat view's lane ahead.
-    xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
-    height_px : height of the view; top_px : first row sampled.
-    """
-    y = offset_rows_px(height_px, top_px)
-    x = np.polyval(coeffs_px, y)
-    slope_m = np.polyval(np.polyder(np.asarray(coeffs_px, float)), y) * xm_per_px / ym_per_px
-    norm = np.sqrt(1.0 + slope_m * slope_m)
-    x_new = x + offset_m / norm / xm_per_px
-    y_new = y - offset_m * slope_m / norm / ym_per_px
-    return tuple(float(v) for v in np.polyfit(y_new, x_new, 2))
-
-
-def offset_rows_px(height_px: int, top_px: int = 0) -> np.ndarray:
-    """Return the rows (px) ``offset_line`` samples: 24, evenly from ``top_px`` to the bottom."""
-    return np.linspace(float(top_px), height_px - 1.0, 24)
-
-
-def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
-    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float),
-    or on each of several rows (an array).
-
-    The horizontal width on a row times the cosine of the lane's heading there (the mean slope
-    of the two lines); equal to the lane width on a bend where the horizontal width is wider.
-    """
-    xl, xr = np.polyval(left_px, y_px), np.polyval(right_px, y_px)
-    dl = np.polyval(np.polyder(np.asarray(left_px, float)), y_px)
-    dr = np.polyval(np.polyder(np.asarray(right_px, float)), y_px)
-    slope_m = 0.5 * (dl + dr) * xm_per_px / ym_per_px
-    out = (xr - xl) * xm_per_px / np.sqrt(1.0 + slope_m * slope_m)
-    return float(out) if np.ndim(out) == 0 else out
-
-
-def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig = SearchConfig(),
-             missing: str = "no lane pixels", top_px: int = 0) -> LineFit:
-    """Return the 2nd-order fit x = f(y) of a line's pixels, or a not-found LineFit saying why.
-
-    Pixels spanning less than ``min_span_fraction`` of the height are fitted straight, unless
-    the search read a look-ahead (``top_px`` > 0, its first row) and the 2nd-order fit bows over
-    the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
-    resolved bend: a tight bend's line that leaves the view sideways).
-    """
-    return fit_line_with_first(ys, xs, height_px, config, missing, top_px)[0]
-
-
-def fit_line_with_first(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
-              top_px: int) -> tuple[LineFit, tuple | None]:
-    """Return ``fit_line``'s fit and its first fit: ``least_squares_rss`` of degree 2 of all the
-    pixels and the sums it read (a, b, c, rss, ``normal_sums``; None when the line was turned
-    down before it), which ``fit_side`` hands on to the stripe test rather than fit the same
-    pixels again."""
-    n = len(ys)
-    if n == 0:
-        return LineFit(None, 0, 0.0, missing), None
-    span = float(ys.max() - ys.min())
-    if n < config.min_line_pixels:
-        return LineFit(None, n, span, f"only {n} lane pixels (need {config.min_line_pixels})"), None
-    if span < config.min_found_span_fraction * height_px:
-        return LineFit(None, n, span, f"pixels span only {span:.0f} px of the height"), None
-    degree = 2
-    sums = normal_sums(ys, xs, float(height_px))
-    a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px), sums)
-    first = (a, b, c, rss, sums)
-    if span < config.min_span_fraction * height_px and not (
-            top_px > 0 and config.short_bend_resolution > 0
-            and abs(a) * span * span / 4 >= config.short_bend_resolution * math.sqrt(rss / n)):
-        degree = 1
-        a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px))
-    if 0 < config.trim_outliers_pct < 100:
-        keep = max(degree + 1, int(round(n * config.trim_outliers_pct / 100)))
-        if keep < n:
-            residual = np.abs(xs - np.polyval((a, b, c), ys))
-            idx = np.sort(np.argpartition(residual, keep - 1)[:keep])
-            ys, xs, n = ys[idx], xs[idx], keep
-            span = float(ys.max() - ys.min())
-            a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px))
-    gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
-    return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap), first
-
-
-def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return each distinct key of ``keys`` (a row, or a shrunk grid's row; ascending) and the
-    median of the ``xs`` that share it (``np.median``'s, for all rows at once)."""
-    keys, xs = np.asarray(keys), np.asarray(xs, float)
-    order = np.lexsort((xs, keys))
-    k, v = keys[order], xs[order]
-    rows, first, counts = np.unique(k, return_index=True, return_counts=True)
-    lo, hi = first + (counts - 1) // 2, first + counts // 2
-    return rows, (v[lo] + v[hi]) / 2
-
-
-def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
-    """Return (a, b, c) of the least-squares x = a*y**2 + b*y + c (a = 0 for degree 1).
-
-    The same fit as ``np.polyfit`` (to rounding), from the normal equations in y centred on its
-    mean and divided by ``scale`` (e.g. the image height), which keeps them well conditioned; it
-    costs a few sums instead of an SVD of an n x 3 matrix (the video hot path).
-    """
-    return least_squares_rss(ys, xs, degree, scale)[:3]
-
-
-def least_squares_rss(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
-                   sums: tuple | None = None) -> tuple[float, float, float, float]:
-    """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).
-
-    The residual comes from the same sums: for the least-squares solution p of G p = s it is
-    sum(x**2) - p . s, with x taken about its mean so that the difference keeps its digits.
-    ``sums``: ``normal_sums(ys, xs, scale)`` when already made.
-    """
-    _, m, _, _, _, st, x0, x, _, sx = normal_sums(ys, xs, scale) if sums is None else sums
-    k = degree + 1
-    gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
-    p = np.linalg.solve(gram, np.array(sx[:k]))  # x - x0 = p0 + p1*t (+ p2*t**2)
-    rss = max(0.0, float((x * x).sum()) - sum(float(p[i]) * sx[i] for i in range(k)))
-    p2 = p[2] if degree == 2 else 0.0
-    a = p2 / scale ** 2
-    b = p[1] / scale - 2 * p2 * m / scale ** 2
-    c = x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2
-    return float(a), float(b), float(c), rss
-
-
-def normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
-    """Return what ``least_squares_rss`` fits from: y (float), its mean m, t = (y - m) / ``scale``,
-    t**2, t**3, the sums of t**0..4, x's mean x0, x - x0, (x - x0) * t and the sums of (x - x0) *
-    t**0..2; ``two_stripes`` starts from the same arrays and sums."""
-    y = ys.astype(np.float64)
-    x = xs.astype(np.float64)
-    m = float(y.mean())
-    t = (y - m) / scale
-    # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
-    t2 = t * t
-    t3 = t2 * t
-    st = [float(len(t)), float(t.sum()), float(t2.sum()), float(t3.sum()), float((t2 * t2).sum())]
-    x0 = float(x.mean())
-    x -= x0
-    xt = x * t
-    sx = [float(x.sum()), float(xt.sum()), float((x * t2).sum())]
-    return y, m, t, t2, t3, st, x0, x, xt, sx
-
-
 def fit_to_metres(coeffs_px, xm_per_px: float, ym_per_px: float) -> tuple[float, float, float]:
     """Return the metric coefficients of a pixel fit by exact scaling (x, y both in metres)."""
     a, b, c = coeffs_px
@@ -315,3 +267,51 @@ def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
     offset = (car_x_px - (xl + xr) / 2) * xm_per_px
     width = (xr - xl) * xm_per_px
     return LaneMeasurement(k, radius(k), offset, width, kl, kr)
+
+
+def offset_line(coeffs_px, offset_m, xm_per_px: float, ym_per_px: float, height_px: int,
+                top_px: int = 0) -> tuple[float, float, float]:
+    """Return the pixel fit (a, b, c) of the curve parallel to a line at ``offset_m`` along its normal.
+
+    The lines of a lane are parallel curves: the other line lies a lane width away along the
+    normal, not at the same x shift on every row (on a 35 m bend, 23 m ahead, the two differ by
+    over half a metre). The line is sampled on the rows from ``top_px`` to the bottom, each
+    point moved ``offset_m`` along the normal in metres (positive: to the right of the line as
+    the car drives, larger x) and the second-order fit x = f(y) refitted to the moved points.
+
+    Parameters
+    ----------
+    coeffs_px : (a, b, c) of the line in bird's-eye pixels.
+    offset_m : signed normal distance (m); + to the right. One value, or one per sampled row
+        (``offset_rows_px``): a distance that changes along the view, as a tracked lane's width
+        does where a grade widens or narrows the flat view's lane ahead.
+    xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
+    height_px : height of the view; top_px : first row sampled.
+    """
+    y = offset_rows_px(height_px, top_px)
+    x = np.polyval(coeffs_px, y)
+    slope_m = np.polyval(np.polyder(np.asarray(coeffs_px, float)), y) * xm_per_px / ym_per_px
+    norm = np.sqrt(1.0 + slope_m * slope_m)
+    x_new = x + offset_m / norm / xm_per_px
+    y_new = y - offset_m * slope_m / norm / ym_per_px
+    return tuple(float(v) for v in np.polyfit(y_new, x_new, 2))
+
+
+def offset_rows_px(height_px: int, top_px: int = 0) -> np.ndarray:
+    """Return the rows (px) ``offset_line`` samples: 24, evenly from ``top_px`` to the bottom."""
+    return np.linspace(float(top_px), height_px - 1.0, 24)
+
+
+def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
+    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float),
+    or on each of several rows (an array).
+
+    The horizontal width on a row times the cosine of the lane's heading there (the mean slope
+    of the two lines); equal to the lane width on a bend where the horizontal width is wider.
+    """
+    xl, xr = np.polyval(left_px, y_px), np.polyval(right_px, y_px)
+    dl = np.polyval(np.polyder(np.asarray(left_px, float)), y_px)
+    dr = np.polyval(np.polyder(np.asarray(right_px, float)), y_px)
+    slope_m = 0.5 * (dl + dr) * xm_per_px / ym_per_px
+    out = (xr - xl) * xm_per_px / np.sqrt(1.0 + slope_m * slope_m)
+    return float(out) if np.ndim(out) == 0 else out

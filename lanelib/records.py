@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-
 NEAR_SHARE = 0.02  # share of a line's pixels nearest the car left out of where it reaches (LineFit.gap_px)
 
 
