@@ -46,7 +46,7 @@ class GeometryOptions:
         than ``autogeometry.DRIFT_PX`` or 1 % of the height: a crest, a dip, a knocked camera) call
         for a new estimate from those frames (fewer than ``autogeometry.MIN_GOOD_FRAMES``, 5, give
         too little confidence for a new estimate to be used).
-    acceptlow_confidence : use an estimate below ``autogeometry.LOW_CONFIDENCE`` (refused otherwise).
+    accept_low_confidence : use an estimate below ``autogeometry.LOW_CONFIDENCE`` (refused otherwise).
     """
 
     lane_width_m: float = DEFAULT_LANE_WIDTH_M
@@ -58,7 +58,7 @@ class GeometryOptions:
     max_frames: int = 50
     check_every_s: float = 0.5
     drift_checks: int = 5
-    acceptlow_confidence: bool = False
+    accept_low_confidence: bool = False
 
     def __post_init__(self):
         if not (self.seconds > 0 and self.max_frames >= 1 and self.check_every_s > 0
@@ -90,14 +90,14 @@ def checked_geometry(frames: Sequence[np.ndarray], source: str | os.PathLike,
     ------
     GeometryError
         As ``estimate_road_geometry``: no consistent vanishing point, or a confidence below
-        ``autogeometry.LOW_CONFIDENCE`` without ``options.acceptlow_confidence``; the message names
+        ``autogeometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``; the message names
         ``source`` and the fix.
     """
     try:
         geo = options.estimate(frames, calibration, lens_from_road=lens_from_road)
     except GeometryError as e:
         raise GeometryError(naming_the_file(str(e), Path(source))) from None
-    if geo.low_confidence and not options.acceptlow_confidence:
+    if geo.low_confidence and not options.accept_low_confidence:
         fixes = ([] if calibration is not None or options.focal_px else ["a calibration (--calibration)"])
         fixes.append("frames of a longer straight stretch" + ("" if Path(source).is_dir() else
                                                               " (--geometry-seconds)"))
@@ -305,7 +305,7 @@ class GeometryWatch:
         except GeometryError as e:
             self.notes.append(f"{where}; a new estimate failed ({e}); the geometry is kept")
             return None
-        if new.low_confidence and not self.options.acceptlow_confidence:
+        if new.low_confidence and not self.options.accept_low_confidence:
             self.notes.append(f"{where}; the new estimate has confidence {new.confidence:.2f}, "
                               "below the limit; the geometry is kept")
             return None

@@ -220,8 +220,8 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
     ``work.target`` atomically (a frame with no line found gets an empty prediction); stale
     temporaries of that target from a killed run are removed first. ``run_time_ms`` is the
     detection and sampling time. ``cache`` keeps one pipeline per (sequence, frame size) across
-    calls (a worker's own dict), the last ``PIPELINES_KEPT`` of them (each holds its maps: a
-    2,000-frame run of 200 sequences once kept them all and peaked at 1.3 GB). A lanelib error
+    calls (a worker's own dict), the last ``PIPELINES_KEPT`` of them (each holds its maps, so a
+    run's memory stays bounded however many sequences it lists). A lanelib error
     (unreadable image, a size the calibration does not fit) is the outcome's ``error``; a
     ``ConfigError`` is raised (it fails every frame).
     """
@@ -290,12 +290,19 @@ def _check_settings(out: Path, settings: dict) -> bool:
     return True
 
 
+def _record_settings(out: Path, settings: dict) -> None:
+    """Write ``out/predict.json``, the settings record (``_check_settings`` reads it)."""
+    path = out / PREDICT_SETTINGS
+    io.remove_stale_temp_files(path)
+    io.write_json(path, settings)
+
+
 def _sequence_geometry(work: Sequence[FrameWork], calibration: Calibration | None,
                        options: GeometryOptions) -> RoadGeometry | GeometryFallback:
     """Return the geometry of one sequence, estimated from up to ``options.max_frames`` of its
     frames, evenly spread, or a ``GeometryFallback`` saying why it is not used: the estimate
     failed (``GeometryError``, or frames it cannot take) or its confidence is below
-    ``autogeometry.LOW_CONFIDENCE`` without ``options.acceptlow_confidence``. A value, not an
+    ``autogeometry.LOW_CONFIDENCE`` without ``options.accept_low_confidence``. A value, not an
     exception, so that a Dask task returns it like a geometry. An image that cannot be read is
     left out here (``predict_frame`` reports it)."""
     step = max(1, math.ceil(len(work) / options.max_frames))
@@ -313,7 +320,7 @@ def _sequence_geometry(work: Sequence[FrameWork], calibration: Calibration | Non
         geo = options.estimate(frames, calibration, lens_from_road=False)
     except (GeometryError, InputError) as e:
         return GeometryFallback(sequence, str(e))
-    if geo.low_confidence and not options.acceptlow_confidence:
+    if geo.low_confidence and not options.accept_low_confidence:
         return GeometryFallback(sequence, f"{low_confidence(geo, len(frames))}; --accept-low-confidence "
                                           "uses it")
     return geo
@@ -357,6 +364,24 @@ def _sequence_configs(work: Sequence[FrameWork], sequences: Sequence[str], confi
             geometries.append((sequence, estimate))
             configs[sequence] = with_geometry(config, estimate)
     return configs, geometries, fallbacks
+
+
+def _predict_frames(todo: Sequence[FrameWork], configs: dict[str, PipelineConfig],
+                    calibration: Calibration | None, client, desc: str, progress: bool) -> list[FrameOutcome]:
+    """Return the outcome of each frame of ``todo`` after predicting it here (``predict_frame``,
+    one pipeline cache) or, with a Dask ``client``, in chunks on its workers (``predict_chunk``)."""
+    outcomes, cache = [], {}
+    with tqdm(total=len(todo), desc=desc, unit="frame", disable=not progress, dynamic_ncols=True) as bar:
+        if client is None:
+            for w in todo:
+                outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
+                bar.update(1)
+        else:
+            chunks = cluster.split(todo, cluster.chunk_size(len(todo), cluster.total_threads(client)))
+            done = cluster.map_chunks(client, predict_chunk, chunks, bar, calibration=calibration,
+                                      configs=configs)
+            outcomes = _check_visible([o for chunk in done for o in chunk], todo)
+    return outcomes
 
 
 def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os.PathLike,
@@ -430,21 +455,8 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
             configs, geometries, fallbacks = _sequence_configs(work, sequences, config, calibration,
                                                                auto_geometry, client, on_geometry)
         if not recorded:
-            path = out / PREDICT_SETTINGS
-            io.remove_stale_temp_files(path)
-            io.write_json(path, settings)
-        outcomes, cache = [], {}
-        with tqdm(total=len(todo), desc=f"predict {benchmark}", unit="frame", disable=not progress,
-                  dynamic_ncols=True) as bar:
-            if client is None:
-                for w in todo:
-                    outcomes.append(predict_frame(w, configs[w.sequence], calibration, cache))
-                    bar.update(1)
-            else:
-                chunks = cluster.split(todo, cluster.chunk_size(len(todo), cluster.total_threads(client)))
-                done = cluster.map_chunks(client, predict_chunk, chunks, bar, calibration=calibration,
-                                          configs=configs)
-                outcomes = _check_visible([o for chunk in done for o in chunk], todo)
+            _record_settings(out, settings)
+        outcomes = _predict_frames(todo, configs, calibration, client, f"predict {benchmark}", progress)
     output = out
     if benchmark == "tusimple":
         output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))

@@ -139,17 +139,7 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     """
     in_path, out = Path(in_path), Path(out_path)
     t0 = time.perf_counter()
-    info = io.video_info(in_path)
-    whole = start_s is None and end_s is None
-    frames = range(info.n_frames) if whole else clip_frames(info, start_s, end_s)
-    inputs = [in_path]
-    io.check_not_input(out, inputs)
-    if log_path is not None:
-        io.check_not_input(log_path, inputs + [out])
-    count = cluster.segment_count(len(frames), cluster.total_threads(client), warmup)
-    spans = cluster.segments(frames, count, warmup)
-    segs = [(first, start, stop, end_s is None and stop == frames.stop) for first, start, stop in spans]
-    out.parent.mkdir(parents=True, exist_ok=True)
+    frames, spans, segs = _plan_segments(in_path, out, log_path, client, start_s, end_s, warmup)
 
     def carry_on(k: int, before: object, o: SegmentOutcome) -> SegmentOutcome | None:
         got = None if carry is None else carry(before, o.carry.end_state, segs[k][1])
@@ -172,31 +162,73 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
                                                    plan=plan_restarts if plan is not None else None,
                                                    in_path=in_path.resolve(), parts=parts.resolve(),
                                                    make=make, threads=threads)
-        outcomes, files = [], []
-        for (_, start, _), o in zip(spans, settled):
-            outcomes.append(o)
-            if o.rows:
-                files.append(parts / f"{start:09d}.mp4")
-            if o.stopped:
-                break
-        if not files:
-            raise InputError(f"{in_path}: no frame could be decoded ({outcomes[0].stopped}); "
-                             "pass a readable video")
-        log = CsvLog(Path(log_path) if log_path else None, inputs)
-        ok = False
-        try:
-            for o in outcomes:
-                for row in o.rows:
-                    log.write(row)
-            io.join_videos(files, out, inputs=inputs)
-            ok = True
-        finally:
-            log.finish(ok)
+        outcomes = _join_parts(in_path, out, log_path, spans, settled, parts)
     finally:
         shutil.rmtree(parts, ignore_errors=True)
+    return _segments_run(outcomes, out, log_path, frames, time.perf_counter() - t0, joints)
+
+
+def _plan_segments(in_path: Path, out: Path, log_path: str | os.PathLike | None, client,
+                   start_s: float | None, end_s: float | None, warmup: int
+                   ) -> tuple[range, list[tuple[int, int, int]], list[tuple[int, int, int, bool]]]:
+    """Return the frames of a ``run_video_segments`` run, its segments ``(first, start, stop)``
+    (``cluster.segments``) and their tasks ``(first, start, stop, to_end)``, after checking that
+    no output lies over an input and making the output's folder."""
+    info = io.video_info(in_path)
+    whole = start_s is None and end_s is None
+    frames = range(info.n_frames) if whole else clip_frames(info, start_s, end_s)
+    inputs = [in_path]
+    io.check_not_input(out, inputs)
+    if log_path is not None:
+        io.check_not_input(log_path, inputs + [out])
+    count = cluster.segment_count(len(frames), cluster.total_threads(client), warmup)
+    spans = cluster.segments(frames, count, warmup)
+    segs = [(first, start, stop, end_s is None and stop == frames.stop) for first, start, stop in spans]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return frames, spans, segs
+
+
+def _join_parts(in_path: Path, out: Path, log_path: str | os.PathLike | None,
+                spans: Sequence[tuple[int, int, int]], settled: Sequence[SegmentOutcome],
+                parts: Path) -> list[SegmentOutcome]:
+    """Return the outcomes of the segments up to the first that stopped decoding, after joining
+    their part videos into ``out`` and writing their log rows to ``log_path``, both atomically.
+
+    Raises
+    ------
+    InputError
+        If no segment holds a frame (the clip could not be decoded).
+    """
+    inputs = [in_path]
+    outcomes, files = [], []
+    for (_, start, _), o in zip(spans, settled):
+        outcomes.append(o)
+        if o.rows:
+            files.append(parts / f"{start:09d}.mp4")
+        if o.stopped:
+            break
+    if not files:
+        raise InputError(f"{in_path}: no frame could be decoded ({outcomes[0].stopped}); "
+                         "pass a readable video")
+    log = CsvLog(Path(log_path) if log_path else None, inputs)
+    ok = False
+    try:
+        for o in outcomes:
+            for row in o.rows:
+                log.write(row)
+        io.join_videos(files, out, inputs=inputs)
+        ok = True
+    finally:
+        log.finish(ok)
+    return outcomes
+
+
+def _segments_run(outcomes: Sequence[SegmentOutcome], out: Path, log_path: str | os.PathLike | None,
+                  frames: range, seconds: float, joints: cluster.Joints) -> VideoRun:
+    """Return the ``VideoRun`` of the joined segments; raise ``PartialOutputError`` when one
+    stopped decoding (the outputs then keep the frames before the break)."""
     n = sum(len(o.rows) for o in outcomes)
     found = sum(o.found for o in outcomes)
-    seconds = time.perf_counter() - t0
     notes = tuple(note for o in outcomes for note in o.notes)
     stopped = next((o.stopped for o in outcomes if o.stopped), "")
     if stopped:
