@@ -6,11 +6,12 @@ import math
 import os
 from dataclasses import replace
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from .. import io
-from ..autogeometry import GeometryOptions, RoadGeometry, checked_geometry
+from ..autogeometry import GeometryOptions, RoadGeometry, checked_geometry, geometry_calibration
 from ..camera import Calibration
 from ..config import PipelineConfig
 from ..errors import InputError
@@ -68,3 +69,23 @@ def estimate_road_geometry(source: str | os.PathLike, calibration: Calibration |
 def with_geometry(config: PipelineConfig, geo: RoadGeometry) -> PipelineConfig:
     """Return ``config`` with the bird's-eye points and scale of ``geo``."""
     return replace(config, perspective=geo.perspective_config())
+
+
+def road_geometry_run(source: str | os.PathLike, config: PipelineConfig, calibration: Calibration | None,
+                      options: GeometryOptions,
+                      on_geometry: Callable[[RoadGeometry], None] | None = None
+                      ) -> tuple[PipelineConfig, Calibration | None]:
+    """Return ``config`` with the bird's-eye points and scale estimated from ``source`` (a video's
+    first ``options.seconds`` or a folder, ``estimate_road_geometry``) and the calibration to run
+    with them (``autogeometry.geometry_calibration``); ``on_geometry`` is called with the estimate.
+
+    Raises
+    ------
+    GeometryError
+        As ``estimate_road_geometry``: the estimate fails or is not confident.
+    """
+    geo = estimate_road_geometry(source, calibration, options)
+    if on_geometry is not None:
+        on_geometry(geo)
+    return with_geometry(config, geo), geometry_calibration(calibration, geo)
+

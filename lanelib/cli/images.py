@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .. import autogeometry, batch
+from .. import batch
 from ..draw import STRAIGHT_M
 from ..errors import InputError
 from ..io import VIDEO_SUFFIXES, list_images
@@ -50,10 +50,8 @@ def _run_images(args) -> int:
     files = list_images(args.in_dir)
     config, calibration = load_pipeline_inputs(args)
     if args.auto_geometry:
-        geo = batch.estimate_road_geometry(args.in_dir, calibration, geometry_options(args))
-        print_geometry(geo)
-        config = batch.with_geometry(config, geo)
-        calibration = autogeometry.geometry_calibration(calibration, geo)
+        config, calibration = batch.road_geometry_run(args.in_dir, config, calibration, geometry_options(args),
+                                                      on_geometry=print_geometry)
     rows = batch.process_images(files, args.output, config, calibration, debug=args.debug,
                                workers=args.workers, scheduler=args.scheduler,
                                progress=not args.no_progress)
