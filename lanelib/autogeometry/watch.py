@@ -126,14 +126,12 @@ def geometry_calibration(calibration: Calibration | None, geo: RoadGeometry) -> 
 # ``frames_used``), so that a refinement rests on more straight road than the estimate it corrects
 REFINE_MIN_CHECKS = 2 * MIN_GOOD_FRAMES
 # ... and only when their median lies farther from the point in use than its standard error plus
-# this share of the width: the straight checks' column spreads 0.2-0.55 % of the width from one
-# check to the next (1.9 and 4.0 px on the 960 px P1 clips, 7.0 px on the 1280 px project video:
-# median |difference| / 0.95); a shift smaller than one check's noise is not worth restarting the
-# tracker for, and it is the hysteresis that keeps the point from going back and forth
+# this share of the width, about the noise of one check's column from one check to the next: a
+# shift smaller than one check's noise is not worth restarting the tracker for, and it is the
+# hysteresis that keeps the point from going back and forth
 REFINE_TOLERANCE = 0.005
 # the last this many straight checks count (5 minutes of straight road at 2 checks a second), and
-# the record of them a Dask joint reads holds as many: a watch pickles in at most ~35 kB (points
-# 12 kB, record 20 kB) however long the video
+# the record of them a Dask joint reads holds as many: a watch pickles small however long the video
 REFINE_MAX_CHECKS = 600
 
 
