@@ -56,7 +56,7 @@ def peak_rss_mb() -> float:
 
 def predict(root: Path, out: Path, **kwargs) -> batch.PredictRun:
     run = batch.predict_benchmark("tusimple", root, out, config=PipelineConfig(), progress=False,
-                                 auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True), **kwargs)
+                                  auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True), **kwargs)
     assert not run.failed, run.failed[:3]
     return run
 
@@ -79,7 +79,7 @@ def bench_clip(what: str, video: Path, tmp: Path, counts) -> None:
         t0 = time.perf_counter()
         if what == "video":
             r = batch.process_video(video, tmp / f"{tag}.mp4", log_path=tmp / f"{tag}.csv", progress=False,
-                                   scheduler=scheduler)
+                                    scheduler=scheduler)
             frames = r.frames
         else:
             pipe = LanePipeline(calibration=evaluate.calibration_from_truth(video))

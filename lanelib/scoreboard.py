@@ -244,7 +244,7 @@ def _fresh(folder: Path) -> Path:
 def _predict(benchmark: str, root: Path, out: Path, list_file: Path | None, config: PipelineConfig,
              auto_geometry: autogeometry.GeometryOptions | None = None) -> batch.PredictRun:
     run = batch.predict_benchmark(benchmark, root, _fresh(out), list_file=list_file, config=config,
-                                 auto_geometry=auto_geometry, progress=False)
+                                  auto_geometry=auto_geometry, progress=False)
     if run.failed:
         raise InputError(f"{len(run.failed)} of {run.frames} frames failed, the first: {run.failed[0].error}")
     return run

@@ -275,7 +275,8 @@ def test_the_watch_refines_the_point_once_the_evidence_says_so_and_not_back_and_
     assert watch.geometry.vanishing_point_px[0] == pytest.approx(true_x, abs=3.0)
     assert "refined: vanishing point" in watch.notes[0] and f"the {need} straight checks" in watch.notes[0]
     # a point on the horizon as estimated: no move; points off the horizon are not kept
-    watch = autogeometry.GeometryWatch(geo, cal, autogeometry.GeometryOptions(check_every_s=0.04, drift_checks=10**6), fps=25.0)
+    options = autogeometry.GeometryOptions(check_every_s=0.04, drift_checks=10**6)
+    watch = autogeometry.GeometryWatch(geo, cal, options, fps=25.0)
     watch._finder = _Points([(x0 + 1.0, y0)] * need + [(x0 + 40.0, y0 + 30.0)] * need)
     assert [watch.check(frame, i, 0.0) for i in range(2 * need)] == [None] * (2 * need)
     assert len(watch.points) == need and watch.notes == []
@@ -333,10 +334,10 @@ def test_the_vanishing_point_is_refined_to_the_straight_ahead_column(bend_then_s
     calibration = autogeometry.geometry_calibration(None, geo)
     before = tmp_path / "before.csv"
     batch.process_video(clip, tmp_path / "before.mp4", batch.with_geometry(PipelineConfig(), geo), calibration,
-                       log_path=before, progress=False)
+                        log_path=before, progress=False)
     after = tmp_path / "after.csv"
     run = batch.process_video(clip, tmp_path / "after.mp4", PipelineConfig(), None, log_path=after,
-                             progress=False, auto_geometry=options)
+                              progress=False, auto_geometry=options)
     refined = [re.search(r"^frame (\d+) .*-> \(([\d.]+), [\d.]+\) px", n) for n in run.notes if "refined" in n]
     assert refined and all(refined), run.notes
     first, last_x = int(refined[0][1]), float(refined[-1][2])

@@ -370,7 +370,7 @@ def test_an_unconfident_estimate_falls_back_unless_accepted(tmp_path, cu_two):
     lst.write_text("".join(f"{e}\n" for e in entries))
     common = dict(list_file=lst, progress=False)
     refused = batch.predict_benchmark("culane", root, tmp_path / "refused", auto_geometry=autogeometry.GeometryOptions(),
-                                     **common)
+                                      **common)
     assert refused.geometries == () and [f.sequence for f in refused.fallbacks] == [sequence]
     reason = refused.fallbacks[0].reason
     assert "has confidence 0." in reason and "below 0.5" in reason and "--accept-low-confidence" in reason
@@ -379,6 +379,6 @@ def test_an_unconfident_estimate_falls_back_unless_accepted(tmp_path, cu_two):
     batch.predict_benchmark("culane", root, tmp_path / "preset", **common)
     assert lines_texts(tmp_path / "refused", entries) == lines_texts(tmp_path / "preset", entries)
     accepted = batch.predict_benchmark("culane", root, tmp_path / "accepted", **common,
-                                      auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True))
+                                       auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True))
     assert [s for s, _ in accepted.geometries] == [sequence] and accepted.fallbacks == ()
     assert accepted.geometries[0][1].low_confidence

@@ -120,7 +120,7 @@ def test_the_video_tuner_exports_the_frame_the_video_command_encodes(camera, tmp
     monkeypatch.setattr(io.VideoWriter, "write",
                         lambda self, rgb: (encoded.append(rgb.copy()), real_write(self, rgb))[1])
     run = batch.process_video(CLIP, tmp_path / "run.mp4", t.config, camera, progress=False,
-                             end_s=n / 25)
+                              end_s=n / 25)
     assert run.frames == len(encoded) == n
     assert np.array_equal(io.read_image(written["annotated"]), encoded[9])
     assert not np.array_equal(encoded[9], t.raw)  # the lane was drawn

@@ -226,8 +226,8 @@ def _run_predict(args) -> int:
         print_geometry(estimate)
 
     run = batch.predict_benchmark(args.benchmark, args.root, args.output, args.list_file, config,
-                                 calibration, args.calibration, options, progress=not args.no_progress,
-                                 on_geometry=show, workers=args.workers, scheduler=args.scheduler)
+                                  calibration, args.calibration, options, progress=not args.no_progress,
+                                  on_geometry=show, workers=args.workers, scheduler=args.scheduler)
     for o in run.failed:
         print(f"error: {o.error}", file=sys.stderr)
     done = len(run.outcomes) - len(run.failed)

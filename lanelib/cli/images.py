@@ -53,8 +53,8 @@ def _run_images(args) -> int:
         config, calibration = batch.road_geometry_run(args.in_dir, config, calibration, geometry_options(args),
                                                       on_geometry=print_geometry)
     rows = batch.process_images(files, args.output, config, calibration, debug=args.debug,
-                               workers=args.workers, scheduler=args.scheduler,
-                               progress=not args.no_progress)
+                                workers=args.workers, scheduler=args.scheduler,
+                                progress=not args.no_progress)
     for r in rows:
         if "error" in r:
             continue
@@ -98,9 +98,9 @@ def _run_video(args) -> int:
     if options is not None:
         print(f"estimating the road geometry from the first {options.seconds:g} s of {args.input}")
     run = batch.process_video(args.input, args.output, config, calibration, debug=args.debug,
-                             log_path=args.log, progress=not args.no_progress,
-                             start_s=args.start, end_s=args.end, auto_geometry=options,
-                             on_geometry=print_geometry, workers=args.workers, scheduler=args.scheduler)
+                              log_path=args.log, progress=not args.no_progress,
+                              start_s=args.start, end_s=args.end, auto_geometry=options,
+                              on_geometry=print_geometry, workers=args.workers, scheduler=args.scheduler)
     for note in run.notes:
         print(f"geometry: {note}")
     print(f"{args.output}: {run.frames} frames{clip_part(args, run)} in {run.seconds:.1f} s "
@@ -148,7 +148,7 @@ def _run_hough(args) -> int:
             raise InputError(f"{args.input}: --start and --end are for videos; drop them for a "
                              "folder of images")
         rows = batch.hough_images(list_images(args.input), args.output, config, workers=args.workers,
-                                 scheduler=args.scheduler, progress=not args.no_progress)
+                                  scheduler=args.scheduler, progress=not args.no_progress)
         for r in rows:
             if "error" in r:
                 continue
@@ -166,8 +166,8 @@ def _run_hough(args) -> int:
         raise InputError(f"{args.input}: neither a folder of images nor a video "
                          f"({', '.join(VIDEO_SUFFIXES)}); pass one of those")
     run = batch.hough_video(args.input, args.output, config, log_path=args.log,
-                           progress=not args.no_progress, start_s=args.start, end_s=args.end,
-                           workers=args.workers, scheduler=args.scheduler)
+                            progress=not args.no_progress, start_s=args.start, end_s=args.end,
+                            workers=args.workers, scheduler=args.scheduler)
     print(f"{args.output}: {run.frames} frames{clip_part(args, run)} in {run.seconds:.1f} s "
           f"({run.fps:.1f} fps); both lines found in {run.found_frames} of {run.frames} frames"
           + (f"; per-frame log in {args.log}" if args.log else ""))
