@@ -21,7 +21,7 @@ from lanelib.errors import ConfigError
 from lanelib.lanes import LaneChecks, LineFit, SearchConfig
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
-from lanelib.runs import process_images
+from lanelib.batch import process_images
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280
