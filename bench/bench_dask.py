@@ -36,7 +36,7 @@ from pathlib import Path
 import dask
 import distributed
 
-from lanelib import cluster, evaluate, runs
+from lanelib import autogeometry, batch, cluster, evaluate
 from lanelib.config import PipelineConfig
 from lanelib.pipeline import LanePipeline
 
@@ -54,9 +54,9 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def predict(root: Path, out: Path, **kwargs) -> runs.PredictRun:
-    run = runs.predict_benchmark("tusimple", root, out, config=PipelineConfig(), progress=False,
-                                 auto_geometry=runs.GeometryOptions(accept_low_confidence=True), **kwargs)
+def predict(root: Path, out: Path, **kwargs) -> batch.PredictRun:
+    run = batch.predict_benchmark("tusimple", root, out, config=PipelineConfig(), progress=False,
+                                  auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True), **kwargs)
     assert not run.failed, run.failed[:3]
     return run
 
@@ -78,8 +78,8 @@ def bench_clip(what: str, video: Path, tmp: Path, counts) -> None:
     def run(scheduler=None, tag="one"):
         t0 = time.perf_counter()
         if what == "video":
-            r = runs.process_video(video, tmp / f"{tag}.mp4", log_path=tmp / f"{tag}.csv", progress=False,
-                                   scheduler=scheduler)
+            r = batch.process_video(video, tmp / f"{tag}.mp4", log_path=tmp / f"{tag}.csv", progress=False,
+                                    scheduler=scheduler)
             frames = r.frames
         else:
             pipe = LanePipeline(calibration=evaluate.calibration_from_truth(video))

@@ -3,7 +3,7 @@
 The stages live in their own modules (camera, perspective, thresholds, search, fit, checks,
 tracking, draw, hough; the hard-road parts in ``roads``, every line in view in ``lines``);
 ``lanelib.pipeline.LanePipeline`` wires them from one ``PipelineConfig``, and
-``lanelib.runs`` runs either pipeline over a folder of images or a video.
+``lanelib.batch`` runs either pipeline over a folder of images or a video.
 """
 from .errors import (CalibrationError, ConfigError, DecodeStoppedError, InputError, LaneLibError,
                      PartialOutputError)

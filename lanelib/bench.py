@@ -7,7 +7,7 @@
   measurements) on consecutive 1280x720 frames, one OpenCV thread; ``remap_ms``: one full-frame
   ``cv2.remap`` of the same colour frames with the pipeline's precomputed bird's-eye maps, one
   thread, interleaved with it; ``detect_to_remap`` = their ratio (goal <= 2.5).
-- ``video_fps``: the whole ``video`` command (``runs.process_video``: decode, track, draw,
+- ``video_fps``: the whole ``video`` command (``batch.process_video``: decode, track, draw,
   encode) on a 1280x720 clip; ``codec_fps``: decode plus encode of the same clip with the same
   encoder settings (``io.H264_PARAMS`` through ``io.VideoWriter``) and nothing else;
   ``video_to_codec`` = their ratio (goal >= 0.7). The two runs alternate and the faster of each
@@ -52,7 +52,8 @@ from .config import PipelineConfig
 from .errors import InputError, LaneLibError
 from .evaluate import calibration_from_truth
 from .pipeline import LanePipeline
-from .runs import GeometryOptions, process_video, sample_frames
+from .autogeometry import GeometryOptions
+from .batch import process_video, sample_frames
 from .tracking import LaneTracker
 
 GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7)}

@@ -30,7 +30,7 @@ class DecodeStoppedError(InputError):
     """A video stopped decoding part-way (truncated or corrupt); ``frames`` frames came before.
 
     ``VideoReader`` raises it after yielding the frames it could decode; a run that catches it
-    may keep what it made of those frames (``runs.run_video`` does, and raises
+    may keep what it made of those frames (``batch.run_video`` does, and raises
     ``PartialOutputError``).
     """
 

@@ -13,7 +13,7 @@ y grows, has a negative slope. The stage functions work on plain arrays, for not
 ``HoughLaneFinder`` runs them from one ``HoughConfig`` on single images, and ``HoughTracker``
 adds smoothing across video frames and holds a lost line for a few frames. Nothing in the
 per-frame path raises on the frame's content: a side without a line says why in ``reason``.
-Its batch runs (a folder of images, a video) are ``runs.hough_images`` and ``runs.hough_video``.
+Its batch runs (a folder of images, a video) are ``batch.hough_images`` and ``batch.hough_video``.
 """
 from __future__ import annotations
 

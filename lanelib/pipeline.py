@@ -6,8 +6,8 @@ measurements -> overlay on the undistorted frame (``detect_lines``: every lane l
 well, for the benchmarks, in a wider and longer view). A lane that fails the checks is not found; what
 it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
 use this object, so what a slider tunes is exactly what a video run uses. This module is the
-per-frame engine only: runs over image folders and videos are ``runs.process_images`` and
-``runs.process_video``.
+per-frame engine only: runs over image folders and videos are ``batch.process_images`` and
+``batch.process_video``.
 """
 from __future__ import annotations
 

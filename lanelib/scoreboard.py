@@ -4,7 +4,7 @@
 scoreboard``, ``make scoreboard``):
 
 - **CULane dev** (``data.culane_dev``): every listed frame predicted on its own
-  (``runs.predict_benchmark``: every line seen, up to two a side) with ``config.benchmark_config``
+  (``batch.predict_benchmark``: every line seen, up to two a side) with ``config.benchmark_config``
   and scored by CULane's official rules (30 px lines on 1640x590, IoU > 0.5): precision, recall, F1.
 - **TuSimple dev** (``data.tusimple_dev``): its 512x288 frames upscaled to 1280x720
   (``upscaled_tusimple``: bicubic, PNG, written once into a cache folder under ``out``), predicted
@@ -21,7 +21,7 @@ scoreboard``, ``make scoreboard``):
   tracker (``evaluate.evaluate_video``): point accuracy.
 
 Every row runs with OpenCV on one thread. ``ms/frame`` is the mean time of one frame's detection
-(the predict rows: ``runs.FrameOutcome.run_time_ms``) or of the ``video`` command's work on one
+(the predict rows: ``batch.FrameOutcome.run_time_ms``) or of the ``video`` command's work on one
 frame without the codec (the video rows: tracking and drawing). A row whose data is absent is
 skipped with the reason (``data.missing_reason``); a row that fails keeps its error and the
 others run. Figures are rounded to what they mean: percentages to 0.1, TuSimple's FP and FN to
@@ -38,7 +38,7 @@ from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
-from . import data, evaluate, io, runs
+from . import autogeometry, batch, data, evaluate, io
 from .bench import one_thread
 from .benchmarks import culane, tusimple
 from .benchmarks.metrics import MAX_RUN_TIME_MS, CULaneCounts
@@ -234,7 +234,7 @@ def _fresh(folder: Path) -> Path:
     """Return ``folder`` with an earlier run's predictions removed, so that every frame is
     predicted, and timed, in this run; a folder that holds anything else is refused."""
     if folder.is_dir() and any(folder.iterdir()):
-        if not (folder / runs.PREDICT_SETTINGS).is_file():
+        if not (folder / batch.PREDICT_SETTINGS).is_file():
             raise InputError(f"{folder}: holds files that are not predictions of an earlier "
                              "scoreboard; pass another --out folder")
         shutil.rmtree(folder)
@@ -242,15 +242,15 @@ def _fresh(folder: Path) -> Path:
 
 
 def _predict(benchmark: str, root: Path, out: Path, list_file: Path | None, config: PipelineConfig,
-             auto_geometry: runs.GeometryOptions | None = None) -> runs.PredictRun:
-    run = runs.predict_benchmark(benchmark, root, _fresh(out), list_file=list_file, config=config,
-                                 auto_geometry=auto_geometry, progress=False)
+             auto_geometry: autogeometry.GeometryOptions | None = None) -> batch.PredictRun:
+    run = batch.predict_benchmark(benchmark, root, _fresh(out), list_file=list_file, config=config,
+                                  auto_geometry=auto_geometry, progress=False)
     if run.failed:
         raise InputError(f"{len(run.failed)} of {run.frames} frames failed, the first: {run.failed[0].error}")
     return run
 
 
-def _predict_ms(run: runs.PredictRun) -> int | None:
+def _predict_ms(run: batch.PredictRun) -> int | None:
     return mean_ms([o.run_time_ms for o in run.outcomes])
 
 
@@ -298,7 +298,7 @@ def _tusimple_dev(out: Path, settings: Settings) -> Measured:
                     tusimple_figures(s.accuracy, s.fp, s.fn) | _over_time(run), _predict_ms(run))
 
 
-def _over_time(run: runs.PredictRun) -> dict:
+def _over_time(run: batch.PredictRun) -> dict:
     """Return the frames predicted slower than TuSimple's limit (which score 0 by its rules), as
     ``{"over_200ms": n}``, or nothing when there are none: on a loaded machine the accuracy then
     says more about the load than about the lane finding."""
@@ -318,9 +318,9 @@ class ClipRun(NamedTuple):
 def track_clip(path: str | Path, config: PipelineConfig = PipelineConfig(),
                calibration: Calibration | None = None) -> ClipRun:
     """Return the lane of every frame of a clip tracked as the ``video`` command tracks it
-    (``runs.lane_video_process``: a fresh ``LaneTracker`` on the first frame, the overlay drawn),
+    (``batch.lane_video_process``: a fresh ``LaneTracker`` on the first frame, the overlay drawn),
     writing nothing, with the time of each frame's work (ms, decoding excluded)."""
-    process, _, _ = runs.lane_video_process(config, calibration, debug=False)
+    process, _, _ = batch.lane_video_process(config, calibration, debug=False)
     rows, ms = [], []
     with io.VideoReader(path) as reader:
         fps = reader.info.fps
@@ -361,7 +361,7 @@ def _synth_sample(benchmark: str) -> Measure:
         listed = sample.root / "list" / "test.txt" if benchmark == "culane" else None
         # the generator's camera, not the benchmark's: the built-in settings, not its preset
         run = _predict(benchmark, sample.root, out / f"synth-{benchmark}", listed,
-                       override(PipelineConfig(), settings), runs.GeometryOptions())
+                       override(PipelineConfig(), settings), autogeometry.GeometryOptions())
         if benchmark == "culane":
             c = culane.evaluate(sample.root, listed, run.output).counts
             figures = detection_figures(c.tp, c.fp, c.fn)

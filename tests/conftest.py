@@ -14,7 +14,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from lanelib import data, io, runs
+from lanelib import autogeometry, data, io
 from lanelib.camera import calibrate
 from lanelib.synth import Camera, CurvatureProfile, GroundGrid, video_sets, write_video
 
@@ -111,10 +111,10 @@ def refine_camera() -> Camera:
 
 
 @pytest.fixture(scope="session")
-def refine_options() -> runs.GeometryOptions:
+def refine_options() -> autogeometry.GeometryOptions:
     """``--auto-geometry`` on ``bend_then_straight``: the first 4 s (12 frames), with the focal
     length as a calibration gives it (no dashes in 4 s)."""
-    return runs.GeometryOptions(seconds=4.0, max_frames=12, focal_px=480 / math.tan(math.radians(20.0)))
+    return autogeometry.GeometryOptions(seconds=4.0, max_frames=12, focal_px=480 / math.tan(math.radians(20.0)))
 
 
 @pytest.fixture(scope="session")

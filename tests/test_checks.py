@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from lanelib import draw, io
+from lanelib.batch import process_images
 from lanelib.checks import LaneCheck, check_lane, line_problem, pair_problem, search_bands_px
 from lanelib.config import PipelineConfig
 from lanelib.errors import ConfigError
@@ -25,7 +26,6 @@ from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.records import LaneSearch, LineFit, Window
 from lanelib.roads.stripes import two_stripes
-from lanelib.runs import process_images
 from lanelib.search import lane_pixels, search_around, sliding_windows
 from lanelib.tracking import LaneTracker
 

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 from lanelib import io
 from lanelib.cli import main
-from lanelib.runs import GRAYSCALE_NOTE
+from lanelib.batch import GRAYSCALE_NOTE
 
 REPO = Path(__file__).resolve().parents[1]
 ROAD = REPO / "test_images" / "straight_1.jpg"

@@ -1,4 +1,4 @@
-"""Tests of ``predict`` on Dask (``cluster``, ``runs.predict_benchmark(workers=, scheduler=)``):
+"""Tests of ``predict`` on Dask (``cluster``, ``batch.predict_benchmark(workers=, scheduler=)``):
 ``--workers 2`` (a LocalCluster) and ``--scheduler`` (a separately started ``dask scheduler`` and
 ``dask worker``) give the predictions of one process, a bad frame is recorded without stopping the
 run, a sequence whose geometry estimate fails keeps the config's points, and ``evaluate`` scores
@@ -21,7 +21,7 @@ import distributed
 import numpy as np
 import pytest
 
-from lanelib import cluster, io, runs
+from lanelib import batch, cluster, io
 from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.cli import main
 from lanelib.synth.datasets import write_dataset
@@ -107,11 +107,11 @@ def without_run_time(text: str) -> str:
 
 def assert_same_predictions(out: Path, reference: Path) -> None:
     """The assembled file and every part are byte for byte those of ``reference`` but for run_time."""
-    for name in [runs.TUSIMPLE_PREDICTIONS, runs.PREDICT_SETTINGS]:
+    for name in [batch.TUSIMPLE_PREDICTIONS, batch.PREDICT_SETTINGS]:
         assert without_run_time((out / name).read_text()) == without_run_time((reference / name).read_text())
-    parts = sorted(p.relative_to(reference) for p in (reference / runs.TUSIMPLE_PARTS).rglob("*.json"))
+    parts = sorted(p.relative_to(reference) for p in (reference / batch.TUSIMPLE_PARTS).rglob("*.json"))
     assert len(parts) == 8
-    assert sorted(p.relative_to(out) for p in (out / runs.TUSIMPLE_PARTS).rglob("*.json")) == parts
+    assert sorted(p.relative_to(out) for p in (out / batch.TUSIMPLE_PARTS).rglob("*.json")) == parts
     for p in parts:
         assert without_run_time((out / p).read_text()) == without_run_time((reference / p).read_text())
 
@@ -157,13 +157,13 @@ def test_two_local_workers_give_the_predictions_of_one_process(tmp_path, ts_root
     figures = []
     for pred in (out, reference):
         assert main(["evaluate", "tusimple", "--gt", str(ts_root), "--pred",
-                     str(pred / runs.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
+                     str(pred / batch.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
         figures.append(json.loads((tmp_path / "fig.json").read_text()))
     assert figures[0]["images"] == 8
     # TuSimple scores a frame predicted in over 200 ms as missed: on a loaded machine a worker's
     # run_time may pass it where one process's did not, so the figures are the same when every
     # frame of both runs is under it, and the same without the time rule always
-    runs_ = [tusimple.read_predictions(p / runs.TUSIMPLE_PREDICTIONS) for p in (out, reference)]
+    runs_ = [tusimple.read_predictions(p / batch.TUSIMPLE_PREDICTIONS) for p in (out, reference)]
     if all(r.run_time_ms <= metrics.MAX_RUN_TIME_MS for preds in runs_ for r in preds):
         assert {k: v for k, v in figures[0].items() if k != "run_time_ms"} == pytest.approx(
             {k: v for k, v in figures[1].items() if k != "run_time_ms"})
@@ -193,7 +193,7 @@ def test_a_bad_frame_on_dask_is_recorded_and_the_run_goes_on(tmp_path, ts_root, 
     captured = capsys.readouterr()
     assert captured.err.count("error:") == 1 and bad in captured.err
     assert "8 frames: 7 predicted (" in captured.out and ", 1 failed" in captured.out
-    preds = tusimple.read_predictions(out / runs.TUSIMPLE_PREDICTIONS)
+    preds = tusimple.read_predictions(out / batch.TUSIMPLE_PREDICTIONS)
     assert [p.raw_file for p in preds] == [r.raw_file for r in labels if r.raw_file != bad]
 
 
@@ -219,7 +219,7 @@ def test_a_failed_geometry_on_dask_keeps_the_config_for_its_sequence(tmp_path, t
     assert len(notes) == 1 and notes[0].startswith("clips/synth02: road geometry not used (no consistent")
     assert "8 frames: 8 predicted" in text
     # the other sequence's frames are those of one process on the whole sample; these have no line
-    parts = sorted((out / runs.TUSIMPLE_PARTS).rglob("*.json"))
+    parts = sorted((out / batch.TUSIMPLE_PARTS).rglob("*.json"))
     assert len(parts) == 8
     for name in parts:
         part = name.relative_to(out)
@@ -233,7 +233,7 @@ def test_a_failed_geometry_on_dask_keeps_the_config_for_its_sequence(tmp_path, t
 
 def test_evaluate_tusimple_on_dask_gives_the_figures_of_one_process(tmp_path, ts_root, reference,
                                                                     scheduler):
-    pred = reference / runs.TUSIMPLE_PREDICTIONS
+    pred = reference / batch.TUSIMPLE_PREDICTIONS
     figures = []
     for extra in ([], ["--scheduler", scheduler]):
         out = tmp_path / f"fig{len(figures)}.json"

@@ -22,7 +22,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from lanelib import cluster, evaluate, hough, io, runs
+from lanelib import batch, cluster, evaluate, hough, io
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline, PipelineConfig, pipeline_for
@@ -264,8 +264,8 @@ def test_a_refinement_early_in_a_run_restarts_the_later_segments_in_one_round(
     logs, done = {}, {}
     for name, extra in (("one", {}), ("two", {"scheduler": scheduler})):
         logs[name] = tmp_path / f"{name}.csv"
-        done[name] = runs.process_video(bend_then_straight, tmp_path / f"{name}.mp4", log_path=logs[name],
-                                        progress=False, auto_geometry=refine_options, **extra)
+        done[name] = batch.process_video(bend_then_straight, tmp_path / f"{name}.mp4", log_path=logs[name],
+                                         progress=False, auto_geometry=refine_options, **extra)
     one, two = done["one"], done["two"]
     refined = [int(n.split()[1]) for n in one.notes if "refined:" in n]
     assert refined and refined[0] < 200, one.notes  # in the second segment (100..199)

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
-from lanelib import autogeometry, io, runs
+from lanelib import autogeometry, batch, io
 from lanelib.camera import Calibration, calibrate
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config, save_config
@@ -22,7 +22,7 @@ from lanelib.synth import load_video_truth
 
 REPO = Path(__file__).resolve().parents[1]
 CLIP = REPO / "videos" / "project.mp4"
-OPTIONS = runs.GeometryOptions(seconds=6.0, max_frames=25)
+OPTIONS = autogeometry.GeometryOptions(seconds=6.0, max_frames=25)
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +35,7 @@ def calibration_file(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def estimate(calibration_file):
     cal = Calibration.load(calibration_file)
-    return cal, runs.estimate_road_geometry(CLIP, cal, OPTIONS)
+    return cal, batch.estimate_road_geometry(CLIP, cal, OPTIONS)
 
 
 def test_the_estimate_on_the_bundled_clip_finds_the_true_horizon(estimate):
@@ -44,7 +44,7 @@ def test_the_estimate_on_the_bundled_clip_finds_the_true_horizon(estimate):
     row, _ = truth.horizon_px()
     assert geo.horizon_row_px == pytest.approx(row, abs=2.0)
     assert not geo.low_confidence
-    config = runs.with_geometry(PipelineConfig(), geo)
+    config = batch.with_geometry(PipelineConfig(), geo)
     assert config.perspective == geo.perspective_config()
     assert config.perspective.car_x_px == pytest.approx(640.0)  # the camera's line: dst centre
     assert config.thresholds == PipelineConfig().thresholds
@@ -58,7 +58,7 @@ def test_a_seam_inside_the_lane_is_not_taken_for_a_lane_line(calibration_file):
     (taking the seam for the right line reads 2.0 m, and a roll of 0.6 deg)."""
     clip = REPO / "videos" / "challenge.mp4"
     truth = load_video_truth(clip).camera
-    geo = runs.estimate_road_geometry(clip, Calibration.load(calibration_file), runs.GeometryOptions())
+    geo = batch.estimate_road_geometry(clip, Calibration.load(calibration_file), autogeometry.GeometryOptions())
     assert geo.camera_height_m == pytest.approx(truth.height_m * 3.7 / 3.6, rel=0.03)
     assert geo.roll_deg == pytest.approx(truth.roll_deg, abs=0.2)
 
@@ -189,11 +189,11 @@ def _shifted(frame: np.ndarray, dy: float) -> np.ndarray:
 
 def test_the_watch_estimates_again_when_the_horizon_moves(estimate):
     cal, geo = estimate
-    frames = runs.sample_frames(CLIP, 6.0, 25)
+    frames = batch.sample_frames(CLIP, 6.0, 25)
     straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok]
     assert len(straight) >= 6
-    options = runs.GeometryOptions(check_every_s=0.04)  # every frame; 5 in a row (the default)
-    watch = runs.GeometryWatch(geo, cal, options, fps=25.0)
+    options = autogeometry.GeometryOptions(check_every_s=0.04)  # every frame; 5 in a row (the default)
+    watch = autogeometry.GeometryWatch(geo, cal, options, fps=25.0)
     for i, f in enumerate(straight[:4]):  # on the horizon: nothing happens
         assert watch.check(f, i, i / 25) is None
     assert watch.notes == []
@@ -212,9 +212,9 @@ def test_the_watch_pickles_without_its_maps_and_goes_on_the_same(estimate):
     undistortion maps and the hood mask, megabytes), which the copy builds again on first use,
     and the copy checks the next frames as the original does, a new estimate included."""
     cal, geo = estimate
-    frames = runs.sample_frames(CLIP, 6.0, 25)
+    frames = batch.sample_frames(CLIP, 6.0, 25)
     straight = [f for f in frames if autogeometry.vanishing_point(f, cal, geo.hood_row_px).ok][:6]
-    watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04), fps=25.0)
+    watch = autogeometry.GeometryWatch(geo, cal, autogeometry.GeometryOptions(check_every_s=0.04), fps=25.0)
     assert watch.check(straight[0], 0, 0.0) is None  # the finder is built
     assert len(pickle.dumps(watch)) < 20_000 < 100 * 20_000 < len(pickle.dumps(watch.finder))
     moved = [_shifted(f, 12.0) for f in straight]
@@ -260,8 +260,8 @@ def test_the_watch_refines_the_point_once_the_evidence_says_so_and_not_back_and_
     used), a move to the median when it lies off by more than its standard error plus the
     tolerance, then twice the points for the next move; off-horizon points do not count."""
     cal, geo = estimate
-    watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04), fps=25.0)
-    need = max(runs.REFINE_MIN_CHECKS, len(geo.frames_used))
+    watch = autogeometry.GeometryWatch(geo, cal, autogeometry.GeometryOptions(check_every_s=0.04), fps=25.0)
+    need = max(autogeometry.REFINE_MIN_CHECKS, len(geo.frames_used))
     x0, y0 = geo.vanishing_point_px
     rng = np.random.default_rng(3)
     true_x = x0 + 15.0  # the straight-ahead column, 15 px right of the estimate's
@@ -275,7 +275,8 @@ def test_the_watch_refines_the_point_once_the_evidence_says_so_and_not_back_and_
     assert watch.geometry.vanishing_point_px[0] == pytest.approx(true_x, abs=3.0)
     assert "refined: vanishing point" in watch.notes[0] and f"the {need} straight checks" in watch.notes[0]
     # a point on the horizon as estimated: no move; points off the horizon are not kept
-    watch = runs.GeometryWatch(geo, cal, runs.GeometryOptions(check_every_s=0.04, drift_checks=10**6), fps=25.0)
+    options = autogeometry.GeometryOptions(check_every_s=0.04, drift_checks=10**6)
+    watch = autogeometry.GeometryWatch(geo, cal, options, fps=25.0)
     watch._finder = _Points([(x0 + 1.0, y0)] * need + [(x0 + 40.0, y0 + 30.0)] * need)
     assert [watch.check(frame, i, 0.0) for i in range(2 * need)] == [None] * (2 * need)
     assert len(watch.points) == need and watch.notes == []
@@ -288,13 +289,13 @@ def test_a_fresh_watch_is_carried_on_by_the_evidence_of_the_one_before(estimate)
     is the one watch's state; where they would have refined the geometry in it, None (the
     segment runs again)."""
     cal, geo = estimate
-    need = max(runs.REFINE_MIN_CHECKS, len(geo.frames_used))
+    need = max(autogeometry.REFINE_MIN_CHECKS, len(geo.frames_used))
     x0, y0 = geo.vanishing_point_px
-    options = runs.GeometryOptions(check_every_s=0.04)
+    options = autogeometry.GeometryOptions(check_every_s=0.04)
     frame = np.zeros((1, 1, 3), np.uint8)
 
     def run(points, indices, before=None):
-        watch = runs.GeometryWatch(geo, cal, options, fps=25.0) if before is None else before
+        watch = autogeometry.GeometryWatch(geo, cal, options, fps=25.0) if before is None else before
         watch._finder = _Points(points)
         for i in indices:
             watch.check(frame, i, i / 25)
@@ -328,15 +329,15 @@ def test_the_vanishing_point_is_refined_to_the_straight_ahead_column(bend_then_s
     truth = load_video_truth(clip)
     true_x = refine_camera.vanishing_point_px()[0]
     options = refine_options
-    geo = runs.estimate_road_geometry(clip, None, options)
+    geo = batch.estimate_road_geometry(clip, None, options)
     assert geo.vanishing_point_px[0] < true_x - 8.0  # the bias to correct
-    calibration = runs.geometry_calibration(None, geo)
+    calibration = autogeometry.geometry_calibration(None, geo)
     before = tmp_path / "before.csv"
-    runs.process_video(clip, tmp_path / "before.mp4", runs.with_geometry(PipelineConfig(), geo), calibration,
-                       log_path=before, progress=False)
+    batch.process_video(clip, tmp_path / "before.mp4", batch.with_geometry(PipelineConfig(), geo), calibration,
+                        log_path=before, progress=False)
     after = tmp_path / "after.csv"
-    run = runs.process_video(clip, tmp_path / "after.mp4", PipelineConfig(), None, log_path=after,
-                             progress=False, auto_geometry=options)
+    run = batch.process_video(clip, tmp_path / "after.mp4", PipelineConfig(), None, log_path=after,
+                              progress=False, auto_geometry=options)
     refined = [re.search(r"^frame (\d+) .*-> \(([\d.]+), [\d.]+\) px", n) for n in run.notes if "refined" in n]
     assert refined and all(refined), run.notes
     first, last_x = int(refined[0][1]), float(refined[-1][2])

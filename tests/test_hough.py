@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from lanelib import ConfigError, InputError, LaneLibError, hough, io, runs
+from lanelib import ConfigError, InputError, LaneLibError, batch, hough, io
 from lanelib import config as config_module
 from lanelib.cli import main
 
@@ -379,8 +379,8 @@ def test_p1_videos_end_to_end_find_both_lines_in_95_percent_of_frames(udacity_p1
     videos = udacity_p1 / "test_videos"
     assert main(["hough", str(videos / "solidWhiteRight.mp4"), "-o", str(tmp_path / "white.mp4"),
                  "--log", str(tmp_path / "white.csv"), "--no-progress"]) == 0
-    run = runs.hough_video(videos / "solidYellowLeft.mp4", tmp_path / "yellow.mp4",
-                           log_path=tmp_path / "yellow.csv", progress=False)
+    run = batch.hough_video(videos / "solidYellowLeft.mp4", tmp_path / "yellow.mp4",
+                            log_path=tmp_path / "yellow.csv", progress=False)
     assert run.frames == 681 and run.found_frames >= 0.95 * 681
     for name, frames in (("white", 221), ("yellow", 681)):
         n, share = both_found_share(tmp_path / f"{name}.csv")

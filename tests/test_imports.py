@@ -4,7 +4,8 @@ The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; 
 parameter record); io; the stages on arrays (thresholds, records, fit, search, checks, result, draw,
 and the hard-road and every-line parts they call: roads, lines); geometry
 (camera, perspective, autogeometry); data; config; the one-frame engines (pipeline, the basic hough
-pipeline); the tracker; runs, evaluate, bench, synth, benchmarks; the scoreboard; widgets; cli.
+pipeline); the tracker; batch (folders, videos, predict), cluster, evaluate, bench, synth, benchmarks;
+the scoreboard; widgets; cli.
 A module imports only from its own layer or below, never from above, and every import is at
 module level (a function-level import hides a cycle instead of removing it). An import under
 ``if TYPE_CHECKING:`` is an edge like any other: a cycle that only type checkers follow is still
@@ -166,7 +167,7 @@ HEAVY_IMPORTS = ("scipy.optimize", "scipy.interpolate", "dask", "distributed")
 
 
 def test_the_command_line_starts_without_the_heavy_imports():
-    code = ("import sys, lanelib.cli, lanelib.evaluate, lanelib.runs; "
+    code = ("import sys, lanelib.cli, lanelib.evaluate, lanelib.batch; "
             f"print([m for m in {HEAVY_IMPORTS!r} if m in sys.modules])")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert p.stdout.strip() == "[]", p.stdout
@@ -189,11 +190,11 @@ LAYERS = [
     {"lanelib.config"},                     # nests the records of params; JSON and presets
     {"lanelib.pipeline", "lanelib.hough"},  # the one-frame engines: advanced, basic
     {"lanelib.tracking"},                   # the tracker loop over a LanePipeline
-    {"lanelib.runs", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
-     "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: runs' frames explained
-    {"lanelib.scoreboard", "lanelib.ablation"},  # measure with runs, evaluate and the benchmarks
+    {"lanelib.batch", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
+     "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: predict's frames explained
+    {"lanelib.scoreboard", "lanelib.ablation"},  # measure with batch, evaluate and the benchmarks
     {"lanelib.widgets"},
-    {"lanelib.cli", "lanelib.__main__", "lanelib"},
+    {"lanelib.cli", "lanelib.__main__", "lanelib"},  # cli: a package, argument parsing only
 ]
 
 

@@ -14,7 +14,7 @@ from hypothesis.extra.numpy import arrays
 from lanelib import io
 from lanelib.errors import InputError, LaneLibError
 from lanelib.pipeline import LanePipeline
-from lanelib.runs import process_images
+from lanelib.batch import process_images
 
 
 def straight_lane_frame(pipe: LanePipeline, offset_px: float = 0.0) -> np.ndarray:

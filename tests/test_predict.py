@@ -1,4 +1,4 @@
-"""Tests of the synthetic benchmark samples (``synth.datasets``) and ``predict`` (``runs.predict_benchmark``):
+"""Tests of the synthetic benchmark samples (``synth.datasets``) and ``predict`` (``batch.predict_benchmark``):
 the layouts and their labels, predictions in each format, resuming, bad input, the round trip
 through ``evaluate``, the default config (the benchmark's preset) and the sequences whose geometry
 estimate is not used. The samples are a few frames each, rendered once per module."""
@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import config, io, runs
+from lanelib import autogeometry, batch, config, io
 from lanelib.benchmarks import culane, metrics, tusimple
 from lanelib.cli import main
 from lanelib.config import PipelineConfig
@@ -140,7 +140,7 @@ def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
     text = capsys.readouterr().out
     assert "clips/synth01: road geometry from its frames" in text and "clips/synth02" in text
     assert "4 frames: 4 predicted" in text
-    preds = tusimple.read_predictions(out / runs.TUSIMPLE_PREDICTIONS)
+    preds = tusimple.read_predictions(out / batch.TUSIMPLE_PREDICTIONS)
     labels = tusimple.read_labels(ts_root)
     assert [p.raw_file for p in preds] == [r.raw_file for r in labels]
     for p, r in zip(preds, labels):
@@ -153,7 +153,7 @@ def test_predict_tusimple_and_evaluate(tmp_path, ts_root, capsys):
             assert (a[both] < b[both]).all()
     # the round trip: evaluate reads the file and gives the figures of the records
     assert main(["evaluate", "tusimple", "--gt", str(ts_root), "--pred",
-                 str(out / runs.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
+                 str(out / batch.TUSIMPLE_PREDICTIONS), "--json", str(tmp_path / "fig.json")]) == 0
     figures = json.loads((tmp_path / "fig.json").read_text())
     expected = tusimple.score(labels, preds)
     assert figures["Accuracy"] == pytest.approx(expected.accuracy)
@@ -184,29 +184,29 @@ def test_predict_culane_and_evaluate(tmp_path, cu_root, capsys):
 def test_predict_resumes(tmp_path, ts_root, capsys):
     out = tmp_path / "pred"
     common = dict(config=PipelineConfig(), progress=False,
-                  auto_geometry=runs.GeometryOptions(accept_low_confidence=True))
-    first = runs.predict_benchmark("tusimple", ts_root, out, **common)
+                  auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True))
+    first = batch.predict_benchmark("tusimple", ts_root, out, **common)
     assert first.skipped == 0 and len(first.outcomes) == 4
-    assembled = (out / runs.TUSIMPLE_PREDICTIONS).read_text()
+    assembled = (out / batch.TUSIMPLE_PREDICTIONS).read_text()
     # a second run skips every frame and estimates no geometry; the file is the same
-    again = runs.predict_benchmark("tusimple", ts_root, out, **common)
+    again = batch.predict_benchmark("tusimple", ts_root, out, **common)
     assert again.skipped == 4 and again.outcomes == () and again.geometries == ()
-    assert (out / runs.TUSIMPLE_PREDICTIONS).read_text() == assembled
+    assert (out / batch.TUSIMPLE_PREDICTIONS).read_text() == assembled
     # a deleted prediction is made again, and the stray temporary of a killed write is removed
-    part = out / runs.TUSIMPLE_PARTS / "clips" / "synth02" / "0001" / "20.json"
+    part = out / batch.TUSIMPLE_PARTS / "clips" / "synth02" / "0001" / "20.json"
     part.unlink()
     stray = part.parent / ".20.abcd1234.part.json"
     stray.write_text('{"raw_file": "clips/synth02/0001/20.jpg", "lan')
-    redo = runs.predict_benchmark("tusimple", ts_root, out, **common)
+    redo = batch.predict_benchmark("tusimple", ts_root, out, **common)
     assert [o.name for o in redo.outcomes] == ["clips/synth02/0001/20.jpg"]
     assert [s for s, _ in redo.geometries] == ["clips/synth02"]
     assert part.is_file() and not stray.exists()
-    lines = (out / runs.TUSIMPLE_PREDICTIONS).read_text().splitlines()
+    lines = (out / batch.TUSIMPLE_PREDICTIONS).read_text().splitlines()
     assert len(lines) == 4 and [json.loads(line)["raw_file"] for line in lines] == [
         r.raw_file for r in tusimple.read_labels(ts_root)]
     # other settings are refused in that folder
     with pytest.raises(InputError, match=r"other settings \(config differ"):
-        runs.predict_benchmark("tusimple", ts_root, out, **{**common, "config": PipelineConfig(
+        batch.predict_benchmark("tusimple", ts_root, out, **{**common, "config": PipelineConfig(
             perspective=replace(PipelineConfig().perspective, lane_width_m=3.5))})
 
 
@@ -267,9 +267,9 @@ def test_detect_lines_finds_the_labelled_lines_with_the_true_geometry(ts_root):
         found = pipe.detect_lines(rgb)
         assert found.ego.found == pipe.detect(rgb).found
         alone = pipe.detect_lines(rgb, ego=False)  # predict's call: the same lines, no ego lane
-        preds = runs.seen_lines(found, rec.h_samples, w=rgb.shape[1])
+        preds = batch.seen_lines(found, rec.h_samples, w=rgb.shape[1])
         assert alone.ego is None and np.array_equal(
-            np.array(runs.seen_lines(alone, rec.h_samples, w=rgb.shape[1])), np.array(preds), equal_nan=True)
+            np.array(batch.seen_lines(alone, rec.h_samples, w=rgb.shape[1])), np.array(preds), equal_nan=True)
         xs = np.array(preds)
         for a, b in zip(xs[:-1], xs[1:]):  # left to right where both are seen
             both = np.isfinite(a) & np.isfinite(b)
@@ -286,7 +286,7 @@ def test_detect_lines_finds_the_labelled_lines_with_the_true_geometry(ts_root):
 # --------------------------------------------------------------------------- the config and geometry of a run
 
 def settings_config(out: Path) -> dict:
-    return json.loads((out / runs.PREDICT_SETTINGS).read_text())["config"]
+    return json.loads((out / batch.PREDICT_SETTINGS).read_text())["config"]
 
 
 @pytest.fixture
@@ -312,7 +312,7 @@ def test_predict_uses_the_benchmarks_preset_unless_told_otherwise(tmp_path, cu_r
     assert run("set", "--set", "lines.min_span_m=4") == config.to_dict(
         config.override(culane_preset, ["lines.min_span_m=4"]))
     # the library's default is the CLI's
-    runs.predict_benchmark("culane", cu_root, tmp_path / "library", progress=False)
+    batch.predict_benchmark("culane", cu_root, tmp_path / "library", progress=False)
     assert settings_config(tmp_path / "library") == config.to_dict(culane_preset)
     assert config.benchmark_config("no such benchmark") == PipelineConfig()
     with pytest.raises(SystemExit):
@@ -331,7 +331,7 @@ def cu_two(tmp_path_factory) -> Path:
 def sequence_entries(root: Path) -> dict[str, list[str]]:
     entries: dict[str, list[str]] = {}
     for entry in culane.read_list(root / "list" / "test.txt"):
-        entries.setdefault(runs.frame_sequence("culane", entry), []).append(entry)
+        entries.setdefault(batch.frame_sequence("culane", entry), []).append(entry)
     return entries
 
 
@@ -369,16 +369,16 @@ def test_an_unconfident_estimate_falls_back_unless_accepted(tmp_path, cu_two):
     lst = tmp_path / "list.txt"
     lst.write_text("".join(f"{e}\n" for e in entries))
     common = dict(list_file=lst, progress=False)
-    refused = runs.predict_benchmark("culane", root, tmp_path / "refused", auto_geometry=runs.GeometryOptions(),
-                                     **common)
+    refused = batch.predict_benchmark("culane", root, tmp_path / "refused", auto_geometry=autogeometry.GeometryOptions(),
+                                      **common)
     assert refused.geometries == () and [f.sequence for f in refused.fallbacks] == [sequence]
     reason = refused.fallbacks[0].reason
     assert "has confidence 0." in reason and "below 0.5" in reason and "--accept-low-confidence" in reason
     assert len(refused.outcomes) == 5 and not refused.failed
     # its frames are predicted with the config's points, as without --auto-geometry
-    runs.predict_benchmark("culane", root, tmp_path / "preset", **common)
+    batch.predict_benchmark("culane", root, tmp_path / "preset", **common)
     assert lines_texts(tmp_path / "refused", entries) == lines_texts(tmp_path / "preset", entries)
-    accepted = runs.predict_benchmark("culane", root, tmp_path / "accepted", **common,
-                                      auto_geometry=runs.GeometryOptions(accept_low_confidence=True))
+    accepted = batch.predict_benchmark("culane", root, tmp_path / "accepted", **common,
+                                       auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True))
     assert [s for s, _ in accepted.geometries] == [sequence] and accepted.fallbacks == ()
     assert accepted.geometries[0][1].low_confidence

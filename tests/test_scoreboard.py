@@ -209,7 +209,8 @@ def test_scoreboard_real_rows_run_on_the_dev_data(culane_dev, tusimple_dev, udac
     assert not any(r.error or r.skipped for r in rows)
     assert set(cu.figures) == {"precision_pct", "recall_pct", "f1_pct", "tp", "fp", "fn"}
     assert cu.figures["tp"] + cu.figures["fn"] == 445  # the labelled lines of culane-dev
-    assert set(ts.figures) == {"accuracy_pct", "fp_rate", "fn_rate"}
+    # "over_200ms" only when a frame took longer than TuSimple's limit (a loaded machine)
+    assert set(ts.figures) - {"over_200ms"} == {"accuracy_pct", "fp_rate", "fn_rate"}
     assert p1.figures["found_pct"] > 90.0
     assert all(isinstance(r.ms_per_frame, int) and r.ms_per_frame > 0 for r in rows)
     assert len(list((tmp_path / scoreboard.TUSIMPLE_CACHE).rglob("*.png"))) == 10

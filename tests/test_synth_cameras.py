@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from lanelib import io, runs
+from lanelib import autogeometry, batch, io
 from lanelib.camera import Calibration, undistort_points
 from lanelib.cli import main
 from lanelib.autogeometry import RoadLineFinder, detect_hood, estimate_geometry, estimate_lens
@@ -239,7 +239,7 @@ def test_a_barrel_lens_not_given_is_measured_from_the_road(barrel_estimate):
 def test_the_geometry_command_writes_the_estimated_lens_for_reuse(barrel_frames, tmp_path, capsys):
     """`geometry FOLDER -o g.json` of the barrel camera writes the lens it measured beside the
     perspective (g.lens.json, readable by --calibration), and a run with --auto-geometry
-    undistorts with it (``runs.geometry_calibration``)."""
+    undistorts with it (``autogeometry.geometry_calibration``)."""
     folder = tmp_path / "frames"
     folder.mkdir()
     for i, frame in enumerate(barrel_frames):
@@ -250,7 +250,7 @@ def test_the_geometry_command_writes_the_estimated_lens_for_reuse(barrel_frames,
     assert "lens not given: its radial distortion was estimated" in printed
     lens = Calibration.load(tmp_path / "g.lens.json")
     assert lens.estimated and lens.dist_coeffs[0] < 0
-    geo = runs.estimate_road_geometry(folder, None, runs.GeometryOptions())
-    assert runs.geometry_calibration(None, geo) is geo.lens
+    geo = batch.estimate_road_geometry(folder, None, autogeometry.GeometryOptions())
+    assert autogeometry.geometry_calibration(None, geo) is geo.lens
     given = Calibration(BARREL.K, np.asarray(BARREL.dist, float), BARREL.size_px)
-    assert runs.geometry_calibration(given, geo) is given
+    assert autogeometry.geometry_calibration(given, geo) is given

@@ -242,7 +242,7 @@ def test_a_base_history_needs_a_count():
 
 def test_a_held_lane_is_drawn_and_logged_apart_from_a_seen_one(pipe):
     from lanelib import draw
-    from lanelib.runs import video_log_row
+    from lanelib.batch import video_log_row
     tracker = LaneTracker(pipe, TrackerConfig(hold_frames=3))
     seen = tracker.update(frame(pipe))
     blank = frame(pipe, left_x=None, right_x=None)

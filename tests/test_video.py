@@ -20,7 +20,7 @@ from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config_or_preset, preset
 from lanelib.errors import ConfigError, DecodeStoppedError
 from lanelib.pipeline import LanePipeline
-from lanelib.runs import VIDEO_LOG_COLUMNS, process_video
+from lanelib.batch import VIDEO_LOG_COLUMNS, process_video
 
 COLUMNS = ["frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
            "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c",

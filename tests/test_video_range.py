@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import io, runs
+from lanelib import batch, io
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import pipeline_for
-from lanelib.runs import VIDEO_LOG_COLUMNS, clip_frames, video_log_row
+from lanelib.batch import VIDEO_LOG_COLUMNS, clip_frames, video_log_row
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
@@ -49,7 +49,7 @@ def test_the_frames_of_a_part_are_those_of_decoding_from_the_start(project_frame
         seen.append((frame.copy(), index, time_s))
         return frame, {"frame": index, "time_s": time_s}, True
 
-    run = runs.run_video(PROJECT, tmp_path / "part.mp4", process, progress=False, start_s=2.0, end_s=3.0)
+    run = batch.run_video(PROJECT, tmp_path / "part.mp4", process, progress=False, start_s=2.0, end_s=3.0)
     assert (run.frames, run.first_frame, run.found_frames) == (25, 50, 25)
     assert [i for _, i, _ in seen] == list(range(50, 75))
     assert [t for _, _, t in seen] == pytest.approx([i / 25 for i in range(50, 75)])

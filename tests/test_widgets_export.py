@@ -3,7 +3,7 @@ tuner shows and what the command line draws with the tuner's config.
 
 PNG is lossless, so a written file read back is the very array: the annotated frame is compared
 with the image ``python -m lanelib images`` (or ``hough``) writes for the same input, config and
-calibration, and the video tuner's with the frame ``runs.process_video`` hands to the encoder.
+calibration, and the video tuner's with the frame ``batch.process_video`` hands to the encoder.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import io, runs, widgets
+from lanelib import batch, io, widgets
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline
@@ -114,13 +114,13 @@ def test_the_video_tuner_exports_the_frame_the_video_command_encodes(camera, tmp
     written = t.export(tmp_path / "export")
     assert written["annotated"].name == "project_frame9_video_annotated.png"
     assert np.array_equal(io.read_image(written["preview"]), t.preview_sheet())
-    # the frames runs.process_video hands to the encoder, over the same n frames (--end n / fps)
+    # the frames batch.process_video hands to the encoder, over the same n frames (--end n / fps)
     encoded = []
     real_write = io.VideoWriter.write
     monkeypatch.setattr(io.VideoWriter, "write",
                         lambda self, rgb: (encoded.append(rgb.copy()), real_write(self, rgb))[1])
-    run = runs.process_video(CLIP, tmp_path / "run.mp4", t.config, camera, progress=False,
-                             end_s=n / 25)
+    run = batch.process_video(CLIP, tmp_path / "run.mp4", t.config, camera, progress=False,
+                              end_s=n / 25)
     assert run.frames == len(encoded) == n
     assert np.array_equal(io.read_image(written["annotated"]), encoded[9])
     assert not np.array_equal(encoded[9], t.raw)  # the lane was drawn

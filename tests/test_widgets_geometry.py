@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lanelib import io, runs, widgets
+from lanelib import batch, io, widgets
 from lanelib.errors import GeometryError, InputError
 from lanelib.autogeometry import estimate_geometry
 from lanelib.perspective import Perspective, PerspectiveConfig
@@ -24,7 +24,7 @@ STRAIGHT = "straight_1.jpg"
 @pytest.fixture(scope="module")
 def clip_geometry(camera):
     """What ``python -m lanelib geometry videos/project.mp4 --calibration ...`` estimates."""
-    return runs.estimate_road_geometry(REPO / CLIP, camera)
+    return batch.estimate_road_geometry(REPO / CLIP, camera)
 
 
 @pytest.fixture(scope="module")

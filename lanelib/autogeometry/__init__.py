@@ -9,7 +9,7 @@ confident it is, what it assumed, and which frames it used and why it left the o
 ``vanishing_point(frame)`` is the cheap per-frame part, for a video to check every few seconds
 whether the vanishing point drifts (a hill, a bump, a camera knocked) and, from the straight
 frames through the video, where the road heads on average: ``refined_geometry`` moves the point
-(and the bird's-eye view with it) along the horizon to there (``runs.GeometryWatch``).
+(and the bird's-eye view with it) along the horizon to there (``GeometryWatch``).
 
 An extension of the core: it uses the core's camera, perspective and thresholds, and the core
 does not import it. The modules, in the order the estimate runs:
@@ -26,7 +26,10 @@ does not import it. The modules, in the order the estimate runs:
 - ``view``: the bird's-eye points, and whether the ego lane runs parallel through them;
 - ``estimate``: the focal length, the scale along the road, the camera's pose and the
   confidence (``estimate_geometry``);
-- ``roadgeometry``: the result (``RoadGeometry``) and ``refined_geometry``.
+- ``roadgeometry``: the result (``RoadGeometry``) and ``refined_geometry``;
+- ``watch``: the options of a run's estimate (``GeometryOptions``), the check that refuses an
+  estimate that fails or is not confident (``checked_geometry``), and the watch through a video
+  that refines the point and estimates again when the horizon moves (``GeometryWatch``).
 
 Frames that give no consistent vanishing point raise ``errors.GeometryError`` naming the reason:
 no road (no line segments), too few segments, inconsistent (segments that meet in no point, or
@@ -39,9 +42,13 @@ from .lens import LensEstimate, estimate_lens, radial_undistort
 from .roadgeometry import DRIFT_PX, LOW_CONFIDENCE, RoadGeometry, refined_geometry
 from .segments import paint_mask_config
 from .vanishing import RoadLine, RoadLineFinder, VanishingPoint, vanishing_point
+from .watch import (REFINE_MAX_CHECKS, REFINE_MIN_CHECKS, REFINE_TOLERANCE, GeometryOptions, GeometryWatch,
+                    checked_geometry, geometry_calibration, low_confidence)
 
 __all__ = ["estimate_geometry", "refined_geometry", "vanishing_point", "estimate_lens", "detect_hood",
            "radial_undistort", "paint_mask_config", "RoadGeometry", "RoadLineFinder", "RoadLine",
            "VanishingPoint", "LensEstimate", "LOW_CONFIDENCE", "DRIFT_PX", "MIN_GOOD_FRAMES",
            "DEFAULT_LOOK_AHEAD_M", "DEFAULT_DASH_M", "DEFAULT_GAP_M", "ASSUMED_HFOV_DEG",
-           "CAMERA_HEIGHT_RANGE_M"]
+           "CAMERA_HEIGHT_RANGE_M", "GeometryOptions", "GeometryWatch", "checked_geometry",
+           "geometry_calibration", "low_confidence", "REFINE_MIN_CHECKS", "REFINE_TOLERANCE",
+           "REFINE_MAX_CHECKS"]

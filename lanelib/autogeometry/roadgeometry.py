@@ -2,7 +2,7 @@
 
 ``RoadGeometry.perspective_config()`` is the ``perspective.PerspectiveConfig`` to run with;
 ``refined_geometry`` moves the vanishing point (and the bird's-eye view with it) along the
-horizon to where the straight frames through a video place it (``runs.GeometryWatch``).
+horizon to where the straight frames through a video place it (``watch.GeometryWatch``).
 """
 from __future__ import annotations
 
@@ -147,7 +147,7 @@ class RoadGeometry:
 
 def refined_geometry(geo: RoadGeometry, shift_px: float, why: str) -> RoadGeometry:
     """Return ``geo`` with its vanishing point moved ``shift_px`` along the horizon (positive to
-    the right), as more frames of straight road place it (``runs.GeometryWatch``).
+    the right), as more frames of straight road place it (``watch.GeometryWatch``).
 
     The road's direction in the image is where the car heads on average: a window of frames on
     a gentle curve, or while the car drifts across its lane, puts it a few px aside. Moving the

@@ -2,7 +2,7 @@
 reported where none is labelled.
 
 ``explain_frame`` runs ``LanePipeline.detect_lines`` on one labelled frame as ``predict`` does
-(the frame on its own, every line seen sampled at the label rows by ``runs.seen_lines``; CULane:
+(the frame on its own, every line seen sampled at the label rows by ``batch.seen_lines``; CULane:
 ``culane.LINES_PER_SIDE`` a side; TuSimple: at the official 1280x720, ``tusimple.full_size``),
 matches the predicted lines to the labels by the benchmark's official rule
 (``metrics.iou_matrix`` and ``metrics.matched_pair_indices`` for CULane, ``metrics.line_accuracy``
@@ -36,11 +36,11 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from . import culane, metrics, tusimple
-from .. import data, io, runs
+from .. import batch, data, io
 from ..config import PipelineConfig, benchmark_config
 from ..errors import InputError
 from ..pipeline import LanePipeline
+from . import culane, metrics, tusimple
 
 FOUND, OFF, REFUSED, MISSED, FALSE = "found", "reported but off", "refused", "missed", "false line"
 CLASSES = (FOUND, OFF, REFUSED, MISSED, FALSE)
@@ -351,10 +351,10 @@ def _label_lines(benchmark: str, labels) -> tuple[list[np.ndarray], np.ndarray]:
 
 def _written(found, rows: np.ndarray, w: int, per_side: int | None) -> tuple[list, list]:
     """Return the lines ``predict`` writes (x at rows) and the lines seen but not written, with why."""
-    written = runs.seen_lines(found, rows, w, per_side)
+    written = batch.seen_lines(found, rows, w, per_side)
     dropped = []
     for line in found.lines:
-        xs = runs.seen_lines(dataclasses.replace(found, lines=(line,)), rows, w)
+        xs = batch.seen_lines(dataclasses.replace(found, lines=(line,)), rows, w)
         if xs and not any(np.array_equal(xs[0], p, equal_nan=True) for p in written):
             dropped.append((xs[0], NOT_WRITTEN.format(n=per_side)))
     return written, dropped

@@ -13,7 +13,7 @@ import ipyevents
 import ipywidgets as widgets
 import numpy as np
 
-from .. import runs, thresholds
+from .. import autogeometry, batch, thresholds
 from ..camera import Calibration, FastBirdseye, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
@@ -214,7 +214,7 @@ class PerspectiveTuner(Tuner):
     bottom centre lands). ``save`` writes the ``perspective`` part (with ``car_x_px``);
     ``load`` reads it and the ``thresholds`` and ``search`` parts the check uses.
 
-    ``geometry_options`` (a ``runs.GeometryOptions``) is what the estimate button uses: 20 s
+    ``geometry_options`` (an ``autogeometry.GeometryOptions``) is what the estimate button uses: 20 s
     of a clip from its start, 50 frames, 3.7 m lanes, a 25 m look-ahead, and
     ``accept_low_confidence`` on (a low-confidence estimate is applied and flagged, not
     refused); set it, or pass options to ``estimate``, to change them.
@@ -252,7 +252,7 @@ class PerspectiveTuner(Tuner):
     def estimate(self, start_s: float | None = None, **options) -> RoadGeometry:
         """Estimate the road geometry from the picked item, set the points to it and return it.
 
-        A video: ``runs.estimate_road_geometry`` of the picked clip, ``seconds`` of it from
+        A video: ``batch.estimate_road_geometry`` of the picked clip, ``seconds`` of it from
         ``start_s`` (default: its start), ``max_frames`` frames evenly spread, what
         ``python -m lanelib geometry CLIP`` gives. An image: ``geometry.estimate_geometry`` of
         this frame alone (one frame measures neither the hood nor the roll and gives a low
@@ -262,7 +262,7 @@ class PerspectiveTuner(Tuner):
         Parameters
         ----------
         start_s : where in the clip the frames start (s); videos only.
-        **options : fields of ``runs.GeometryOptions`` that replace those of
+        **options : fields of ``autogeometry.GeometryOptions`` that replace those of
             ``self.geometry_options`` for this estimate: ``lane_width_m``, ``look_ahead_m``,
             ``dash_m``, ``gap_m``, ``focal_px``, ``seconds``, ``max_frames``,
             ``accept_low_confidence`` (on by default here: a low-confidence estimate is
@@ -277,11 +277,11 @@ class PerspectiveTuner(Tuner):
         InputError
             For an unknown option, or ``start_s`` with an image.
         """
-        names = set(runs.GeometryOptions.__dataclass_fields__)
+        names = set(autogeometry.GeometryOptions.__dataclass_fields__)
         unknown = sorted(set(options) - names)
         if unknown:
             raise InputError(f"estimate: unknown options {unknown}; use fields of "
-                             f"runs.GeometryOptions ({', '.join(sorted(names))})")
+                             f"autogeometry.GeometryOptions ({', '.join(sorted(names))})")
         opts = replace(self.geometry_options, **options)
         label, path = self.image, self.images[self.image]
         calibration = self._calibration_for(label)
@@ -290,7 +290,7 @@ class PerspectiveTuner(Tuner):
         trial = replace(opts, accept_low_confidence=True)
         if self.is_video:
             start = 0.0 if start_s is None else float(start_s)
-            geo = runs.estimate_road_geometry(path, calibration, trial, start_s, lens_from_road=False)
+            geo = batch.estimate_road_geometry(path, calibration, trial, start_s, lens_from_road=False)
             source = f"the clip {label}, {opts.seconds:g} s from {start:g} s"
         else:
             if start_s is not None:
@@ -366,7 +366,7 @@ class PerspectiveTuner(Tuner):
         self._events = ipyevents.Event(source=self.preview, watched_events=["click"],
                                        prevent_default_action=True)
         self._events.on_dom_event(self._on_click)
-        self.geometry_options = runs.GeometryOptions(accept_low_confidence=True)
+        self.geometry_options = autogeometry.GeometryOptions(accept_low_confidence=True)
         self.geometry: RoadGeometry | None = None  # the last estimate for the picked item
         self._geometry: tuple[str, PerspectiveConfig, str] | None = None  # (item, its points, source)
         self.estimate_button = widgets.Button(description=ESTIMATE_LABELS[False], icon="road",

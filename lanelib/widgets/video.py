@@ -241,7 +241,7 @@ class VideoTuner(Tuner):
         """Return the tracked frame shown, annotated as ``python -m lanelib video`` draws it.
 
         The tracker's result for the frame (tracked from the clip's first frame), drawn as
-        ``play()`` and ``runs.process_video`` draw it: the frame of the output video before it
+        ``play()`` and ``batch.process_video`` draw it: the frame of the output video before it
         is encoded (``export`` writes it as a lossless PNG).
         """
         i = min(self.frame, len(self.results) - 1)
