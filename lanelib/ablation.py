@@ -198,10 +198,6 @@ def _slug(name: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-")
 
 
-def _measure(out: Path, only: list[str], settings: tuple[str, ...]) -> list[Row]:
-    return run_scoreboard(out, only, settings=settings)
-
-
 def run(parts: Sequence[Part] = PARTS, only: Sequence[str] | None = None, out: str | Path = DEFAULT_OUT,
         workers: int = 1, on_done: Callable[[str], None] | None = None) -> Ablation:
     """Return the ablation of ``parts`` on the scoreboard's rows ``only`` (all for None).
@@ -221,12 +217,13 @@ def run(parts: Sequence[Part] = PARTS, only: Sequence[str] | None = None, out: s
     results: dict[str, list[Row]] = {}
     if workers == 1:
         for name, settings in jobs.items():
-            results[name] = _measure(out / _slug(name), keys, settings)
+            results[name] = run_scoreboard(out / _slug(name), keys, settings=settings)
             if on_done:
                 on_done(name)
     else:
         with concurrent.futures.ProcessPoolExecutor(workers) as pool:
-            futures = {pool.submit(_measure, out / _slug(n), keys, s): n for n, s in jobs.items()}
+            futures = {pool.submit(run_scoreboard, out / _slug(n), keys, settings=s): n
+                       for n, s in jobs.items()}
             for f in concurrent.futures.as_completed(futures):
                 results[futures[f]] = f.result()
                 if on_done:

@@ -46,7 +46,7 @@ import math
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Sequence
 
 import numpy as np
 from tqdm import tqdm
@@ -56,10 +56,8 @@ from . import cluster
 from .benchmarks.metrics import (  # noqa: F401  (the point matching is shared; see above)
     MATCH_ACCURACY, POINT_THRESHOLD_PX, LineScores, line_accuracy, line_threshold_px, score_lines)
 from .camera import Calibration
-from .config import PipelineConfig, override
 from .errors import DecodeStoppedError, InputError, LaneLibError, naming_the_file
 from .io import VideoReader, list_images, read_image
-from .pipeline import LanePipeline
 from .synth.truth import load_image_truth, load_video_truth
 from .tracking import LaneTracker
 
@@ -273,7 +271,8 @@ _ROWS = (  # (label, summary key, format of a value)
 )
 
 
-def _cell(value, fmt: str) -> str:
+def format_cell(value, fmt: str) -> str:
+    """Return one printed cell of a table: the value formatted, or "-" where it is missing or NaN."""
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "-"
     if fmt == "pct":
@@ -292,7 +291,7 @@ def format_table(reports: Sequence[EvalReport], titles: Sequence[str] | None = N
     titles = list(titles) if titles is not None else [
         f"{Path(r.source).name} ({r.detector})" for r in reports]
     sums = [r.summary() for r in reports]
-    cols = [[_cell(s[key], fmt) for _, key, fmt in _ROWS] for s in sums]
+    cols = [[format_cell(s[key], fmt) for _, key, fmt in _ROWS] for s in sums]
     label_w = max(len(label) for label, _, _ in _ROWS)
     widths = [max(len(t), *(len(c) for c in col)) for t, col in zip(titles, cols)]
     lines = [" " * label_w + "".join(f"  {t:>{w}}" for t, w in zip(titles, widths))]
@@ -510,7 +509,7 @@ def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracke
     """Return ``evaluate_video`` of each pipeline on one video, decoding it once for all.
 
     Each pipeline runs on its own (its own ``LaneTracker``) over the same frames, in step; the
-    reports are those ``evaluate_video`` gives one by one (``compare_methods`` uses this).
+    reports are those ``evaluate_video`` gives one by one (``compare.compare_methods`` uses this).
     """
     truth = load_video_truth(path)
     frames = truth.frames[:max_frames]
@@ -565,111 +564,3 @@ def calibration_from_truth(path: str | os.PathLike) -> Calibration:
         except InputError as e:
             first_error = first_error or e
     raise first_error
-
-
-# --------------------------------------------------------------------------- methods compared
-
-@dataclass(frozen=True)
-class MethodScore:
-    """One method (a set of config overrides) scored on one source: its report, or why it was not run."""
-
-    source: str
-    method: str
-    settings: tuple[str, ...]
-    report: EvalReport | None
-    skipped: str = ""
-
-
-def applies(settings: Sequence[str], detector: str) -> bool:
-    """Return False for settings that change nothing for ``detector`` (``tracking.*`` on single frames)."""
-    return detector == "tracker" or not any(s.startswith("tracking.") for s in settings)
-
-
-def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str | os.PathLike],
-                    config: PipelineConfig = PipelineConfig(),
-                    max_frames: int | None = None) -> list[MethodScore]:
-    """Return every method scored on every source, each against the truth beside the source.
-
-    Parameters
-    ----------
-    methods : method name -> its ``config.override`` settings (``"search.trim_outliers_pct=95"``);
-        a method with no settings is ``config`` itself (the baseline to compare against).
-    sources : folders of images (each detected on its own, ``evaluate_images``) and videos
-        (tracked, ``evaluate_video``), each with its ground truth beside it.
-    config : the config the settings change.
-    max_frames : score only the first this many images or frames of each source.
-
-    Each source is scored with its true camera (``calibration_from_truth``), so the figures are
-    the lane finding's alone. A method whose settings only touch the tracker is not run on images
-    (its score says so). Bad settings raise ``ConfigError`` before anything runs.
-    """
-    configs = {name: override(config, settings) for name, settings in methods.items()}
-    out = []
-    for source in sources:
-        path = Path(source)
-        camera = calibration_from_truth(path)
-        detector = "frame" if path.is_dir() else "tracker"
-        run = [n for n, settings in methods.items() if applies(settings, detector)]
-        pipes = [LanePipeline(configs[n], camera, size=camera.image_size) for n in run]
-        if detector == "frame":
-            reports = [evaluate_images(path, p, max_frames) for p in pipes]
-        else:  # the clip decoded once, every method tracking it in step
-            reports = evaluate_video_many(path, pipes, True, max_frames)
-        got = dict(zip(run, reports))
-        for name, settings in methods.items():
-            out.append(MethodScore(str(path), name, tuple(settings), got.get(name),
-                                   "" if name in got else "tracker only"))
-    return out
-
-
-_COMPARED = (  # (column, summary key, format)
-    ("found %", "found_rate", "pct"),
-    ("points %", "point_accuracy", "pct"),
-    ("FP %", "fp_rate", "pct"),
-    ("FN %", "fn_rate", "pct"),
-    ("offset cm", "offset_err_cm_median", "{:.1f}"),
-    ("curv. 1/m", "curvature_err_median", "{:.1e}"),
-)
-
-
-def format_comparison(scores: Sequence[MethodScore], baseline: str | None = None) -> str:
-    """Return ``compare_methods``' scores as one plain-text table, a block of rows per source.
-
-    Columns: lane found, point accuracy, false-positive and false-negative lines (all %), the
-    median |offset error| (cm) and |curvature error| (1/m), and ``Δ points``: the point accuracy
-    minus that of ``baseline`` (default: the first method) on the same source, in points.
-    """
-    if not scores:
-        return "(nothing compared)"
-    baseline = baseline if baseline is not None else scores[0].method
-    base = {s.source: s.report.summary() for s in scores if s.method == baseline and s.report}
-    rows = []
-    for s in scores:
-        detector = s.report.detector if s.report else "frame"
-        label = f"{Path(s.source).name} ({detector})"
-        if s.report is None:
-            rows.append([label, s.method] + ["-"] * len(_COMPARED) + [s.skipped])
-            continue
-        summary = s.report.summary()
-        cells = [_cell(summary[key], fmt) for _, key, fmt in _COMPARED]
-        ref = base.get(s.source)
-        delta = "" if s.method == baseline or ref is None else _delta(summary["point_accuracy"],
-                                                                       ref["point_accuracy"])
-        rows.append([label, s.method, *cells, delta])
-    head = ["source", "method", *(c for c, _, _ in _COMPARED), "Δ points"]
-    widths = [max(len(r[i]) for r in rows + [head]) for i in range(len(head))]
-    line = lambda r: "  ".join(  # noqa: E731
-        (c.ljust(w) if i < 2 else c.rjust(w)) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
-    out = [line(head)]
-    for i, r in enumerate(rows):
-        if i and r[0] != rows[i - 1][0]:
-            out.append("")
-        out.append(line(r if i == 0 or r[0] != rows[i - 1][0] else [""] + r[1:]))
-    return "\n".join(out)
-
-
-def _delta(value: float, ref: float) -> str:
-    """Return ``value - ref`` in percentage points, signed, one decimal ("-" if either is NaN)."""
-    if not (math.isfinite(value) and math.isfinite(ref)):
-        return "-"
-    return f"{round(100.0 * (value - ref), 1) + 0.0:+.1f}"

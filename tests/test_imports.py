@@ -190,7 +190,8 @@ LAYERS = [
     {"lanelib.config"},                     # nests the records of params; JSON and presets
     {"lanelib.pipeline", "lanelib.hough"},  # the one-frame engines: advanced, basic
     {"lanelib.tracking"},                   # the tracker loop over a LanePipeline
-    {"lanelib.batch", "lanelib.cluster", "lanelib.evaluate", "lanelib.bench", "lanelib.synth",
+    {"lanelib.batch", "lanelib.cluster", "lanelib.evaluate", "lanelib.compare", "lanelib.bench",
+     "lanelib.synth",
      "lanelib.benchmarks", "lanelib.benchmarks.why", "lanelib.benchmarks.why_images"},  # why: predict's frames explained
     {"lanelib.scoreboard", "lanelib.ablation"},  # measure with batch, evaluate and the benchmarks
     {"lanelib.widgets"},
