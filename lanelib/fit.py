@@ -91,6 +91,27 @@ def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float
     return least_squares_rss(ys, xs, degree, scale)[:3]
 
 
+def joined_fit(seen_rows: np.ndarray, seen_xs: np.ndarray, reference_px, reference_rows: np.ndarray,
+               height_px: int) -> tuple[float, float, float]:
+    """Return one second-order fit to a line where it is seen and to a reference line where not.
+
+    A line seen only far ahead is joined to a reference near the car (its track, or the line
+    inferred from the other line), and an asphalt edge seen near the car to a guide far ahead:
+    one sample per row of each, ``seen_xs`` on ``seen_rows`` and ``reference_px`` (pixel
+    coefficients) on ``reference_rows``, so the fit follows each where it is the evidence.
+
+    Examples
+    --------
+    >>> rows = np.arange(0.0, 50.0)
+    >>> a, b, c = joined_fit(rows, 100.0 + 0 * rows, (0.0, 0.0, 100.0), np.arange(50.0, 100.0), 100)
+    >>> round(a, 9), round(b, 9), round(c, 6)
+    (0.0, 0.0, 100.0)
+    """
+    ys = np.concatenate([np.asarray(seen_rows, float), np.asarray(reference_rows, float)])
+    xs = np.concatenate([np.asarray(seen_xs, float), np.polyval(reference_px, reference_rows)])
+    return least_squares_poly(ys, xs, 2, float(height_px))
+
+
 def least_squares_rss(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
                    sums: tuple | None = None) -> tuple[float, float, float, float]:
     """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).

@@ -22,7 +22,7 @@ from .camera import Calibration, Undistorter
 from .checks import LaneCheck, check_lane, holds_from_px, search_bands_px
 from .config import PipelineConfig
 from .errors import InputError
-from .fit import least_squares_poly, measure, offset_line
+from .fit import joined_fit, measure, offset_line
 from .lines import vote
 from .lines.trace import find_lines
 from .params import LinesConfig
@@ -412,7 +412,7 @@ class LanePipeline:
         road's range, parallel, equally curved) over the rows where the edge is seen (the
         search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
         beyond); its search's ``edge`` flags the side. With ``shoulder_m`` (a painted line faded
-        out, ``LaneTracker`` step 8) the line is placed that far inside the edge, along its
+        out, ``roads.tracked.Shoulder``) the line is placed that far inside the edge, along its
         normal (``fit.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
         (one second-order fit to both), the look-ahead and the other line kept; the search's
         ``shoulder`` flags the side instead, and it is returned unchecked: the tracker checks it
@@ -441,9 +441,7 @@ class LanePipeline:
             if seen_top > search.top_px and guide_px is not None:
                 near = np.arange(float(seen_top), float(h))
                 far = np.arange(float(search.top_px), float(seen_top))
-                placed = least_squares_poly(
-                    np.concatenate([near, far]),
-                    np.concatenate([np.polyval(placed, near), np.polyval(guide_px, far)]), 2, float(h))
+                placed = joined_fit(near, np.polyval(placed, near), guide_px, far, h)
             return replace(search, **{side: replace(fit, coeffs_px=tuple(placed))},
                            shoulder=(side == "left", side == "right"))
         # the look-ahead ends where the edge is seen: its fit is not extrapolated beyond, and

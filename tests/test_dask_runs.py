@@ -130,12 +130,14 @@ def test_a_trackers_state_key_says_whether_two_runs_go_on_alike(country):
     assert run(copied, 55, 64) == run(whole, 55, 64) != run(late, 55, 64)
     assert copied.state_key() == whole.state_key()
     # frame numbers count back from the last frame tracked: a start 100 frames later, the same key
-    copied._frame += 100
-    copied._history = type(copied._history)([replace(a, frame=a.frame + 100) for a in copied._history],
-                                            copied._history.maxlen)
-    copied._trend = type(copied._trend)([replace(a, frame=a.frame + 100) for a in copied._trend],
-                                        copied._trend.maxlen)
+    state = copied.state
+    state.frame += 100
+    state.history = type(state.history)([replace(a, frame=a.frame + 100) for a in state.history],
+                                        state.history.maxlen)
+    state.trend = type(state.trend)([replace(a, frame=a.frame + 100) for a in state.trend],
+                                    state.trend.maxlen)
     assert copied.state_key() == whole.state_key()
+    assert pickle.loads(pickle.dumps(state)) == whole.state != LaneTracker(pipe).state
 
 
 def test_settle_joints_reruns_in_a_chain_from_the_state_before():

@@ -18,6 +18,8 @@ from lanelib.io import VideoReader, read_frame
 from lanelib.params import EdgeConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.roads.edge import road_edge
+from lanelib.roads.stripes import stripe_spread
+from lanelib.roads.tracked import joined_paint, near_grid, road_view_top, shoulder_beside
 from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
 from lanelib.synth.sets import SUNNY, country_layout
 from lanelib.synth.truth import lane_truth, load_video_truth
@@ -109,7 +111,7 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
     from 14-22 m ahead of the car (the camera level with the road under the car): the flat
     bird's-eye view spreads the road ahead, the lane's width by 1.21 / 1.45 / 1.75 on rows
     500 / 300 / 100 (the generator's truth lines mapped into the view). The double yellow's two
-    stripes spread alike, and their spacing (``LaneTracker._stripe_spread``, a straight line in
+    stripes spread alike, and their spacing (``roads.stripes.stripe_spread``, a straight line in
     the distance from the bottom row) reads the spread within 0.15 (about 0.1 high: the grade
     begins some metres ahead, not at the car); a level road reads 1 within 0.03."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
@@ -132,7 +134,8 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
     width = normal_width_m(fits[0], fits[1], rows, xm, ym)
     true_scale = width / normal_width_m(fits[0], fits[1], h - 1.0, xm, ym)
     assert true_scale == pytest.approx(rows_scale[::-1], abs=0.02)
-    spread = LaneTracker(pipe)._stripe_spread(pipe.binary(pipe.birdseye(raw), fallback=True), fits[0], 0)
+    spread = stripe_spread(pipe.binary(pipe.birdseye(raw), fallback=True), fits[0],
+                           pipe.config.search.double_line_px, 0, pipe.size)
     assert spread is not None
     read = np.polyval(spread, h - 1.0 - rows)
     assert read == pytest.approx(true_scale, abs=0.15 if grade else 0.03)
@@ -232,7 +235,7 @@ def _painted_edge_view(shoulder_m: float = 0.35) -> tuple[np.ndarray, float, flo
 
 def test_the_shoulder_beyond_a_painted_line_is_measured_within_a_few_cm():
     """A white right line 0.35 m inside the asphalt edge (grass beyond): the tracker measures the
-    shoulder from the line out to the edge (``LaneTracker._shoulder_beside``, the rows within
+    shoulder from the line out to the edge (``roads.tracked.shoulder_beside``, the rows within
     ``shoulder_near_m`` of the car) within 2 cm, from the line's fit or its pixels; with grey,
     road-like surface beyond (a barrier) no shoulder is measured."""
     from lanelib.records import LineFit
@@ -240,14 +243,14 @@ def test_the_shoulder_beyond_a_painted_line_is_measured_within_a_few_cm():
     tracker = LaneTracker(pipe)
     bird, line_x, _ = _painted_edge_view()
     line = LineFit((0.0, 0.0, line_x), 5000, 719.0)
-    grid = tracker._near_grid(None, bird)
-    assert tracker._shoulder_beside(grid, line, _left_line(), 1) == pytest.approx(0.35, abs=0.02)
+    grid = near_grid(tracker, None, bird)
+    assert shoulder_beside(tracker, grid, line, _left_line(), 1) == pytest.approx(0.35, abs=0.02)
     ys = np.repeat(np.arange(400, 720), 5).astype(float)
     xs = np.tile(line_x + np.arange(-2, 3), 320).astype(float)
-    assert tracker._shoulder_beside(grid, line, _left_line(), 1, (ys, xs)) == pytest.approx(0.35, abs=0.02)
+    assert shoulder_beside(tracker, grid, line, _left_line(), 1, (ys, xs)) == pytest.approx(0.35, abs=0.02)
     barrier, _ = _edge_view((175, 175, 172))
     barrier[:, int(round(line_x)) - 7:int(round(line_x)) + 8] = 225
-    assert np.isnan(tracker._shoulder_beside(tracker._near_grid(None, barrier), line, _left_line(), 1))
+    assert np.isnan(shoulder_beside(tracker, near_grid(tracker, None, barrier), line, _left_line(), 1))
 
 
 def _faded_road(paint_missing_from_m: float):
@@ -319,7 +322,7 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
     the flat view widens the lane ahead there. Extrapolated to the car, or joined to the line
     inferred from the double yellow, it lay 15-47 cm inside the truth at the car (13 false lines
     in 210-223); joined nearer the car to the line placed inside the asphalt edge
-    (``LaneTracker._joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false."""
+    (``roads.tracked.joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     truth = load_video_truth(COUNTRY)
     tracker, h, errors, sources, returning = LaneTracker(pipe), pipe.size[1], [], [], []
@@ -383,7 +386,7 @@ def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_e
     451-719), and the line placed the shoulder inside the asphalt edge: within 5 px of the line
     near the car, bending off it ahead (joined beyond the edge to a line inferred from the other
     one, which does not follow the flat view's widening in a sag), 9-19 px off on rows 200-350.
-    The joined line (``LaneTracker._joined_paint``) lies within 3 px of the line on every row,
+    The joined line (``roads.tracked.joined_paint``) lies within 3 px of the line on every row,
     and counts the paint's pixels and rows with the edge's; too few paint pixels give none."""
     from lanelib.records import LineFit
     tracker = LaneTracker(LanePipeline(PipelineConfig()))
@@ -394,12 +397,12 @@ def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_e
     placed = LineFit(tuple(line - bend), 60, 200.0, gap_px=10.0)
     ahead = np.arange(200, 351, 50)
     assert np.abs(np.polyval(placed.coeffs_px, ahead) - np.polyval(line, ahead)).min() >= 9
-    joined = tracker._joined_paint((ys, xs), placed, 100)
+    joined = joined_paint(tracker, (ys, xs), placed, 100)
     rows = np.arange(200, 720, 20)
     assert np.abs(np.polyval(joined.coeffs_px, rows) - np.polyval(line, rows)).max() <= 3
     assert joined.n_pixels == 60 + int(np.sum(ys <= np.quantile(ys, 0.98)))
     assert joined.span_px == pytest.approx(719 - 10 - 200)
-    assert tracker._joined_paint((ys[:40], xs[:40]), placed, 100) is None
+    assert joined_paint(tracker, (ys[:40], xs[:40]), placed, 100) is None
 
 
 def test_the_asphalt_edge_is_followed_where_the_flat_view_widens_ahead():
@@ -453,11 +456,11 @@ def _truth_lines_in_view(pipe: LanePipeline, lane) -> tuple[tuple[np.ndarray, np
 def test_the_road_view_ends_at_the_rendered_crest_of_country(frame):
     """country.mp4 where the road crests a hill while turning (frames 116-160): beyond the crest
     the view's far rows hold grass and the road farther round the turn. Between the truth lines,
-    the road seen from the car (``LaneTracker.road_view_top_px``) ends within 0.6 m (18 rows)
+    the road seen from the car (``roads.tracked.road_view_top``) ends within 0.6 m (18 rows)
     beyond the truth's crest row (the last row where the lines are seen), and not before it."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     lines, crest = _truth_lines_in_view(pipe, load_video_truth(COUNTRY).frames[frame])
-    top = LaneTracker(pipe).road_view_top_px(read_frame(COUNTRY, frame), lines)
+    top = road_view_top(LaneTracker(pipe), read_frame(COUNTRY, frame), lines)
     assert crest - 18 <= top <= crest
 
 
@@ -469,4 +472,4 @@ def test_the_road_view_keeps_the_whole_view_of_a_shadowed_road():
     tracker = LaneTracker(pipe)
     for frame in range(0, len(truth.frames), 25):
         lines, _ = _truth_lines_in_view(pipe, truth.frames[frame])
-        assert tracker.road_view_top_px(read_frame(SHADOWS, frame), lines) == 0, frame
+        assert road_view_top(tracker, read_frame(SHADOWS, frame), lines) == 0, frame

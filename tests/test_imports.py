@@ -219,15 +219,18 @@ def test_imports_go_down_the_layers(module):
 CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.records", "lanelib.fit",
         "lanelib.search", "lanelib.checks",
         "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
-        "lanelib.hough", "lanelib.tracking", "lanelib.config", "lanelib.pipeline"}
+        "lanelib.hough", "lanelib.config", "lanelib.pipeline", "lanelib.tracking", "lanelib.tracking.state",
+        "lanelib.tracking.judge", "lanelib.tracking.proposers", "lanelib.tracking.update",
+        "lanelib.tracking.tracker"}
 EXTENSIONS = ("lanelib.autogeometry", "lanelib.roads", "lanelib.lines")
 # the core modules that still call a hard-road or every-line part by name, and which: the search
 # narrows a double line to its inner stripe (``SearchConfig.double_line_px``), a lines result
-# holds ``ViewLine``s, the pipeline and the tracker run the asphalt edge, the crest's road view,
-# the stripes' spacing and the every-line search. Nothing else of the core may reach them.
+# holds ``ViewLine``s, the pipeline runs the asphalt edge and the every-line search, the tracker
+# its hard-road proposers (``roads.tracked``) and its checks the stripes' spread. Nothing else
+# of the core may reach them.
 CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.result": {"lanelib.lines"},
               "lanelib.pipeline": {"lanelib.roads", "lanelib.lines"},
-              "lanelib.tracking": {"lanelib.roads"}}
+              "lanelib.tracking.tracker": {"lanelib.roads"}, "lanelib.tracking.judge": {"lanelib.roads"}}
 
 
 @pytest.mark.parametrize("module", sorted(CORE))

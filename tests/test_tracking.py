@@ -15,6 +15,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import fit_line, least_squares_poly, normal_width_m, offset_line
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
+from lanelib.roads.stripes import stripe_spread
 from lanelib.tracking import LaneTracker, TrackerConfig
 
 H, W = 720, 1280
@@ -616,7 +617,7 @@ def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, st
     assert ("widened ahead as its double stripes" in r.reason) == stripe_spread
     assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=4)
     # the smoothed lane averages this frame with the three before it: read the frame's own fit
-    top = float(np.polyval(tracker._history[-1].right, 0.0))
+    top = float(np.polyval(tracker.state.history[-1].right, 0.0))
     assert top == pytest.approx(top_x, abs=12)
 
 
@@ -632,7 +633,7 @@ def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
     r = tracker.update(pipe.perspective.unwarp(bird))
     assert r.found and "right line inferred" in r.reason
     assert "double stripes" not in r.reason
-    assert float(np.polyval(tracker._history[-1].right, 0.0)) == pytest.approx(RIGHT_X, abs=12)
+    assert float(np.polyval(tracker.state.history[-1].right, 0.0)) == pytest.approx(RIGHT_X, abs=12)
 
 
 def _turning_frame(pipe: LanePipeline, n: int, right: bool = True) -> np.ndarray:
@@ -685,8 +686,8 @@ def _short_track(grade_pair_check: bool = True) -> LaneTracker:
     tracker = LaneTracker(pipe)
     for _ in range(3):
         tracker.update(_pitched_frame(pipe, 1.0, True))
-    tracker._history = type(tracker._history)([replace(a, top_px=H // 2 + 40) for a in tracker._history],
-                                              maxlen=tracker._history.maxlen)
+    tracker.state.history = type(tracker.state.history)(
+        [replace(a, top_px=H // 2 + 40) for a in tracker.state.history], maxlen=tracker.state.history.maxlen)
     return tracker
 
 
@@ -792,14 +793,14 @@ def test_the_reacquisition_band_widens_with_the_inferred_run(pipe):
     halves = []
     for _ in range(6):
         tracker.update(_paint_returns_frame(pipe, None))
-        halves.append(tracker._reacquire_half_px(1))
+        halves.append(tracker.reacquire_half_px(1))
     cap = TrackerConfig().reacquire_band_m / XM
     assert halves == pytest.approx([0, 0, 2 * margin, 3 * margin, cap, cap])
-    assert tracker._reacquire_half_px(0) == 0
-    assert tracker._jump_limit_m(1) == pytest.approx(TrackerConfig().reacquire_band_m)
-    assert tracker._jump_limit_m(0) == TrackerConfig().max_jump_m
+    assert tracker.reacquire_half_px(0) == 0
+    assert tracker.jump_limit_m(1) == pytest.approx(TrackerConfig().reacquire_band_m)
+    assert tracker.jump_limit_m(0) == TrackerConfig().max_jump_m
     tracker.update(frame(pipe))
-    assert tracker._reacquire_half_px(1) == 0
+    assert tracker.reacquire_half_px(1) == 0
 
 
 @pytest.mark.parametrize("kwargs", [dict(reacquire_after_frames=-1), dict(reacquire_band_m=0.0)])
@@ -819,7 +820,7 @@ def _lose_track(pipe: LanePipeline, **kwargs) -> LaneTracker:
     assert [r.method for r in held[:3]] == ["hold"] * 3
     assert "tracker reset" in held[3].reason and tracker.lane is None
     assert math.isnan(tracker.seen_width_m)  # the track's, forgotten; the reset remembers it
-    assert tracker._lost_track.width_m == pytest.approx(3.7, abs=0.02)
+    assert tracker.state.lost_track.width_m == pytest.approx(3.7, abs=0.02)
     return tracker
 
 
@@ -913,22 +914,18 @@ def _double_line_mask(coeffs, spread_top: float, first_row: int = 0) -> np.ndarr
 def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(pipe):
     """A double line on a tight bend leaves the view sideways on row 420 (of 720): its stripes
     show only below it, 300 rows, short of half the view, but all of the view where the line
-    is, and the spread they tell (drawn: 1.09 on row 500) is read (``LaneTracker._stripe_spread``).
-    Before, a line out of the view counted as its stripes missing: on ``country`` frames 140-147
-    the pair of seen lines was refused as not parallel and the double line inferred. A line
-    that stays in the view, its stripes shown on the same 300 rows only, is still not read
+    is, and the spread they tell (drawn: 1.09 on row 500) is read (``roads.stripes.stripe_spread``).
+    A line that stays in the view, its stripes shown on the same 300 rows only, is not read
     (stripes missing on over half of it)."""
     a = -0.004  # x = 320 on the bottom row, 0 on row 420, outside the view above
     b = (320.0 - a * ((H - 1.0) ** 2 - 420.0 ** 2)) / (H - 1.0 - 420.0)
     bent = np.array([a, b, -a * 420.0 ** 2 - b * 420.0])
-    tracker = LaneTracker(pipe)
-    assert tracker._in_view_top_px(bent, 0) == pytest.approx(420.0, abs=1.0)
-    spread = tracker._stripe_spread(_double_line_mask(bent, 1.3), bent, 0)
+    spacing = pipe.config.search.double_line_px
+    spread = stripe_spread(_double_line_mask(bent, 1.3), bent, spacing, 0, pipe.size)
     assert spread is not None
     assert np.polyval(spread, H - 1.0 - 500.0) == pytest.approx(1.0 + 0.3 * 219.0 / 719.0, abs=0.03)
     straight = np.array([0.0, 0.0, 320.0])
-    assert tracker._in_view_top_px(straight, 0) == 0.0
-    assert tracker._stripe_spread(_double_line_mask(straight, 1.3, 420), straight, 0) is None
+    assert stripe_spread(_double_line_mask(straight, 1.3, 420), straight, spacing, 0, pipe.size) is None
 
 
 @pytest.mark.parametrize("top_m, starts", [(-1.5, True), (1.2, True), (-2.2, False)])

@@ -2,7 +2,7 @@
 
 ``EdgeConfig`` (``roads.edge.road_edge``), ``LinesConfig`` (``lines.trace.find_lines``,
 ``lines.vote.vote_lines``, ``pipeline.LanePipeline.detect_lines``) and ``TrackerConfig``
-(``tracking.LaneTracker``; its steps are numbered in ``tracking``'s module docstring). Frozen
+(``tracking.LaneTracker``, whose loop ``tracking``'s module docstring describes). Frozen
 dataclasses with units in their field names; ``__post_init__`` refuses a value out of range with a
 ``ConfigError`` naming the key. A function a docstring names without its module is its stage's
 (``roads.edge.road_edge``, ``fit.fit_line``, ...).
@@ -49,7 +49,7 @@ class EdgeConfig:
         from the other line, which the flat view changes with distance on a pitched road.
     trace_gap_m : the trace ends after this much road (m) without an edge point.
     max_shoulder_m : how far (m) beyond a painted line its asphalt edge is looked for, to
-        measure the shoulder between them (``LaneTracker``, step 8).
+        measure the shoulder between them (``roads.tracked.Shoulder``).
     """
 
     enabled: bool = True
@@ -192,8 +192,8 @@ class LinesConfig:
 
 @dataclass(frozen=True)
 class TrackerConfig:
-    """Parameters of ``LaneTracker`` (the checks every lane passes are ``params.LaneChecks``); the
-    steps named are those of ``tracking``'s module docstring.
+    """Parameters of ``LaneTracker`` (the checks every lane passes are ``params.LaneChecks``); the parts
+    named are in ``lanelib.tracking`` and ``lanelib.roads.tracked``.
 
     Parameters
     ----------
@@ -203,22 +203,22 @@ class TrackerConfig:
     smooth_frames : good frames averaged (weighted towards the newest) for the reported fit.
     recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
-    base_history_frames : 0 (off), or accepted frames whose line bases are remembered (step 6).
+    base_history_frames : 0 (off), or accepted frames whose line bases are remembered (``tracking.proposers.RememberedBases``).
     min_base_peak : a histogram base whose (peak - mean) / mean is below this is weak, and the
         remembered base is tried instead (with ``base_history_frames``).
     lookahead_growth_m : how far (m of road) the look-ahead may reach beyond the rows the tracked
-        lane was measured on, per frame (step 1). Beyond those rows the track is an
+        lane was measured on, per frame (``LaneTracker.lookahead_top_px``). Beyond those rows the track is an
         extrapolation: coming out of a tight bend it still curves as it did, and a search
         around it, or a check against it, over the whole view would refuse the straightening
         lane. A second-order fit extrapolated 3 m errs by about 3**2 * dk / 2, a few cm for the
         curvature changes of a clothoid between frames; the view opens fully in 5 frames.
     trend_frames : accepted frames whose lane centre line gives the trend that the predicted lane
-        follows (step 7), from the third accepted frame on; below 3 turns the prediction off.
+        follows (``TrackState.predicted_lane``), from the third accepted frame on; below 3 turns the prediction off.
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
-        the lane is held for, beside ``hold_frames`` (step 5); they do not count toward it.
+        the lane is held for, beside ``hold_frames`` (``tracking.update.hold_or_lose``); they do not count toward it.
     max_gap_m : largest distance (m of road) between the view's bottom row and a line's pixels
-        nearest it (``records.LineFit.gap_px``) for the line to be taken as seen at the car (step
-        2). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
+        nearest it (``records.LineFit.gap_px``) for the line to be taken as seen at the car
+        (``TrackChecks.judge``). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
         away, a stray edge far ahead) is an extrapolation at the car: a heading error of a degree
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
@@ -232,7 +232,7 @@ class TrackerConfig:
         comes into view it lags, and the pair is refused though it is the lane. Not without a
         track: a pair that only this check keeps, with nothing to compare it with, is more often
         false than the lane.
-    stripe_spread : while one line is inferred (step 4), take the change of the lane's width
+    stripe_spread : while one line is inferred, take the change of the lane's width
         ahead from the seen line's double stripes (``roads.stripes.stripe_spacing_px``) when they show on
         enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
         the stripes' spacing with it, so the lane's width on a row is its tracked width at the car
@@ -242,29 +242,29 @@ class TrackerConfig:
         crest the flat view's lane ahead widens far beyond its width at the car.
     reacquire_after_frames : 0 (off), or the accepted frames in a row a line must have been
         inferred (or seen only short of the car, ``max_gap_m``) before it is looked for in a wider
-        band around its inference (step 1): twice ``prior_margin_px`` either side, one
+        band around its inference (``tracking.proposers.Reacquire``): twice ``prior_margin_px`` either side, one
         ``prior_margin_px`` more for each further frame, up to ``reacquire_band_m``; the jump
         limit against it (``max_jump_m``) is as wide. Three frames: a line missing for one or two
         frames (a gap in a dashed line, a shadow) is still near its track.
-    reacquire_band_m : the widest half band (m) a long-inferred line is looked for in (step 1).
+    reacquire_band_m : the widest half band (m) a long-inferred line is looked for in.
         1.2 m, about a third of a lane: paint returning after a line was inferred for many frames
         (over a crest) may lie a metre outside the inference; a line farther out makes a lane
         outside the width checks' range with the seen line anyway.
     restart_frames : 0 (off), or the frames after a reset in which one line alone may restart
-        the lane where the lost track's line on its side was (step 5). 25 frames (a second at
+        the lane where the lost track's line on its side was (``tracking.start.restart``). 25 frames (a second at
         25 fps): within it the car has moved across the lane by little (at 0.5 m/s of lateral
         speed, half a metre); later the lost track tells nothing about where the lines are.
     restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
-        its side to restart the lane (step 5). 0.5 m, ``max_jump_m``'s default: a line of the
+        its side to restart the lane. 0.5 m, ``max_jump_m``'s default: a line of the
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
     road_view_run_m : 0 (off), or the least run (m of road) of rows whose lane interior does not
         look like the road near the car that ends the look-ahead of a frame whose lines were
-        refused (step 1, ``roads.edge.road_view_top_px``). 1 m: a patch of dirt or a shadow's tinted
+        refused (``roads.tracked.RoadView``). 1 m: a patch of dirt or a shadow's tinted
         edge across one or two rows does not; a crest's grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
     shoulder_frames : 0 (off), or the newest measurements of a painted line's shoulder (the
-        distance from the paint out to the asphalt edge beyond it, step 8) that are remembered;
+        distance from the paint out to the asphalt edge beyond it, ``roads.tracked.Shoulder``) that are remembered;
         the shoulder is their median once half of them are in and they agree within
         ``shoulder_spread_m``, and a line whose paint then fades out is placed that far inside
         the asphalt edge.
@@ -278,13 +278,13 @@ class TrackerConfig:
         number in the video (``update``'s ``index``) it divides, so a Dask segment measures on the
         same frames as one process. A shoulder changes over tens of metres, not from one frame to
         the next, and measuring it costs about a fifth of a clean road's update.
-    return_gap_m : on a side whose paint has been missing at the car (step 8), the largest distance
+    return_gap_m : on a side whose paint has been missing at the car, the largest distance
         (m of road) between the view's bottom row and the returning paint's nearest pixels for it
         to count as seen at the car again (``max_gap_m`` for any other line); farther, the paint
         is joined nearer the car to the line placed the shoulder inside the asphalt edge. Paint
         returning beyond a crest, into a sag, is seen metres ahead, and its fit extrapolated to
         the car lies inside the lane there (the flat view widens the lane ahead in a sag).
-    near_gap_m : 0 (off), or ``max_gap_m`` on a bend (step 2) for a line whose paint reached the
+    near_gap_m : 0 (off), or ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
         car in the newest accepted frames, when the other line of the frame reaches the car
         within it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen
         now only from farther ahead (its paint near the car in a tree's shade) it is kept where
@@ -294,16 +294,16 @@ class TrackerConfig:
         view can turn its fit back there. Not on straight roads (``near_gap_bend_m``): there a
         dashed line's gaps are extrapolated well, and a join to a track whose other line is
         missing too is worse. The same rule keeps a frame whose line is so extrapolated out of
-        the width seen at the car (step 3, ``seen_width_m``).
+        the width seen at the car (``seen_width_m``).
     pitched_start_frames : 0 (off), or the frames in a row, without a track, whose pair is refused
         only as not parallel but is a lane in a pitched flat view (``checks.pitched_pair_problem``:
         its width changes linearly along the view by at most ``max_pitch_change``, and is
         parallel about that trend) and agrees with the previous frame's such pair (each line
         within ``max_jump_m`` at the car and ``max_bend_m`` in shape) that start the track with
-        that pair (step 5). Where the camera looks at the road at another pitch than the
+        that pair (``tracking.start.pitched_start``). Where the camera looks at the road at another pitch than the
         bird's-eye points were chosen for, every pair of the flat view converges or diverges,
         and no lane would start; once started, the pair's checks compare the width with the
-        tracked width (step 2), which carries the pitch. One frame alone starts nothing: a
+        tracked width, which carries the pitch. One frame alone starts nothing: a
         wrong pair (a seam, a barrier's foot) rarely keeps one trend while the car moves.
     max_pitch_change : the largest change of the lane's width over the whole view, as a share of
         its width at the car, that a pitched start takes for the view's pitch (0.5: with the

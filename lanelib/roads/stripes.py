@@ -324,3 +324,37 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, ite
     coeffs = (float(p2 / scale ** 2), float(p[1] / scale - 2 * p2 * m / scale ** 2),
               float(x0 + p[0] - p[1] * m / scale + p2 * m * m / scale ** 2))
     return coeffs, spacing, upper, float((residual * residual).sum())
+
+
+def stripe_spread(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int,
+                  size: tuple[int, int]) -> np.ndarray | None:
+    """Return the flat view's scale across the road relative to the bottom row's, as a straight
+    line in (bottom row - row), from the stripes of a double line along the fit ``coeffs_px``
+    (``stripe_spacing_px``), or None.
+
+    None unless the stripes show on at least 4 bands of rows covering half the look-ahead (from
+    ``top_px``, down from where the line lies in the view of ``size`` (w, h): on a tight bend it
+    leaves the view sideways, and no stripes show above that), their spacing lies within an
+    eighth of ``spacing_px`` (RMS) of the straight line, and the scale at the look-ahead's top is
+    0.7-2.5: a spread read from fewer or scattered bands is noise, and a line inferred at that
+    spread would follow it. None with ``spacing_px`` 0 (no double lines looked for).
+    """
+    if not spacing_px:
+        return None
+    w, h = size
+    bottom = float(h - 1)
+    ys, gaps = stripe_spacing_px(binary, coeffs_px, spacing_px, top_px)
+    rows = np.arange(float(top_px), bottom + 1.0)
+    x = np.polyval(coeffs_px, rows)
+    outside = np.flatnonzero((x < 0) | (x >= w))
+    in_view = float(top_px) if not len(outside) else float(rows[outside[-1]] + 1.0)
+    depth = bottom - max(float(top_px), in_view)
+    if len(ys) < 4 or ys.max() - ys.min() < 0.5 * depth:
+        return None
+    slope, at_car = np.polyfit(bottom - ys, gaps, 1)
+    residual = gaps - np.polyval((slope, at_car), bottom - ys)
+    if at_car <= 0 or float(np.sqrt(np.mean(residual ** 2))) > spacing_px / 8:
+        return None
+    if not 0.7 <= 1.0 + slope / at_car * depth <= 2.5:
+        return None
+    return np.array([slope / at_car, 1.0])

@@ -1,0 +1,281 @@
+"""The tracker's hard-road proposers: the road seen from the car, the asphalt edge, a faded line.
+
+Each is a proposer of ``LaneTracker`` (the protocol in ``lanelib.tracking.proposers``): it says
+``where`` it has something to look for in a frame and ``propose``s candidate searches there.
+
+- ``RoadView``: when a line is refused, the look-ahead is also cut where the lane's interior
+  stops looking like the road near the car (beyond a crest, a vehicle on the road).
+- ``AsphaltEdge``: a lane with one line and no paint at all on the other side takes the
+  unpainted asphalt edge there as its line (``LanePipeline.edge_search``).
+- ``Shoulder``: while both lines are seen, each painted line's distance out to the asphalt edge
+  is measured near the car (``measure_shoulders``, on one frame in ``shoulder_every``) and
+  remembered; when the paint then fades, the line is placed that far inside the edge where the
+  edge is seen, joined beyond to the inference or nearer the car to returning paint.
+
+The tracker is passed in (duck-typed): this package sits below the tracker in the layers.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..fit import joined_fit, row_medians
+from ..records import NEAR_SHARE, LaneSearch, LineFit
+from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
+
+SIDES = ("left", "right")
+
+
+class RoadView:
+    """A line refused: search again in the view that ends where the road stops looking like the
+    road seen from the car (``TrackerConfig.road_view_run_m``); a pair there is taken."""
+
+    name, rule, moves_lookahead = "road view", "a pair", True
+
+    def where(self, frame):
+        t = frame.tracker
+        if frame.track is None or not frame.best.failed or t.config.road_view_run_m <= 0:
+            return None
+        cap = road_view_top(t, frame.raw, frame.track)
+        return cap if cap > frame.top else None
+
+    def propose(self, frame, where):
+        t = frame.tracker
+        return [(t.pipeline.search(frame.mask(), frame.prior, bases=t.bases(frame.track), top_px=where), "")]
+
+
+def road_view_top(tracker, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]) -> int:
+    """Return the first row (px) of the road seen continuously from the car in a RAW frame,
+    between the tracked lines ``track`` (``roads.edge.road_view_top_px``), 0 for the whole view.
+
+    Only every ``road_view_step_px``-th row of the bird's-eye view, and only the columns the
+    lane's interior covers on them, are remapped (``LanePipeline.birdseye_rows``); the
+    saturation step that is unlike the road is ``EdgeConfig.min_saturation_step``.
+    """
+    pipe = tracker.pipeline
+    w, h = pipe.size
+    rows = np.arange(h - 1, -1, -tracker.config.road_view_step_px)
+    lo, hi = road_view_interior(rows, track, w)
+    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min() + 1))  # the columns an interior covers
+    if c0 >= w:
+        return 0
+    return road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, tracker.ym,
+                            pipe.config.edge.min_saturation_step, tracker.config.road_view_run_m, w, c0)
+
+
+class AsphaltEdge:
+    """One line kept and no paint on the other side: the asphalt edge there as the line.
+
+    Without a track: the best search found one line and nothing on the other side. With a
+    track: the other side's tracked line was the asphalt edge (no paint was tracked there), and
+    what the search found there failed the checks, so it is dropped for the edge.
+    """
+
+    name, rule, moves_lookahead = "asphalt edge", "more lines", False
+
+    def where(self, frame):
+        if not frame.tracker.pipeline.config.edge.enabled:
+            return None
+        best, track = frame.best, frame.track
+        search = best.search
+        if track is None:
+            return search if search.left.found != search.right.found else None
+        if (best.left is None) == (best.right is None):
+            return None
+        side = "left" if best.left is None else "right"
+        if not frame.tracker.state.edge[SIDES.index(side)]:
+            return None
+        return replace(search, **{side: LineFit(None, reason="refused by the checks")})
+
+    def propose(self, frame, where):
+        return [(frame.tracker.pipeline.edge_search(frame.birdseye(), where), "")]
+
+
+class Shoulder:
+    """A painted line faded out: placed its measured shoulder inside the asphalt edge."""
+
+    name, rule, moves_lookahead = "shoulder", "a pair", False
+
+    def where(self, frame):
+        t = frame.tracker
+        if not (t.pipeline.config.edge.enabled and frame.track is not None and t.config.shoulder_frames):
+            return None
+        return faded_side(t, frame.raw, frame.images.get("birdseye"), frame.best)
+
+    def propose(self, frame, where):
+        t = frame.tracker
+        side, why_faded = where
+        note = (f"{SIDES[side]} line {why_faded}: placed the shoulder ({shoulder_m(t, side):.2f} m) "
+                "inside the asphalt edge")
+        return [(placed, note + (", joined ahead to its returning paint" if joined else ""))
+                for placed, joined in shoulder_search(t, frame.birdseye(), side, frame.best, frame.track)]
+
+
+def shoulder_m(tracker, side: int) -> float:
+    """Return the shoulder (m) of line ``side`` (0 left, 1 right): how far beyond its paint the
+    asphalt edge runs, the median of the remembered measurements once at least half of
+    ``shoulder_frames`` are in and their robust spread is within ``shoulder_spread_m``; NaN
+    otherwise."""
+    cfg = tracker.config
+    found = np.array(tracker.state.shoulders[side], float)
+    if not cfg.shoulder_frames or 2 * len(found) < cfg.shoulder_frames:
+        return float("nan")
+    median = float(np.median(found))
+    if 1.4826 * float(np.median(np.abs(found - median))) > cfg.shoulder_spread_m:
+        return float("nan")
+    return median
+
+
+def measure_shoulders(tracker, raw: np.ndarray, bird: np.ndarray | None, search: LaneSearch,
+                      left: LineFit | None, right: LineFit | None) -> None:
+    """Remember the shoulder of each painted line of a frame that kept both lines at the car
+    (``shoulder_beside``, when clearly found)."""
+    if not (tracker.reach_car(left) and tracker.reach_car(right)):
+        return
+    grid = None
+    for i, (fit, other) in enumerate(((left, right), (right, left))):
+        if search.edge[i] or search.shoulder[i]:
+            continue  # not paint
+        grid = grid or near_grid(tracker, raw, bird)
+        shoulder = shoulder_beside(tracker, grid, fit, other, i, (search.left_pixels, search.right_pixels)[i])
+        if not np.isnan(shoulder):
+            tracker.state.shoulders[i].append(round(shoulder, 4))
+
+
+def near_grid(tracker, raw: np.ndarray | None, bird: np.ndarray | None) -> VergeGrid:
+    """Return the verge features (``roads.edge.verge_grid``) of the bird's-eye view's rows within
+    ``shoulder_near_m`` of its bottom row: one row of each ``EdgeConfig.scale`` (measured on every
+    frame with both lines, so cheap), from ``bird`` or those rows of RAW alone remapped."""
+    pipe = tracker.pipeline
+    h = pipe.size[1]
+    k = pipe.config.edge.scale
+    top = max(0, int(round(tracker.bottom - tracker.config.shoulder_near_m / tracker.ym))) // k * k
+    sample = grid_rows_px(top, h, k)
+    rows = bird[sample] if bird is not None else pipe.birdseye_rows(raw, sample)
+    return verge_grid(rows, k, top, h, sampled=True)
+
+
+def shoulder_beside(tracker, grid: VergeGrid, fit: LineFit, other: LineFit, side: int,
+                    pixels: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+    """Return the shoulder (m) beyond line ``fit`` on ``side`` (0 left, 1 right), NaN where not
+    clearly found.
+
+    The median distance (along the line's normal) from the line out to the asphalt edge beyond
+    it in ``grid`` (``near_grid``; ``roads.edge.road_edge`` from 0 to ``EdgeConfig.max_shoulder_m``
+    beyond the line, the road surface read between ``fit`` and ``other``), on the rows within
+    ``shoulder_near_m`` of the bottom row. Clearly found: edge points on at least half of those
+    rows, their distances' robust spread within ``shoulder_spread_m``. With the line's
+    ``pixels`` ((ys, xs) of the search) the distance on a row is from the median of its pixels
+    there: on a tight bend a fit can lie centimetres outside its paint at the car.
+    """
+    cfg = replace(tracker.pipeline.config.edge, trace_margin_m=0.0)
+    k = cfg.scale
+    xm, ym, bottom = tracker.xm, tracker.ym, tracker.bottom
+    top = max(0, int(round(bottom - tracker.config.shoulder_near_m / ym)))
+    _, points = road_edge(None, other, SIDES[side], xm, ym, tracker.checks, cfg, top,
+                          guide_px=fit.coeffs_px, range_m=(0.0, cfg.max_shoulder_m), grid=grid)
+    if len(points) < 0.5 * (bottom + 1 - top) / k:
+        return float("nan")
+    ys = points[:, 1]
+    x_line = np.polyval(fit.coeffs_px, ys)
+    if pixels is not None and len(pixels[0]):
+        bins = (np.asarray(pixels[0]) // k).astype(int)
+        near = bins >= top // k
+        rows, paint = row_medians(bins[near], np.asarray(pixels[1], float)[near])
+        if len(rows):  # the paint's x on each grid row it holds
+            grid_rows = (ys // k).astype(int)
+            at = np.minimum(np.searchsorted(rows, grid_rows), len(rows) - 1)
+            hit = rows[at] == grid_rows
+            x_line[hit] = paint[at[hit]]
+    slope = np.polyval(np.polyder(np.asarray(fit.coeffs_px, float)), ys) * xm / ym
+    dist = np.abs(points[:, 0] - x_line) * xm / np.sqrt(1.0 + slope ** 2)
+    median = float(np.median(dist))
+    if 1.4826 * float(np.median(np.abs(dist - median))) > tracker.config.shoulder_spread_m:
+        return float("nan")
+    return median
+
+
+def faded_side(tracker, raw: np.ndarray, bird: np.ndarray | None, best) -> tuple[int, str] | None:
+    """Return the side (0 left, 1 right) whose painted line has faded out, with what was seen of
+    it, or None.
+
+    The side's shoulder is known (``shoulder_m``), its tracked line is no asphalt edge, the other
+    line is kept, the side's paint was not seen at the car in the last accepted frame, and: this
+    frame kept no line there for ``reacquire_after_frames`` frames or more (a line missing for a
+    frame or two, a dash's gap, is still near its track and is inferred); or the line kept there
+    is seen only far ahead (the paint returning ahead); or it is the asphalt edge itself: the edge
+    lies less than half the shoulder beyond it (grass beside the edge can pass for a line).
+    """
+    search, state = best.search, tracker.state
+    for i, (fit, other) in enumerate(((best.left, best.right), (best.right, best.left))):
+        if other is None or state.edge[i] or not state.faded_run[i] or search.edge[i] or search.shoulder[i]:
+            continue
+        shoulder = shoulder_m(tracker, i)
+        if np.isnan(shoulder):
+            continue
+        if fit is None:
+            if state.faded_run[i] >= max(1, tracker.config.reacquire_after_frames):
+                return i, "not found where its paint faded out"
+            continue
+        found = (search.left, search.right)[i]
+        if not tracker.reach_car(found):
+            return i, "seen only far ahead where its paint faded out"
+        gap_m = found.gap_px * tracker.ym
+        if gap_m > tracker.config.return_gap_m:
+            return i, f"seen only from {gap_m:.1f} m ahead where its paint faded out"
+        if shoulder_beside(tracker, near_grid(tracker, raw, bird), fit, other, i) < 0.5 * shoulder:
+            return i, "seen at the asphalt edge, where its paint runs the shoulder inside it"
+    return None
+
+
+def shoulder_search(tracker, bird: np.ndarray, side: int, best, track) -> list[tuple[LaneSearch, bool]]:
+    """Return the best search with its line ``side`` placed the remembered shoulder inside the
+    asphalt edge on that side (``LanePipeline.edge_search``), each with whether it is joined to
+    the line's returning paint: first so joined (``joined_paint``) where the search has pixels on
+    that side, then joined beyond the edge to the line inferred from the kept one; none where no
+    edge is found. The edge is looked for from the line inferred from the kept one, within the
+    shoulder plus or minus the line's jump limit beyond it."""
+    search = best.search
+    kept = best.right if side == 0 else best.left
+    name = SIDES[side]
+    guide = tracker.inferred_line(np.array(kept.coeffs_px, float), track, side, search.top_px)
+    shoulder, tol = shoulder_m(tracker, side), tracker.jump_limit_m(side)
+    faded = replace(search, **{name: LineFit(None, reason="paint faded out"), SIDES[1 - side]: kept})
+    placed = tracker.pipeline.edge_search(bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
+                                          shoulder)
+    if placed is None:
+        return []
+    line = getattr(placed, name)
+    joined = joined_paint(tracker, (search.left_pixels, search.right_pixels)[side], line, search.top_px)
+    if joined is None:
+        return [(placed, False)]
+    return [(replace(placed, **{name: joined}), True), (placed, False)]
+
+
+def joined_paint(tracker, pixels, placed: LineFit, top_px: int) -> LineFit | None:
+    """Return a faded line's returning paint ahead joined nearer the car to ``placed`` (the line
+    placed the shoulder inside the asphalt edge), or None with fewer than half
+    ``min_line_pixels`` paint pixels (``pixels``: (ys, xs) of the search on that side) in the
+    look-ahead (from ``top_px``).
+
+    One second-order fit (``fit.joined_fit``) to the paint's median x on each row it holds and to
+    the placed line on each row between the paint's nearest (all but ``records.NEAR_SHARE`` of
+    its pixels lie above it) and the bottom row: paint seen only a few metres ahead beyond a
+    crest lies inside the line at the car, which an extrapolation would not follow. Its pixel
+    count and rows are the edge's and the paint's together.
+    """
+    ys, xs = np.asarray(pixels[0]), np.asarray(pixels[1], float)
+    keep = ys >= top_px
+    ys, xs = ys[keep], xs[keep]
+    if len(ys) < tracker.pipeline.config.search.min_line_pixels // 2:
+        return None
+    bottom = tracker.bottom
+    near = float(np.quantile(ys, 1.0 - NEAR_SHARE))
+    keep = ys <= near
+    rows, med = row_medians(ys[keep], xs[keep])
+    coeffs = joined_fit(rows.astype(float), med, placed.coeffs_px, np.arange(np.floor(near) + 1.0, bottom + 1.0),
+                        tracker.pipeline.size[1])
+    top = min(float(rows[0]), bottom - placed.gap_px - placed.span_px)
+    return replace(placed, coeffs_px=coeffs, n_pixels=placed.n_pixels + int(keep.sum()),
+                   span_px=float(bottom - placed.gap_px - top))

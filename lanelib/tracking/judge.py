@@ -1,0 +1,273 @@
+"""The checks of a tracked frame: which lines of a candidate search the track keeps, and why.
+
+``TrackChecks.judge`` runs, for each line, the checks of a single image (``checks.line_problem``)
+and the checks against the track: a line seen only far ahead (``checks.gap_problem``) is kept
+where it lies along its track and joined near the car to a reference (``fit.joined_fit``); a
+line that jumped at the car or bent away from its track is refused, unless both lines bent
+alike and are a lane on their own (the road changed, the track lags). The pair is then checked
+for width, parallelism and curvature against the tracked width, with two exceptions that read
+the view's pitch: a pitched flat view's lane and a grade read from a double line's stripes.
+Without a track, a pair refused as not parallel may start the track as a pitched lane, and one
+line alone may restart a track lost moments ago (``restart``).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..checks import gap_problem, line_problem, pair_problem, pitched_pair_problem
+from ..fit import joined_fit
+from ..records import LaneSearch, LineFit
+from ..roads.stripes import stripe_spread
+from .candidate import SIDES, Candidate
+from .start import pitched_start, restart
+
+
+class TrackChecks:
+    """The checks of one tracker (its geometry, ``TrackerConfig`` and ``LaneChecks``)."""
+
+    def __init__(self, tracker: "LaneTracker"):
+        self.t = tracker
+
+    def judge(self, search: LaneSearch, track, top_px: int = 0, mask=None,
+              candidates: list | None = None, bands: tuple[float, float] | None = None) -> Candidate:
+        """Return what the checks keep of ``search`` against ``track`` (pixel coefficients, or
+        None without a track), over the look-ahead from ``top_px`` down.
+
+        ``mask``: a function returning the frame's whole-view mask, for the grade pair check
+        (None skips it). ``candidates``: where the lines this frame could restart the lane from
+        are collected (None leaves the state as it is). ``bands``: the width (px) of the band
+        each line was searched in (default: the search's, ``checks.search_bands_px``).
+        """
+        t = self.t
+        rows = t.rows if not top_px else np.linspace(float(top_px), t.bottom, len(t.rows))
+        bands = t.pipeline.search_bands_px(search) if bands is None else bands
+        failed = False
+        why: list[str] = []
+        kept: dict[str, LineFit | None] = {"left": None, "right": None}
+        bent: dict[str, LineFit] = {}  # lines refused only for bending away from the track
+        distant: dict[str, LineFit] = {}  # lines seen only far ahead that lie along their track
+        limits = self.gap_limits_m(search.left, search.right, bands, track)
+        for i, (side, fit) in enumerate((("left", search.left), ("right", search.right))):
+            if not fit.found:
+                why.append(f"{side} line not found ({fit.reason})")
+                continue
+            problem = line_problem(fit, bands[i], t.checks, t.xm, side)
+            if problem:
+                why.append(problem)
+                failed = True
+                continue
+            far = gap_problem(fit, t.ym, limits[i], side) if track is not None else ""
+            if far:
+                if not self.confirms_track(fit, track[i], top_px, i):
+                    why.append(far)
+                    failed = True
+                    continue
+                kept[side] = distant[side] = fit
+                continue
+            if track is not None:
+                problem = self.track_problem(fit, track[i], rows, i)
+                if problem:
+                    why.append(problem)
+                    failed = True
+                    if " bent " in problem:
+                        bent[side] = fit
+                    continue
+            kept[side] = fit
+        for i, side in enumerate(SIDES):
+            if side in distant:  # joined to the other line's inference, or else to its track
+                other = SIDES[1 - i]
+                near = kept[other] is not None and other not in distant
+                ref = t.inferred_line(np.array(kept[other].coeffs_px), track, i, top_px) if near else track[i]
+                kept[side] = replace(distant[side], coeffs_px=self.joined(distant[side], ref, top_px))
+                why.append(f"{gap_problem(distant[side], t.ym, limits[i], side)}; it lies "
+                           f"along its track there, and nearer the car "
+                           + ("the line inferred from the other line is taken" if near else "its track is taken"))
+        if len(bent) == 2 and self.pair_outvotes_track(bent, track, rows, top_px):
+            kept, failed = dict(bent), False
+            why.append("both lines bent away from the track together and pass the pair checks: "
+                       "the road changed, the track lags")
+        if kept["left"] is not None and kept["right"] is not None:
+            problem = self.pair_problem(kept, track, rows, top_px, mask, bool(distant), why)
+            if problem:
+                why.append(problem)
+                failed = True
+                if track is None:
+                    if candidates is not None and pitched_start(t, kept, problem, top_px, why):
+                        return Candidate(search, kept["left"], kept["right"], why, False)
+                    return restart(t, search, kept, why, failed, candidates)
+                lc, rc = (t.pipeline.line_confidence(kept[s]) for s in SIDES)
+                drop = "right" if lc >= rc else "left"
+                why.append(f"{drop} line dropped (lower confidence)")
+                kept[drop] = None
+        if track is None and (kept["left"] is None or kept["right"] is None):
+            return restart(t, search, kept, why, failed, candidates)
+        return Candidate(search, kept["left"], kept["right"], why, failed)
+
+    # ---- a line against its track ---------------------------------------------------------
+
+    def track_problem(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray, side: int) -> str:
+        """Return why a line is no continuation of its tracked line ("" when it is): it jumped
+        more than the jump limit at the car (``jump_limit_m``), or its shape bent more than
+        ``max_bend_m`` from the track over the rows where both lie in view (unless the track
+        inferred that line: a seen line is not checked against one never seen)."""
+        t = self.t
+        name = SIDES[side]
+        dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(tracked, rows)) * t.xm
+        dx = dx[self.bend_rows(fit, tracked, rows)]
+        jump_m = t.jump_limit_m(side)
+        if abs(dx[-1]) > jump_m:
+            return f"{name} line jumped {abs(dx[-1]):.2f} m at the car (limit {round(jump_m, 2)} m)"
+        if dx.max() - dx.min() > t.config.max_bend_m and not t.state.newest_inferred(side):
+            return (f"{name} line bent {dx.max() - dx.min():.2f} m away from its track "
+                    f"(limit {t.config.max_bend_m} m)")
+        return ""
+
+    def bend_rows(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Return which ``rows`` a line's bend against its tracked line is read on: those where
+        both lie in the view, and always the bottom row (the car). On a tight bend the lines
+        leave the view sideways; above that both are extrapolations of fits made from different
+        pixels, and they part by metres though both lay on the line where it was seen."""
+        w = self.t.pipeline.size[0]
+        x_fit, x_track = np.polyval(fit.coeffs_px, rows), np.polyval(tracked, rows)
+        inside = (x_fit >= 0) & (x_fit < w) & (x_track >= 0) & (x_track < w)
+        inside[-1] = True
+        return inside
+
+    def confirms_track(self, fit: LineFit, tracked: np.ndarray, top_px: int, side: int) -> bool:
+        """Return whether a line seen only far ahead lies within the jump limit of its tracked
+        line on the rows where its pixels are, inside the look-ahead."""
+        t = self.t
+        near = t.bottom - fit.gap_px
+        rows = np.linspace(max(float(top_px), near - fit.span_px), near, 5)
+        dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(tracked, rows)) * t.xm
+        return bool(np.abs(dx).max() <= t.jump_limit_m(side))
+
+    def joined(self, fit: LineFit, reference: np.ndarray, top_px: int) -> tuple[float, float, float]:
+        """Return a line seen only far ahead joined to ``reference`` nearer the car
+        (``fit.joined_fit``: the fit where its pixels are, the reference below them)."""
+        t = self.t
+        near = t.bottom - fit.gap_px
+        seen = np.arange(max(float(top_px), near - fit.span_px), near)
+        return joined_fit(seen, np.polyval(fit.coeffs_px, seen), reference,
+                          np.arange(near, t.bottom + 1.0), t.pipeline.size[1])
+
+    def gap_limits_m(self, left: LineFit, right: LineFit, bands: tuple[float, float], track
+                     ) -> tuple[float, float]:
+        """Return the largest gap (m) each line may stop short of the car by and count as seen
+        there: ``near_gap_m`` (``gap_limit_m``) for a line seen short of the car by more than
+        that where its tracked line bends over the gap (``bent_gap``) while the other line
+        reaches within ``near_gap_m`` and passes its line checks, so that it is joined to the
+        line inferred from the other; else ``max_gap_m``, where an extrapolation on a straight
+        road does not rest on the curvature."""
+        t, cfg = self.t, self.t.config
+        if not cfg.near_gap_m or track is None:
+            return cfg.max_gap_m, cfg.max_gap_m
+        fits = (left, right)
+        bent = [fit.found and self.bent_gap(fit, track, i) for i, fit in enumerate(fits)]
+        if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
+            return cfg.max_gap_m, cfg.max_gap_m
+        near = [fit.found and fit.gap_px * t.ym <= cfg.near_gap_m
+                and not line_problem(fit, bands[i], t.checks, t.xm, SIDES[i])
+                for i, fit in enumerate(fits)]
+        return tuple(self.gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
+                     for i in range(2))
+
+    def bent_gap(self, fit: LineFit | None, track, side: int) -> bool:
+        """Return whether a line reaches the car only by an extrapolation that rests on the
+        curvature: its pixels stop more than ``near_gap_m`` short of the bottom row where its
+        tracked line bends by more than ``near_gap_bend_m`` over the gap."""
+        t, cfg = self.t, self.t.config
+        return bool(cfg.near_gap_m and track is not None and fit.gap_px * t.ym > cfg.near_gap_m
+                    and abs(track[side][0]) * fit.gap_px ** 2 * t.xm > cfg.near_gap_bend_m)
+
+    def gap_limit_m(self, side: int) -> float:
+        """Return ``near_gap_m`` when line ``side``'s paint reached the car in the newest accepted
+        frames (not inferred, not faded: the track there is a measurement), else ``max_gap_m``."""
+        t, cfg = self.t, self.t.config
+        s = t.state
+        if (cfg.near_gap_m and s.history and not s.history[-1].inferred[side]
+                and not s.inferred_run[side] and not s.faded_run[side]):
+            return min(cfg.near_gap_m, cfg.max_gap_m)
+        return cfg.max_gap_m
+
+    # ---- the pair -------------------------------------------------------------------------
+
+    def pair_problem(self, kept: dict, track, rows: np.ndarray, top_px: int, mask, distant: bool,
+                     why: list[str]) -> str:
+        """Return why two kept lines are no lane ("" when they are), noting an exception in
+        ``why``: compared row by row with the tracked width (``width_reference``); checked on
+        their own when the track inferred a line, where a pitched flat view's lane is a lane;
+        with ``grade_pair_check``, a pair not parallel to the track is a lane when it is
+        parallel on the grade a double line's stripes show."""
+        t = self.t
+        h = t.pipeline.size[1]
+        left, right = kept["left"], kept["right"]
+        reference = self.width_reference(track, rows)
+        problem = pair_problem(left, right, h, t.xm, t.ym, t.checks, top_px, width_reference_px=reference)
+        if track is not None and reference is None and problem and not distant and not self.pair_alone(
+                left, right, top_px):
+            # checked on its own (a line inferred), both lines seen at the car
+            why.append(f"{problem}, but a lane in a pitched flat view (its width changes linearly)")
+            return ""
+        if t.config.grade_pair_check and track is not None and problem.startswith("lines not parallel"):
+            graded = self.graded_reference(left, right, rows, top_px, mask)
+            if graded is not None and not pair_problem(left, right, h, t.xm, t.ym, t.checks, top_px,
+                                                       width_reference_px=graded):
+                why.append(f"{problem} against the track, but parallel on the road ahead's grade "
+                           "(the double stripes' spread)")
+                return ""
+        return problem
+
+    def pair_alone(self, left: LineFit, right: LineFit, top_px: int) -> str:
+        """Return why two lines checked on their own, not against the tracked width, are no lane;
+        with ``pitched_start_frames`` on, a lane in a pitched flat view is a lane."""
+        t = self.t
+        h = t.pipeline.size[1]
+        problem = pair_problem(left, right, h, t.xm, t.ym, t.checks, top_px)
+        if problem.startswith("lines not parallel") and t.config.pitched_start_frames:
+            return pitched_pair_problem(left, right, h, t.xm, t.ym, t.checks, top_px,
+                                        t.config.max_pitch_change)
+        return problem
+
+    def pair_outvotes_track(self, bent: dict, track, rows: np.ndarray, top_px: int) -> bool:
+        """Return whether two lines that both bent away from the track are the lane anyway: they
+        bend alike (within ``max_bend_m`` of each other) and are a lane on their own."""
+        t = self.t
+        dl = np.polyval(bent["left"].coeffs_px, rows) - np.polyval(track[0], rows)
+        dr = np.polyval(bent["right"].coeffs_px, rows) - np.polyval(track[1], rows)
+        if float(np.abs(dl - dr).max()) * t.xm > t.config.max_bend_m:
+            return False
+        return not self.pair_alone(bent["left"], bent["right"], top_px)
+
+    def width_reference(self, track, rows: np.ndarray) -> np.ndarray | None:
+        """Return the tracked lane's width (px) on ``rows``, or None without a track or when the
+        newest accepted frame inferred a line: an inferred line's width ahead is no measurement
+        but a width carried over, and a pair seen now would be refused against it."""
+        s = self.t.state
+        if track is None or s.newest_inferred(0) or s.newest_inferred(1):
+            return None
+        return np.polyval(track[1], rows) - np.polyval(track[0], rows)
+
+    def graded_reference(self, left: LineFit, right: LineFit, rows: np.ndarray, top_px: int,
+                         mask) -> np.ndarray | None:
+        """Return the lane's width (px) on ``rows`` as the road ahead's grade makes it in the flat
+        view: the pair's width at the car times the scale across the road read from a double
+        line's stripes along either line (``spread``), or None when no stripes tell it."""
+        if mask is None:
+            return None
+        t = self.t
+        for fit in (left, right):
+            spread = self.spread(mask(), fit.coeffs_px, top_px)
+            if spread is not None:
+                at_car = float(np.polyval(right.coeffs_px, t.bottom) - np.polyval(left.coeffs_px, t.bottom))
+                return at_car * np.polyval(spread, t.bottom - rows)
+        return None
+
+    def spread(self, binary: np.ndarray, coeffs_px, top_px: int) -> np.ndarray | None:
+        """Return the view's scale across the road ahead from a double line's stripes along
+        ``coeffs_px`` (``roads.stripes.stripe_spread``), or None."""
+        t = self.t
+        return stripe_spread(binary, coeffs_px, t.pipeline.config.search.double_line_px, top_px,
+                             t.pipeline.size)

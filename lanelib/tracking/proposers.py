@@ -1,0 +1,228 @@
+"""Where the tracker looks again when a frame's first search does not give a lane.
+
+A proposer is any object with a ``name``, a ``rule`` and two methods:
+
+- ``where(frame)`` returns what to look for in this frame (a side, the bases, a row), or None
+  when the proposer has nothing to do here;
+- ``propose(frame, where)`` returns candidate searches, each with a note for the frame's
+  reason, in the order they are to be judged.
+
+``LaneTracker.update`` asks its proposers in order. Each candidate is judged by the track's
+checks (``judge.TrackChecks``) and taken under the proposer's ``rule``: "more lines" takes it
+when more of its lines pass than of the best so far; "a pair" takes it only when both pass. The
+first candidate taken ends the proposer's turn. The proposers here search the frame's mask
+again; the hard-road ones (the crest's road view, the asphalt edge, a faded line's shoulder)
+live in ``lanelib.roads.tracked``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..fit import parallel_fits
+from ..records import LaneSearch, LineFit, Window
+from ..search import lane_pixels, search_around
+from .candidate import Candidate
+
+
+
+@dataclass
+class Frame:
+    """One frame as the proposers see it: the raw frame, the predicted lane ``track`` (None
+    without a track), the look-ahead's first row ``top``, the best candidate so far, the
+    searches run and the pipeline's images (its masks made once, when first asked)."""
+
+    tracker: "LaneTracker"
+    raw: np.ndarray
+    track: tuple[np.ndarray, np.ndarray] | None
+    top: int
+    prior: tuple[LineFit, LineFit] | None
+    images: dict
+    best: Candidate | None = None
+    first: LaneSearch | None = None
+    looked: list = field(default_factory=list)  # every search run: did any see a line?
+
+    def mask(self) -> np.ndarray:
+        """Return the whole view under the fallback masks' rule, thresholded once."""
+        pipe, images = self.tracker.pipeline, self.images
+        if "fallback binary" not in images:
+            if pipe.has_fallback_masks or "binary" not in images:
+                bird = images.get("birdseye")
+                images["fallback binary"] = pipe.binary(
+                    bird if bird is not None else pipe.birdseye(self.raw), fallback=True)
+            else:
+                images["fallback binary"] = images["binary"]
+        return images["fallback binary"]
+
+    def birdseye(self) -> np.ndarray:
+        """Return the frame's bird's-eye view, warped once."""
+        if self.images.get("birdseye") is None:
+            self.images["birdseye"] = self.tracker.pipeline.birdseye(self.raw)
+        return self.images["birdseye"]
+
+    def judge(self, search: LaneSearch, top_px: int | None = None) -> Candidate:
+        """Return what the track's checks keep of a search of this frame."""
+        return self.tracker.checks_of_track.judge(
+            search, self.track, search.top_px if top_px is None else top_px, self.mask,
+            self.tracker.state.restart_candidates[1])
+
+
+class Proposer(Protocol):
+    """Where to look again in a frame (see the module docstring)."""
+
+    name: str
+    rule: str  # "more lines" or "a pair"
+    moves_lookahead: bool  # a candidate taken sets the frame's look-ahead (its ``top_px``)
+
+    def where(self, frame: Frame) -> Any | None: ...
+
+    def propose(self, frame: Frame, where: Any) -> list[tuple[LaneSearch | None, str]]: ...
+
+
+class WindowsFromTrack:
+    """With a track and no pair: sliding windows started from the tracked lines' bases."""
+
+    name, rule, moves_lookahead = "windows from the track", "more lines", False
+
+    def where(self, frame: Frame):
+        return frame.tracker.bases(frame.track) if frame.track is not None and not frame.best.pair else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.tracker.pipeline.search(frame.mask(), bases=where, top_px=frame.top), "")]
+
+
+class RememberedBases:
+    """Without a track, when a histogram peak is weak (``min_base_peak``): windows started
+    from the median of the recent accepted bases (``base_history_frames``) on that side."""
+
+    name, rule, moves_lookahead = "remembered bases", "more lines", False
+
+    def where(self, frame: Frame):
+        if frame.track is not None or frame.best.pair:
+            return None
+        t = frame.tracker
+        remembered, search = t.remembered_bases, frame.first
+        if remembered is None or search.method != "windows":
+            return None
+        out, weak = [], False
+        for base, conf, memory in zip(search.bases_px, search.base_confidence, remembered):
+            if base is None or conf is None or conf < t.config.min_base_peak:
+                out.append(memory)
+                weak = True
+            else:
+                out.append(base)
+        return (out[0], out[1]) if weak else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.tracker.pipeline.search(frame.mask(), bases=where),
+                 "windows started from the remembered bases (weak histogram peak)")]
+
+
+class Reacquire:
+    """A line the track has inferred for ``reacquire_after_frames`` frames, looked for in a band
+    around its inference that widens with the frames it has been inferred (up to
+    ``reacquire_band_m``): an inference drifts while nothing shows the line."""
+
+    name, rule, moves_lookahead = "re-acquire", "more lines", False
+
+    def where(self, frame: Frame):
+        if frame.track is None:
+            return None
+        best = frame.best
+        for i, (mine, other) in enumerate(((best.left, best.right), (best.right, best.left))):
+            if mine is None and other is not None and frame.tracker.reacquire_half_px(i) > 0:
+                return i
+        return None
+
+    def propose(self, frame: Frame, where):
+        return [(reacquired(frame.tracker, frame.best.search, frame.mask(), frame.track, where,
+                            frame.top), "")]
+
+
+class FallbackMasks:
+    """Without a track and no pair: the whole view on the fallback masks
+    (``ThresholdConfig.fallback_rule``)."""
+
+    name, rule, moves_lookahead = "fallback masks", "more lines", False
+
+    def where(self, frame: Frame):
+        ok = frame.track is None and not frame.best.pair and frame.tracker.pipeline.has_fallback_masks
+        return True if ok else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.tracker.pipeline.search(frame.mask()), "")]
+
+
+class ShorterViews:
+    """Without a track and no pair: shorter look-aheads (``SearchConfig.short_views``), where a
+    tight bend's lane stays in view."""
+
+    name, rule, moves_lookahead = "shorter views", "more lines", False
+
+    def where(self, frame: Frame):
+        pipe = frame.tracker.pipeline
+        return True if frame.track is None and not frame.best.pair and pipe.config.search.short_views else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.tracker.pipeline.short_view_search(frame.mask()), "")]
+
+
+class OtherPeaks:
+    """Without a track and no pair: windows from other histogram peaks
+    (``SearchConfig.candidates`` > 1)."""
+
+    name, rule, moves_lookahead = "other peaks", "more lines", False
+
+    def where(self, frame: Frame):
+        pipe = frame.tracker.pipeline
+        return True if frame.track is None and not frame.best.pair and pipe.config.search.candidates > 1 else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.tracker.pipeline.robust_search(frame.mask(), frame.best.search), "")]
+
+
+def reacquired(tracker: "LaneTracker", search: LaneSearch, binary: np.ndarray, track, side: int,
+               top_px: int) -> LaneSearch | None:
+    """Return ``search`` with line ``side`` looked for again in ``binary``, the whole view, or
+    None when no line could lie within ``reacquire_half_px`` of its inference.
+
+    The inference is moved across to the median distance of the lane pixels in the bin nearest
+    it (bins ``prior_margin_px`` wide, every half margin, out to the band's half width) that
+    holds ``min_line_pixels``, and the line is searched within ``prior_margin_px`` of it
+    (``search.search_around``), its curvature shared with the other line when it is short
+    (``fit.parallel_fits``). The band goes into the search's windows, so the line's band checks
+    compare it with the band it was searched in.
+    """
+    cfg = tracker.pipeline.config.search
+    half = tracker.reacquire_half_px(side)
+    margin = cfg.prior_margin_px
+    ys, xs = lane_pixels(binary)
+    keep = ys >= top_px
+    dx = xs[keep] - np.polyval(track[side], ys[keep])
+    dx = dx[np.abs(dx) <= half]
+    if len(dx) < cfg.min_line_pixels:
+        return None
+    steps = np.arange(margin / 2, half - margin / 2 + 1.0, margin / 2)
+    for centre in [0.0] + [c for step in steps for c in (-step, step)]:  # nearest first
+        near = dx[np.abs(dx - centre) <= margin / 2]
+        if len(near) >= cfg.min_line_pixels:
+            break
+    else:
+        return None
+    moved = np.array(track[side], float)
+    moved[2] += float(np.median(near))
+    name = ("left", "right")[side]
+    priors = [LineFit(None), LineFit(None)]
+    priors[side] = LineFit(tuple(moved))
+    found = search_around(binary, priors[0], priors[1], cfg, top_px)
+    h = tracker.pipeline.size[1]
+    slabs = np.linspace(float(h), float(top_px), cfg.n_windows + 1).round().astype(int)
+    band = tuple(Window(name, int(x - margin), int(x + margin), int(lo), int(hi))
+                 for hi, lo in zip(slabs[:-1], slabs[1:])
+                 for x in [float(np.polyval(moved, (lo + hi) / 2))])
+    merged = replace(search, **{name: getattr(found, name), f"{name}_pixels": getattr(found, f"{name}_pixels")},
+                     windows=tuple(w for w in search.windows if w.side != name) + band)
+    left, right = parallel_fits(merged.left, merged.right, merged.left_pixels, merged.right_pixels, h, cfg)
+    return replace(merged, left=left, right=right)

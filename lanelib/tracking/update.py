@@ -1,0 +1,135 @@
+"""The end of a tracked frame: infer a missing line and smooth, or hold, or lose the lane.
+
+``accept`` takes a frame that kept at least one line: a missing line is inferred from the kept
+one (``LaneTracker.inferred_line``, confidence half the kept line's), the frame joins the
+remembered ones and the reported lane is their smoothed average. ``hold_or_lose`` takes a frame
+that kept none: the predicted lane is held for up to ``hold_frames`` frames with a confidence
+falling to zero (frames in which no search saw any line, under an overpass, are held for up to
+``blind_hold_frames`` beside them); then the track is forgotten and no lane is reported until
+a pair passes the checks.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..fit import normal_width_m
+from ..records import LineFit, line_source
+from ..result import FrameResult
+from .candidate import SIDES, Candidate
+from .state import Accepted
+
+
+
+def accept(t: "LaneTracker", best: Candidate, track, images: dict,
+           spread: np.ndarray | None = None) -> FrameResult:
+    """Remember a frame that kept at least one line and return its result: the smoothed lane
+    (``spread``: the view's scale across the road ahead for an inferred line, from a double
+    line's stripes)."""
+    s, search = t.state, best.search
+    left, right = best.left, best.right
+    notes = list(best.why)
+    coeffs, confs = {}, {}
+    for side, fit in (("left", left), ("right", right)):
+        if fit is not None:
+            coeffs[side] = np.array(fit.coeffs_px, float)
+            confs[side] = t.pipeline.line_confidence(fit)
+    for side, other, i in (("left", "right", 0), ("right", "left", 1)):
+        if side not in coeffs:  # infer from the other line and the tracked lane width
+            coeffs[side] = t.inferred_line(coeffs[other], track, i, search.top_px, spread)
+            confs[side] = round(0.5 * confs[other], 3)
+            widened = " at the car, widened ahead as its double stripes" if spread is not None else ""
+            width = "the tracked width" if track is not None else "the width seen before the loss"
+            notes.append(f"{side} line inferred from the {other} line and {width}{widened}")
+    if track is None and (left is None or right is None):  # restarted from one line
+        s.restart_width = s.lost_track.width_m
+    accepted = Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
+                        search.top_px, s.frame, (left is None, right is None))
+    s.history.append(accepted)
+    s.trend.append(accepted)
+    s.inferred_run = [0 if t.reach_car(fit) else run + 1 for run, fit in zip(s.inferred_run, (left, right))]
+    # a line placed the shoulder inside the asphalt edge is no paint seen: its paint is still
+    # missing, and the width at the car is not measured on it
+    seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
+    at_car = [_paint_at_car(t, fit, run) for fit, run in zip(seen, s.faded_run)]
+    s.faded_run = [0 if near else run + 1 for run, near in zip(s.faded_run, at_car)]
+    bent = t.checks_of_track.bent_gap
+    if (t.reach_car(seen[0]) and t.reach_car(seen[1])  # both seen at the car: measured there
+            and not any(bent(fit, track, i) for i, fit in enumerate(seen))):
+        s.seen_widths.append(normal_width_m(coeffs["left"], coeffs["right"], t.bottom, t.xm, t.ym))
+    if s.base_history.maxlen:
+        s.base_history.append(t.bases((coeffs["left"], coeffs["right"])))
+    s.lost = s.blind = 0
+    s.conf = (confs["left"], confs["right"])
+    for i, fit in enumerate((left, right)):
+        if fit is not None:  # an inferred line keeps the side's kind
+            s.edge[i] = bool(search.edge[i])
+    kinds = tuple("inferred" if fit is None else line_source(search, i) for i, fit in enumerate((left, right)))
+    return _result(t, t.lane, s.conf, search.method, {"left": left, "right": right}, best, notes, images, kinds)
+
+
+def hold_or_lose(t: "LaneTracker", best: Candidate, track, images: dict, blind: bool) -> FrameResult:
+    """Count a frame that kept no line (``blind``: no search saw any line) and return its
+    result: the predicted lane held, or no lane once the hold is over (the track forgotten)."""
+    s, cfg = t.state, t.config
+    notes = list(best.why)
+    if track is not None and (note := _hold(t, blind)):
+        counted = s.lost - s.blind
+        share = (1.0 - counted / (cfg.hold_frames + 1)) * (1.0 - s.blind / (cfg.blind_hold_frames + 1))
+        notes.append(note)
+        confs = tuple(round(c * share, 3) for c in s.conf)
+        return _result(t, track, confs, "hold", {}, best, notes, images, ("held", "held"))
+    if track is not None:
+        blinds = f" beside {s.blind} frames with nothing seen" if s.blind else ""
+        notes.append(f"lane lost for more than {cfg.hold_frames} frames{blinds}; tracker reset")
+        t.forget_track()
+    else:
+        s.lost += 1
+    reason = "; ".join(notes) or "no lane"
+    left, right = LineFit(None, reason=reason), LineFit(None, reason=reason)
+    return FrameResult(left, right, t.pipeline.measure(left, right), best.search.method,
+                       0.0, 0.0, reason, best.search, images)
+
+
+def _hold(t: "LaneTracker", blind: bool) -> str:
+    """Count one more frame without a lane and return the note of its hold, or "" when the hold
+    is over. A blind frame uses the ``blind_hold_frames`` first and does not count toward
+    ``hold_frames``; any other, or one beyond those, counts toward it."""
+    s, cfg = t.state, t.config
+    if blind and s.blind < cfg.blind_hold_frames:
+        s.lost += 1
+        s.blind += 1
+        return f"holding the last good lane (nothing seen: {s.blind} of {cfg.blind_hold_frames} blind frames)"
+    counted = s.lost - s.blind
+    if counted >= cfg.hold_frames:
+        return ""
+    s.lost += 1
+    return f"holding the last good lane ({counted + 1} of {cfg.hold_frames} frames)"
+
+
+def _paint_at_car(t: "LaneTracker", fit: LineFit | None, faded_run: int) -> bool:
+    """Return whether ``fit`` is paint seen at the car; on a side whose paint has been missing
+    at the car for ``faded_run`` accepted frames, only when its pixels reach within
+    ``return_gap_m`` of the bottom row (returning paint seen farther ahead is joined nearer the
+    car to the line placed inside the asphalt edge)."""
+    if not t.reach_car(fit):
+        return False
+    return not faded_run or fit.gap_px * t.ym <= t.config.return_gap_m
+
+
+def _result(t: "LaneTracker", coeffs, confs, method: str, sources: dict, best: Candidate,
+            notes: list[str], images: dict, kinds: tuple[str, str]) -> FrameResult:
+    fits = []
+    for side, c in zip(SIDES, coeffs):
+        src = sources.get(side)
+        fits.append(LineFit(tuple(float(v) for v in c), src.n_pixels if src else 0,
+                            src.span_px if src else 0.0, "" if src else _note_for(side, notes)))
+    left, right = fits
+    return FrameResult(left, right, t.pipeline.measure(left, right), method,
+                       float(confs[0]), float(confs[1]), "; ".join(notes), best.search, images,
+                       sources=kinds)
+
+
+def _note_for(side: str, notes: list[str]) -> str:
+    """Return the notes about one line (why it was inferred or held)."""
+    mine = [n for n in notes if n.startswith(side) or n.startswith("holding")]
+    return "; ".join(mine) or "not detected in this frame"
