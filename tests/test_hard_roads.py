@@ -350,37 +350,6 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
     assert sum(src == "shoulder" for _, src, _ in returning) >= 18, returning
 
 
-def test_a_line_seen_only_ahead_in_shade_is_joined_to_its_track_near_the_car():
-    """country.mp4, frames 12-30 (the first bend, tree shade over the road near the car): the
-    right line (frames 13-16) and the left line (24-30) are seen only 4-8 m ahead. Extrapolated
-    to the car their fits lay 11-39 cm off there (4 false lines: 14-16 and 28, with
-    ``tracking.near_gap_m=0``). By default (``near_gap_m`` 1 m on a bend: the tracked line bends
-    more than ``near_gap_bend_m`` over the gap) each is joined nearer the car to the line
-    inferred from the other line where that one reaches the car: two false lines are left.
-    Frame 13, whose left line is not found (nothing near the car to join to: the right line is
-    extrapolated, 0.81 of its points right, 0.86 before the change moved the smoothed track).
-    Frame 17, whose left line is inferred: frame 16's pair, both lines seen after an inferred
-    one and checked on their own, narrows ahead as a pitched flat view's lane does over the
-    crest (``TrackerConfig.pitched_start_frames``) and is kept, and the width inferred from it
-    the next frame is off."""
-    def false_lines(settings):
-        cfg = override(PipelineConfig(), list(settings))
-        pipe = LanePipeline(cfg, calibration_from_truth(COUNTRY))
-        truth, tracker, out = load_video_truth(COUNTRY), LaneTracker(pipe), []
-        with VideoReader(COUNTRY) as reader:
-            for i, frame in enumerate(reader):
-                result = tracker.update(frame)
-                if i > 30:
-                    break
-                if i >= 12 and score_frame(pipe, result, truth.frames[i]).fp_lines:
-                    out.append(i)
-        return out
-
-    assert false_lines([]) == [13, 17]
-    assert false_lines(["tracking.pitched_start_frames=0"]) == [13]
-    assert false_lines(["tracking.near_gap_m=0"]) == [14, 15, 16, 28]
-
-
 def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_edge():
     """A faded line's paint seen again only on rows 200-450 of the view (none on the car's rows
     451-719), and the line placed the shoulder inside the asphalt edge: within 5 px of the line
