@@ -11,29 +11,28 @@ per-frame engine only: runs over image folders and videos are ``batch.process_im
 """
 from __future__ import annotations
 
-import functools
-from dataclasses import replace
-
 import cv2
 import numpy as np
 
 from . import draw, thresholds
+from .bands import Bands
 from .camera import Calibration, Undistorter
 from .checks import LaneCheck, check_lane, holds_from_px, search_bands_px
 from .config import PipelineConfig
 from .errors import InputError
-from .fit import joined_fit, measure, offset_line
-from .lines import vote
-from .lines.trace import find_lines
+from .fit import measure
+from .lines.detect import LinesSetup, find_every_line, row_weights
 from .params import LinesConfig
 from .perspective import LinesView, Perspective, scaled
+from .proposers import Candidate, FallbackMasks, Frame, OtherPeaks, ShorterViews, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
-from .result import FrameResult, LinesResult, Rejected, image_line, line_confidence
-from .roads.edge import road_edge
-from .search import candidate_bases, fit_side, histogram, search_around, sliding_windows
+from .result import FrameResult, LinesResult, Rejected, line_confidence
+from .roads.proposers import AsphaltEdge
+from .search import search_around, sliding_windows
 
 
-BAND_STRIPS = 4  # strips in which band_binary computes the bands around prior fits
+# where a single image's lane is looked for again when its first search fails (``detect``)
+DETECT_PROPOSERS = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())
 
 
 class LanePipeline:
@@ -64,14 +63,10 @@ class LanePipeline:
         self.raw_to_birdseye = self.lens.inverse + self.perspective
         self.birdseye_to_raw = self.raw_to_birdseye.inverse
         self._birdseye_maps = self.raw_to_birdseye.remap_maps(self.size)
-        self._context_px = thresholds.context_px(config.thresholds)
         self._clahe = thresholds.make_clahe(config.thresholds, self.size)  # None when off
-        self._context_masks = tuple(n for n in thresholds.rule_masks(config.thresholds)
-                                    if thresholds.mask_context_px(getattr(config.thresholds, n)) != (0, 0))
+        self._bands = Bands(config.thresholds, config.search.prior_margin_px, self._birdseye_maps, self.size)
         self.car_x_px = self.perspective.car_x_px
-        self._lines_view = None  # (view, remap maps, thresholds), made by the first detect_lines
-        self._lines_to_raw = None  # the lines view's transform back to the raw frame, made with it
-        self._lines_seen = None  # the lines view's pixels that see the frame, away from its edge
+        self._lines: LinesSetup | None = None  # the lines view, made by the first detect_lines
         self._lines_weights = None  # how much each row of the lines view counts in the vote
 
     def __reduce__(self):
@@ -144,86 +139,13 @@ class LanePipeline:
     # ---- one frame ------------------------------------------------------------------------
 
     def band_binary(self, raw: np.ndarray, prior: tuple[LineFit, LineFit]) -> np.ndarray:
-        """Return the lane-pixel mask of a RAW frame near the ``prior`` fits only (0 elsewhere).
-
-        Inside the bands that ``search.search_around`` reads (``prior_margin_px`` either side of
-        each found prior line) the mask equals ``binary(birdseye(raw))``. The view is cut into
-        ``BAND_STRIPS`` horizontal strips; in each, the pieces of band, grown by the border
-        ``thresholds.context_px`` asks for, are laid side by side (in x order, so a piece cut by
-        the image's edge keeps that edge) and remapped and thresholded in one call each. On a
-        tracked video frame that is about 40 % of the bird's-eye view. With
-        ``thresholds.clahe`` on (CLAHE depends on the whole view) the whole view is thresholded
-        and the bands are cut from it.
-        """
+        """Return the lane-pixel mask of a RAW frame near the ``prior`` fits only (0 elsewhere):
+        inside the bands that ``search.search_around`` reads it equals ``binary(birdseye(raw))``
+        (``bands.Bands.mask``). With ``thresholds.clahe`` on (CLAHE depends on the whole view) the
+        whole view is thresholded and the bands are cut from it."""
         self.undistorter.check(raw)
-        w, h = self.size
-        margin = self.config.search.prior_margin_px
-        cx, cy = self._context_px
-        m1, m2 = self._birdseye_maps
         whole = self.binary(self.birdseye(raw)) if self._clahe is not None else None
-        mask = np.zeros((h, w), np.uint8)
-        edges = np.linspace(0, h, BAND_STRIPS + 1).round().astype(int)
-        for y0, y1 in zip(edges[:-1], edges[1:]):
-            rows = np.arange(y0, y1, dtype=np.float64)
-            spans = []
-            for fit in prior:
-                if fit.found:
-                    xs = fit.x_at(rows)
-                    lo = max(0, int(np.floor(xs.min() - margin)))
-                    hi = min(w, int(np.ceil(xs.max() + margin)) + 1)
-                    if lo < hi:
-                        spans.append([lo, hi])
-            pieces: list[list[int]] = []  # [lo, hi] of band columns; the grown box is lo-cx..hi+cx
-            for lo, hi in sorted(spans):
-                if pieces and lo - cx <= pieces[-1][1] + cx:
-                    pieces[-1][1] = max(pieces[-1][1], hi)
-                else:
-                    pieces.append([lo, hi])
-            if not pieces:
-                continue
-            if whole is not None:
-                for lo, hi in pieces:
-                    mask[y0:y1, lo:hi] = whole[y0:y1, lo:hi]
-                continue
-            b0, b1 = max(0, y0 - cy), min(h, y1 + cy)
-            boxes = [(max(0, lo - cx), min(w, hi + cx)) for lo, hi in pieces]
-            # each box remapped into its place on the canvas (no stacked copy of the maps)
-            grown = np.empty((b1 - b0, sum(a1 - a0 for a0, a1 in boxes), raw.shape[2]), np.uint8)
-            x = 0
-            for a0, a1 in boxes:
-                cv2.remap(raw, m1[b0:b1, a0:a1], m2[b0:b1, a0:a1], cv2.INTER_LINEAR,
-                          dst=grown[:, x:x + a1 - a0])
-                x += a1 - a0
-            cuts, x = [], 0  # where each piece's band lies in the grown canvas
-            for (lo, hi), (a0, a1) in zip(pieces, boxes):
-                cuts.append((slice(y0 - b0, y1 - b0), slice(x + lo - a0, x + hi - a0)))
-                x += a1 - a0
-            part = self._band_threshold(grown, cuts)
-            x = 0
-            for lo, hi in pieces:
-                mask[y0:y1, lo:hi] = part[:, x:x + hi - lo]
-                x += hi - lo
-        return mask
-
-    def _band_threshold(self, grown: np.ndarray, cuts: list[tuple[slice, slice]]) -> np.ndarray:
-        """Return the combined mask of the band pieces ``cuts`` of a grown canvas, side by side.
-
-        Masks that look beyond a pixel (Sobel, top-hat) are computed on the grown canvas and cut;
-        colour masks only on the pieces themselves. With a closing or opening of the combined
-        mask everything is computed on the grown canvas.
-        """
-        tconf = self.config.thresholds
-        join = (lambda parts: parts[0]) if len(cuts) == 1 else np.hstack
-        if tconf.open_px > 1 or tconf.close_px > 1:
-            full = thresholds.combine(grown, tconf)
-            return join([full[c] for c in cuts])
-        channels = thresholds.Channels(grown)
-        computed = {}
-        for name in self._context_masks:
-            m = thresholds.mask(channels, getattr(tconf, name))
-            computed[name] = join([m[c] for c in cuts])
-        pieces = channels.cut(cuts, join)  # the colour spaces those masks converted, cut too
-        return thresholds.combine(pieces.rgb, tconf, computed, channels=pieces)
+        return self._bands.mask(raw, prior, whole)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                      keep_images: bool = False, top_px: int = 0) -> tuple[LaneSearch, dict]:
@@ -254,69 +176,55 @@ class LanePipeline:
 
         The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
         checks is not found, and is kept apart in ``rejected``. Without a ``prior``, a lane of
-        the whole view that fails is looked for again: on the fallback masks
-        (``ThresholdConfig.fallback_rule``) in the whole view, then in shorter views
-        (``short_view_search``), then from other histogram peaks (``robust_search``, when
-        ``candidates`` > 1), then, when one line was found and the other side has no paint
-        line, with the asphalt edge on that side (``edge_search``).
+        the whole view that fails is looked for again by the proposers that need no track
+        (``DETECT_PROPOSERS``, ``proposers.choose``, the tracker's chain): the fallback masks
+        (``ThresholdConfig.fallback_rule``) in the whole view, shorter views, other histogram
+        peaks (``candidates`` > 1), and, when one line was found and the other side has no
+        paint, the asphalt edge on that side. The first whose two lines pass is taken.
         """
         search, images = self.search_frame(raw, prior, keep_images)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        mask = images["binary"]
-        retry = None
-        if self.has_fallback_masks:
-            mask = self.binary(images["birdseye"], fallback=True)
-            whole = self.search(mask)
-            if whole.left.found and whole.right.found and self.check(whole).ok:
-                retry = whole
-        if retry is None:
-            retry = self.short_view_search(mask)
-        if retry is None and self.config.search.candidates > 1:
-            retry = self.robust_search(mask, search)
-        if retry is None:
-            retry = self.edge_search(images["birdseye"], search)
-        if retry is None:
-            return result
-        if keep_images:
-            images["binary"] = mask  # the views show the mask the lane came from
-        return self.result(retry, images if keep_images else {})
+        frame = Frame(self, raw, self._passing, images, first=search)
+        best = choose(frame, DETECT_PROPOSERS).search
+        if best is not search and keep_images:
+            images["binary"] = frame.mask()  # the views show the mask the lane came from
+        images.pop("fallback binary", None)
+        return result if best is search else self.result(best, images if keep_images else {})
+
+    def _passing(self, search: LaneSearch) -> Candidate:
+        """Return a search judged as a single image: both lines, or none when not both pass."""
+        if passes(self, search):
+            return Candidate(search, search.left, search.right, [], False)
+        return Candidate(search, None, None, [], False)
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
         """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
-        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked
-        (with the view's transform back to the raw frame, ``_lines_to_raw``, and the view's pixels
-        that see the frame away from its edge, ``_lines_seen``)."""
-        if self._lines_view is None:
+        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked,
+        with its transform back to the raw frame and its pixels that see the frame away from its
+        edge (``lines.detect.LinesSetup``)."""
+        if self._lines is None:
             lc = self.config.lines
             view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px, lc.view_ahead_m,
                              lc.view_ym_per_px)
             raw_to_view = self.lens.inverse + view
             tconf = thresholds.scaled(self.config.thresholds, view.scale_from_ego)
             maps = raw_to_view.remap_maps(view.size)
-            self._lines_view = (view, maps, tconf)
-            self._lines_to_raw = raw_to_view.inverse
             # where the view sees the frame, away from its edge: the edge of the frame is no paint
             seen = cv2.remap(np.full(self.size[::-1], 255, np.uint8), maps[0], maps[1], cv2.INTER_NEAREST,
                              borderMode=cv2.BORDER_CONSTANT, borderValue=0)
             edge = 2 * tconf.line_tophat.width_px + 1
-            self._lines_seen = cv2.erode(seen, np.ones((3, edge), np.uint8))
-        return self._lines_view
+            self._lines = LinesSetup(view, maps, tconf, raw_to_view.inverse,
+                                     cv2.erode(seen, np.ones((3, edge), np.uint8)))
+        return self._lines.view, self._lines.maps, self._lines.tconf
 
     def lines_row_weights(self) -> np.ndarray:
-        """Return how much each row of the lines view counts in the vote (``LinesConfig``:
-        ``row_weight_full``, ``row_weight_power``): the raw frame's rows it sees, over
-        ``row_weight_full`` and at most 1, to the power ``row_weight_power``. A far row of the
-        view is stretched from a fraction of one raw row, so a speck there would otherwise vote
-        along metres of road. Made once, with the view."""
+        """Return how much each row of the lines view counts in the vote
+        (``lines.detect.row_weights``); made once, with the view."""
         if self._lines_weights is None:
-            view, _, _ = self.lines_view()
-            lc = self.config.lines
-            rows = np.arange(view.size[1], dtype=np.float64)
-            pts, ok = self._lines_to_raw.checked(np.column_stack([np.full(len(rows), view.car_x_px), rows]))
-            seen = np.where(ok, np.abs(np.gradient(pts[:, 1])), 0.0)
-            self._lines_weights = np.clip(seen / lc.row_weight_full, 0.0, 1.0) ** lc.row_weight_power
+            self.lines_view()
+            self._lines_weights = row_weights(self._lines, self.config.lines)
         return self._lines_weights
 
     def detect_lines(self, raw: np.ndarray, config: LinesConfig | None = None,
@@ -324,141 +232,18 @@ class LanePipeline:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
 
         The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
-        looked for in the lines view (``lines_view``: by default 28 m across and 150 m ahead), masked
-        by the rule of the thresholds rescaled to it (not at the edge of the frame), by
-        ``lines.trace.find_lines`` or ``lines.vote.vote_lines`` (``LinesConfig.method``), and mapped back to
-        the raw frame over the span where each is seen (``result.image_line``). ``keep_images``
-        keeps the view ("lines_birdseye") and its mask ("lines_binary"). ``config``: the search's
-        parameters (default: ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V``
-        tune ``predict``). ``ego=False`` skips
-        ``detect`` (a third of the time) and leaves ``LinesResult.ego`` None.
+        looked for in the lines view (``lines_view``: by default 28 m across and 150 m ahead) by
+        ``lines.detect.find_every_line``. ``keep_images`` keeps the view ("lines_birdseye") and
+        its mask ("lines_binary"). ``config``: the search's parameters (default:
+        ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V`` tune ``predict``).
+        ``ego=False`` skips ``detect`` (a third of the time) and leaves ``LinesResult.ego`` None.
         """
         config = self.config.lines if config is None else config
         ego_result = self.detect(raw) if ego else None
-        view, maps, tconf = self.lines_view()
-        bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
-        mask = thresholds.combine(bird, tconf)
-        if config.tophat_low and tconf.line_tophat.enabled:  # far paint: blurred, dimmer
-            far = replace(tconf.line_tophat, low=min(config.tophat_low, tconf.line_tophat.low))
-            low = thresholds.mask(bird, far)
-            top = max(0, int(view.bottom_px - config.near_m / view.ym_per_px))
-            half = int(config.near_half_width_m / view.xm_per_px)
-            cx = int(view.car_x_px)
-            low[top:, max(0, cx - half):cx + half] = 0
-            mask = cv2.bitwise_or(mask, low)
-        wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
-        mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
-        mask = cv2.bitwise_and(mask, self._lines_seen)
-        to_raw = functools.partial(image_line, view_to_raw=self._lines_to_raw, car_x_px=view.car_x_px,
-                                   bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
-        refused: tuple = ()
-        if config.method == "vote":
-            weights = self.lines_row_weights() if config.row_weight_power > 0 else None
-            weighed = vote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
-            found = vote.reported(weighed, config, mask.shape[0], view.ym_per_px)
-            refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
-        else:
-            found = find_lines(mask, config, view.xm_per_px, view.ym_per_px)
-        images = {"lines_birdseye": bird, "lines_binary": mask} if keep_images else {}
-        return LinesResult(tuple(to_raw(line) for line in found), ego_result, images, refused)
-
-    def short_view_search(self, binary: np.ndarray) -> LaneSearch | None:
-        """Return the first search in a shorter look-ahead whose lane passes the checks, or None.
-
-        For a frame without a track whose whole view failed its checks: sliding windows over the
-        lower ``SearchConfig.short_views`` shares of the view in turn (a tight bend's lane stays
-        in a shorter view; ``search.lookahead_top_px``). Its search's ``top_px`` says which.
-        """
-        h = self.size[1]
-        for share in self.config.search.short_views:
-            search = self.search(binary, top_px=int(round(h * (1.0 - share))))
-            if search.left.found and search.right.found and self.check(search).ok:
-                return search
-        return None
-
-    def robust_search(self, binary: np.ndarray, first: LaneSearch) -> LaneSearch | None:
-        """Return the first search from other histogram peaks whose lane passes the checks, or None.
-
-        The robust path (``SearchConfig.candidates``), for a frame whose search from the
-        strongest peaks failed its checks (a seam, a kerb or a shadow edge took a line): sliding
-        windows from each pair of the ``candidates`` strongest peaks on each side
-        (``search.candidate_bases``), the pairs with the stronger peaks first, skipping the pair
-        already tried. Its search's ``method`` is "robust".
-        """
-        sc = self.config.search
-        hist = histogram(binary, sc.histogram_fraction)
-        lefts, rights = candidate_bases(hist, self.car_x_px, sc.candidates, sc.margin_px)
-        pairs = sorted(((l, r) for l in lefts for r in rights),
-                       key=lambda p: -(int(hist[int(p[0])]) + int(hist[int(p[1])])))
-        for bases in pairs:
-            if first.bases_px == bases:
-                continue
-            search = sliding_windows(binary, sc, bases=bases, car_x=self.car_x_px)
-            if self.check(search).ok and search.left.found and search.right.found:
-                return replace(search, method="robust")
-        return None
-
-    def edge_search(self, bird: np.ndarray, search: LaneSearch, guide_px=None,
-                    range_m: tuple[float, float] | None = None,
-                    shoulder_m: float | None = None) -> LaneSearch | None:
-        """Return ``search`` with its missing line replaced by the asphalt edge on that side,
-        when the lane then passes the checks; else None.
-
-        Only for a search that found one line, which passes its own check, and no paint at all
-        on the other side (its fit not found): a painted line that is seen is never replaced.
-        The edge (``roads.edge.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
-        ``bird``, between ``range_m`` from ``guide_px``: by default a lane's width from the found
-        line) is then checked with the found line as a lane (``check``: width within the
-        road's range, parallel, equally curved) over the rows where the edge is seen (the
-        search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
-        beyond); its search's ``edge`` flags the side. With ``shoulder_m`` (a painted line faded
-        out, ``roads.tracked.Shoulder``) the line is placed that far inside the edge, along its
-        normal (``fit.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
-        (one second-order fit to both), the look-ahead and the other line kept; the search's
-        ``shoulder`` flags the side instead, and it is returned unchecked: the tracker checks it
-        against its track (the lane's width ahead, which a grade changes in the flat view).
-        """
-        cfg = self.config.edge
-        if not cfg.enabled or search.left.found == search.right.found:
-            return None
-        side, other = ("right", search.left) if search.left.found else ("left", search.right)
-        first = self.check(search)
-        if first.left or first.right:
-            return None
-        p = self.perspective
-        fit, _ = road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, self.config.checks,
-                           cfg, search.top_px, guide_px, range_m)
-        if not fit.found:
-            return None
-        h = self.size[1]
-        seen_top = max(search.top_px, int(h - 1 - fit.gap_px - fit.span_px))
-        if shoulder_m is not None:
-            # the painted line the shoulder inside the edge where the edge is seen, joined beyond
-            # it to the guide (one second-order fit to both); the look-ahead and the other line
-            # are kept
-            inward = -shoulder_m if side == "right" else shoulder_m
-            placed = offset_line(fit.coeffs_px, inward, p.xm_per_px, p.ym_per_px, h, seen_top)
-            if seen_top > search.top_px and guide_px is not None:
-                near = np.arange(float(seen_top), float(h))
-                far = np.arange(float(search.top_px), float(seen_top))
-                placed = joined_fit(near, np.polyval(placed, near), guide_px, far, h)
-            return replace(search, **{side: replace(fit, coeffs_px=tuple(placed))},
-                           shoulder=(side == "left", side == "right"))
-        # the look-ahead ends where the edge is seen: its fit is not extrapolated beyond, and
-        # the other line is refitted on its pixels there (an S-bend's two halves are not one
-        # second-order curve: the whole view's fit would not be parallel to the edge's)
-        top = seen_top
-        fits = {side: fit}
-        if top > search.top_px:
-            ys, xs = search.right_pixels if side == "left" else search.left_pixels
-            near = ys >= top
-            refit, _ = fit_side((ys[near], xs[near]), "left" if side == "right" else "right",
-                                self.size[1], self.config.search, "no lane pixels")
-            if not refit.found:
-                return None
-            fits["left" if side == "right" else "right"] = refit
-        found = replace(search, **fits, edge=(side == "left", side == "right"), top_px=top)
-        return found if self.check(found).ok else None
+        self.lines_view()
+        weights = self.lines_row_weights() if config.method == "vote" and config.row_weight_power > 0 else None
+        lines, images, refused = find_every_line(raw, self._lines, config, weights)
+        return LinesResult(lines, ego_result, images if keep_images else {}, refused)
 
     def result(self, search: LaneSearch, images: dict | None = None) -> FrameResult:
         """Return the FrameResult of a search: its fits if they pass ``check``, else not found.

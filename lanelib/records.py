@@ -84,7 +84,7 @@ class LaneSearch:
     # (left, right): the line is the unpainted asphalt edge (``road_edge``), not paint
     edge: tuple[bool, bool] = (False, False)
     # (left, right): the line is placed a remembered shoulder inside the asphalt edge (its paint
-    # faded out, ``roads.tracked.Shoulder``), not seen
+    # faded out, ``roads.proposers.Shoulder``), not seen
     shoulder: tuple[bool, bool] = (False, False)
 
 

@@ -67,7 +67,7 @@ class FrameResult:
     not found or rejected). ``sources`` says where each reported line comes from: "seen" (paint
     found in this frame), "edge" (the unpainted asphalt edge, ``roads.edge.road_edge``), "shoulder"
     (a faded painted line placed its measured shoulder inside the asphalt edge,
-    ``roads.tracked.AsphaltEdge``, ``roads.tracked.Shoulder``), "inferred" (from the other line and the tracked width),
+    ``roads.proposers.AsphaltEdge``, ``roads.proposers.Shoulder``), "inferred" (from the other line and the tracked width),
     "held" (from earlier frames), "" (no line).
     ``images`` holds the stage images (undistorted, birdseye, binary,
     search, result) when the pipeline was asked to keep them.

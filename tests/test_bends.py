@@ -20,6 +20,7 @@ from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.records import LineFit
 from lanelib.search import lookahead_top_px
+from lanelib.proposers import short_view_search
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280
@@ -58,7 +59,7 @@ def test_a_50m_bend_is_found_in_a_short_view_and_not_in_the_whole_view(pipe):
     mask = pipe.binary(bird)
     whole = pipe.search(mask)
     assert not (whole.left.found and whole.right.found and pipe.check(whole).ok)
-    short = pipe.short_view_search(mask)
+    short = short_view_search(pipe, mask)
     assert short is not None and short.top_px > 0
     # the fits follow the true circle (within 0.15 m) over the rows their pixels span: the windows
     # lose a line steeper than about one px per row (0.18 m per m of road, 9 m ahead on a 50 m

@@ -19,7 +19,7 @@ from lanelib.params import EdgeConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.roads.edge import road_edge
 from lanelib.roads.stripes import stripe_spread
-from lanelib.roads.tracked import joined_paint, near_grid, road_view_top, shoulder_beside
+from lanelib.roads.proposers import joined_paint, near_grid, road_view_top, shoulder_beside
 from lanelib.synth import CarPose, CurvatureProfile, GroundGrid, Renderer, Scene
 from lanelib.synth.sets import SUNNY, country_layout
 from lanelib.synth.truth import lane_truth, load_video_truth
@@ -235,7 +235,7 @@ def _painted_edge_view(shoulder_m: float = 0.35) -> tuple[np.ndarray, float, flo
 
 def test_the_shoulder_beyond_a_painted_line_is_measured_within_a_few_cm():
     """A white right line 0.35 m inside the asphalt edge (grass beyond): the tracker measures the
-    shoulder from the line out to the edge (``roads.tracked.shoulder_beside``, the rows within
+    shoulder from the line out to the edge (``roads.proposers.shoulder_beside``, the rows within
     ``shoulder_near_m`` of the car) within 2 cm, from the line's fit or its pixels; with grey,
     road-like surface beyond (a barrier) no shoulder is measured."""
     from lanelib.records import LineFit
@@ -322,7 +322,7 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
     the flat view widens the lane ahead there. Extrapolated to the car, or joined to the line
     inferred from the double yellow, it lay 15-47 cm inside the truth at the car (13 false lines
     in 210-223); joined nearer the car to the line placed inside the asphalt edge
-    (``roads.tracked.joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false."""
+    (``roads.proposers.joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     truth = load_video_truth(COUNTRY)
     tracker, h, errors, sources, returning = LaneTracker(pipe), pipe.size[1], [], [], []
@@ -355,7 +355,7 @@ def test_returning_paint_ahead_is_joined_to_the_line_placed_inside_the_asphalt_e
     451-719), and the line placed the shoulder inside the asphalt edge: within 5 px of the line
     near the car, bending off it ahead (joined beyond the edge to a line inferred from the other
     one, which does not follow the flat view's widening in a sag), 9-19 px off on rows 200-350.
-    The joined line (``roads.tracked.joined_paint``) lies within 3 px of the line on every row,
+    The joined line (``roads.proposers.joined_paint``) lies within 3 px of the line on every row,
     and counts the paint's pixels and rows with the edge's; too few paint pixels give none."""
     from lanelib.records import LineFit
     tracker = LaneTracker(LanePipeline(PipelineConfig()))
@@ -425,7 +425,7 @@ def _truth_lines_in_view(pipe: LanePipeline, lane) -> tuple[tuple[np.ndarray, np
 def test_the_road_view_ends_at_the_rendered_crest_of_country(frame):
     """country.mp4 where the road crests a hill while turning (frames 116-160): beyond the crest
     the view's far rows hold grass and the road farther round the turn. Between the truth lines,
-    the road seen from the car (``roads.tracked.road_view_top``) ends within 0.6 m (18 rows)
+    the road seen from the car (``roads.proposers.road_view_top``) ends within 0.6 m (18 rows)
     beyond the truth's crest row (the last row where the lines are seen), and not before it."""
     pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
     lines, crest = _truth_lines_in_view(pipe, load_video_truth(COUNTRY).frames[frame])

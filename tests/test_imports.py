@@ -183,7 +183,7 @@ LAYERS = [
     {"lanelib.params"},                     # every parameter record (imports only errors)
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.records", "lanelib.fit", "lanelib.search", "lanelib.checks",
-     "lanelib.result", "lanelib.draw",                      # stages
+     "lanelib.result", "lanelib.draw", "lanelib.proposers", "lanelib.bands",  # stages
      "lanelib.roads", "lanelib.lines"},                     # hard-road parts; every line in view
     {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry"},
     {"lanelib.data"},
@@ -217,7 +217,7 @@ def test_imports_go_down_the_layers(module):
 
 # the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it
 CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.records", "lanelib.fit",
-        "lanelib.search", "lanelib.checks",
+        "lanelib.search", "lanelib.checks", "lanelib.proposers", "lanelib.bands",
         "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
         "lanelib.hough", "lanelib.config", "lanelib.pipeline", "lanelib.tracking", "lanelib.tracking.state",
         "lanelib.tracking.judge", "lanelib.tracking.proposers", "lanelib.tracking.update",
@@ -226,7 +226,7 @@ EXTENSIONS = ("lanelib.autogeometry", "lanelib.roads", "lanelib.lines")
 # the core modules that still call a hard-road or every-line part by name, and which: the search
 # narrows a double line to its inner stripe (``SearchConfig.double_line_px``), a lines result
 # holds ``ViewLine``s, the pipeline runs the asphalt edge and the every-line search, the tracker
-# its hard-road proposers (``roads.tracked``) and its checks the stripes' spread. Nothing else
+# its hard-road proposers (``roads.proposers``) and its checks the stripes' spread. Nothing else
 # of the core may reach them.
 CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.result": {"lanelib.lines"},
               "lanelib.pipeline": {"lanelib.roads", "lanelib.lines"},

@@ -49,7 +49,7 @@ class EdgeConfig:
         from the other line, which the flat view changes with distance on a pitched road.
     trace_gap_m : the trace ends after this much road (m) without an edge point.
     max_shoulder_m : how far (m) beyond a painted line its asphalt edge is looked for, to
-        measure the shoulder between them (``roads.tracked.Shoulder``).
+        measure the shoulder between them (``roads.proposers.Shoulder``).
     """
 
     enabled: bool = True
@@ -193,7 +193,7 @@ class LinesConfig:
 @dataclass(frozen=True)
 class TrackerConfig:
     """Parameters of ``LaneTracker`` (the checks every lane passes are ``params.LaneChecks``); the parts
-    named are in ``lanelib.tracking`` and ``lanelib.roads.tracked``.
+    named are in ``lanelib.tracking`` and ``lanelib.roads.proposers``.
 
     Parameters
     ----------
@@ -259,12 +259,12 @@ class TrackerConfig:
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
     road_view_run_m : 0 (off), or the least run (m of road) of rows whose lane interior does not
         look like the road near the car that ends the look-ahead of a frame whose lines were
-        refused (``roads.tracked.RoadView``). 1 m: a patch of dirt or a shadow's tinted
+        refused (``roads.proposers.RoadView``). 1 m: a patch of dirt or a shadow's tinted
         edge across one or two rows does not; a crest's grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
     shoulder_frames : 0 (off), or the newest measurements of a painted line's shoulder (the
-        distance from the paint out to the asphalt edge beyond it, ``roads.tracked.Shoulder``) that are remembered;
+        distance from the paint out to the asphalt edge beyond it, ``roads.proposers.Shoulder``) that are remembered;
         the shoulder is their median once half of them are in and they agree within
         ``shoulder_spread_m``, and a line whose paint then fades out is placed that far inside
         the asphalt edge.

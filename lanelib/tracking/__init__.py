@@ -14,7 +14,7 @@ debug composite work on it unchanged. Per frame:
    (``judge.TrackChecks``).
 4. **Propose.** While no pair passes, the proposers look again, each where it has something
    to look for (``proposers``: windows from the track, remembered bases, re-acquisition,
-   fallback masks, shorter views, other peaks; ``roads.tracked``: the road seen from the car,
+   fallback masks, shorter views, other peaks; ``roads.proposers``: the road seen from the car,
    the asphalt edge, a faded line's shoulder). The best candidate is kept.
 5. **Infer.** A line lost is inferred from the other at the width seen at the car.
 6. **Smooth.** The reported lane is a weighted average of the last ``smooth_frames`` accepted
@@ -29,9 +29,8 @@ debug composite work on it unchanged. Per frame:
 The state carried between frames is one record, ``TrackState``: it can be compared, copied and
 pickled (the Dask joints of a video's segments use it).
 """
-from .candidate import Candidate
+from ..proposers import Candidate, Frame, Proposer
 from .judge import TrackChecks
-from .proposers import Frame, Proposer
 from .state import Accepted, LostTrack, TrackState
 from .tracker import PROPOSERS, LaneTracker
 from ..params.roads import TrackerConfig

@@ -20,7 +20,7 @@ from ..checks import gap_problem, line_problem, pair_problem, pitched_pair_probl
 from ..fit import joined_fit
 from ..records import LaneSearch, LineFit
 from ..roads.stripes import stripe_spread
-from .candidate import SIDES, Candidate
+from ..proposers import SIDES, Candidate
 from .start import pitched_start, restart
 
 

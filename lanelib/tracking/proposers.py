@@ -1,84 +1,21 @@
-"""Where the tracker looks again when a frame's first search does not give a lane.
+"""The proposers that read the track: where the tracker looks again in a frame.
 
-A proposer is any object with a ``name``, a ``rule`` and two methods:
-
-- ``where(frame)`` returns what to look for in this frame (a side, the bases, a row), or None
-  when the proposer has nothing to do here;
-- ``propose(frame, where)`` returns candidate searches, each with a note for the frame's
-  reason, in the order they are to be judged.
-
-``LaneTracker.update`` asks its proposers in order. Each candidate is judged by the track's
-checks (``judge.TrackChecks``) and taken under the proposer's ``rule``: "more lines" takes it
-when more of its lines pass than of the best so far; "a pair" takes it only when both pass. The
-first candidate taken ends the proposer's turn. The proposers here search the frame's mask
-again; the hard-road ones (the crest's road view, the asphalt edge, a faded line's shoulder)
-live in ``lanelib.roads.tracked``.
+The protocol and the chain are ``lanelib.proposers`` (``choose``), shared with a single image's
+``LanePipeline.detect``. These three need a track, or what the tracker remembers: windows
+started from the tracked lines, windows from the remembered bases where a histogram peak is
+weak, and the re-acquisition of a line inferred for several frames. The hard-road ones (the
+crest's road view, the asphalt edge, a faded line's shoulder) live in ``lanelib.roads.proposers``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from dataclasses import replace
 
 import numpy as np
 
 from ..fit import parallel_fits
+from ..proposers import Frame
 from ..records import LaneSearch, LineFit, Window
 from ..search import lane_pixels, search_around
-from .candidate import Candidate
-
-
-
-@dataclass
-class Frame:
-    """One frame as the proposers see it: the raw frame, the predicted lane ``track`` (None
-    without a track), the look-ahead's first row ``top``, the best candidate so far, the
-    searches run and the pipeline's images (its masks made once, when first asked)."""
-
-    tracker: "LaneTracker"
-    raw: np.ndarray
-    track: tuple[np.ndarray, np.ndarray] | None
-    top: int
-    prior: tuple[LineFit, LineFit] | None
-    images: dict
-    best: Candidate | None = None
-    first: LaneSearch | None = None
-    looked: list = field(default_factory=list)  # every search run: did any see a line?
-
-    def mask(self) -> np.ndarray:
-        """Return the whole view under the fallback masks' rule, thresholded once."""
-        pipe, images = self.tracker.pipeline, self.images
-        if "fallback binary" not in images:
-            if pipe.has_fallback_masks or "binary" not in images:
-                bird = images.get("birdseye")
-                images["fallback binary"] = pipe.binary(
-                    bird if bird is not None else pipe.birdseye(self.raw), fallback=True)
-            else:
-                images["fallback binary"] = images["binary"]
-        return images["fallback binary"]
-
-    def birdseye(self) -> np.ndarray:
-        """Return the frame's bird's-eye view, warped once."""
-        if self.images.get("birdseye") is None:
-            self.images["birdseye"] = self.tracker.pipeline.birdseye(self.raw)
-        return self.images["birdseye"]
-
-    def judge(self, search: LaneSearch, top_px: int | None = None) -> Candidate:
-        """Return what the track's checks keep of a search of this frame."""
-        return self.tracker.checks_of_track.judge(
-            search, self.track, search.top_px if top_px is None else top_px, self.mask,
-            self.tracker.state.restart_candidates[1])
-
-
-class Proposer(Protocol):
-    """Where to look again in a frame (see the module docstring)."""
-
-    name: str
-    rule: str  # "more lines" or "a pair"
-    moves_lookahead: bool  # a candidate taken sets the frame's look-ahead (its ``top_px``)
-
-    def where(self, frame: Frame) -> Any | None: ...
-
-    def propose(self, frame: Frame, where: Any) -> list[tuple[LaneSearch | None, str]]: ...
 
 
 class WindowsFromTrack:
@@ -90,7 +27,7 @@ class WindowsFromTrack:
         return frame.tracker.bases(frame.track) if frame.track is not None and not frame.best.pair else None
 
     def propose(self, frame: Frame, where):
-        return [(frame.tracker.pipeline.search(frame.mask(), bases=where, top_px=frame.top), "")]
+        return [(frame.pipeline.search(frame.mask(), bases=where, top_px=frame.top), "")]
 
 
 class RememberedBases:
@@ -116,7 +53,7 @@ class RememberedBases:
         return (out[0], out[1]) if weak else None
 
     def propose(self, frame: Frame, where):
-        return [(frame.tracker.pipeline.search(frame.mask(), bases=where),
+        return [(frame.pipeline.search(frame.mask(), bases=where),
                  "windows started from the remembered bases (weak histogram peak)")]
 
 
@@ -139,48 +76,6 @@ class Reacquire:
     def propose(self, frame: Frame, where):
         return [(reacquired(frame.tracker, frame.best.search, frame.mask(), frame.track, where,
                             frame.top), "")]
-
-
-class FallbackMasks:
-    """Without a track and no pair: the whole view on the fallback masks
-    (``ThresholdConfig.fallback_rule``)."""
-
-    name, rule, moves_lookahead = "fallback masks", "more lines", False
-
-    def where(self, frame: Frame):
-        ok = frame.track is None and not frame.best.pair and frame.tracker.pipeline.has_fallback_masks
-        return True if ok else None
-
-    def propose(self, frame: Frame, where):
-        return [(frame.tracker.pipeline.search(frame.mask()), "")]
-
-
-class ShorterViews:
-    """Without a track and no pair: shorter look-aheads (``SearchConfig.short_views``), where a
-    tight bend's lane stays in view."""
-
-    name, rule, moves_lookahead = "shorter views", "more lines", False
-
-    def where(self, frame: Frame):
-        pipe = frame.tracker.pipeline
-        return True if frame.track is None and not frame.best.pair and pipe.config.search.short_views else None
-
-    def propose(self, frame: Frame, where):
-        return [(frame.tracker.pipeline.short_view_search(frame.mask()), "")]
-
-
-class OtherPeaks:
-    """Without a track and no pair: windows from other histogram peaks
-    (``SearchConfig.candidates`` > 1)."""
-
-    name, rule, moves_lookahead = "other peaks", "more lines", False
-
-    def where(self, frame: Frame):
-        pipe = frame.tracker.pipeline
-        return True if frame.track is None and not frame.best.pair and pipe.config.search.candidates > 1 else None
-
-    def propose(self, frame: Frame, where):
-        return [(frame.tracker.pipeline.robust_search(frame.mask(), frame.best.search), "")]
 
 
 def reacquired(tracker: "LaneTracker", search: LaneSearch, binary: np.ndarray, track, side: int,

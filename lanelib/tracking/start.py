@@ -11,7 +11,7 @@ import numpy as np
 
 from ..checks import pitched_pair_problem
 from ..records import LaneSearch, LineFit
-from .candidate import SIDES, Candidate
+from ..proposers import SIDES, Candidate
 
 
 def restart(t: "LaneTracker", search: LaneSearch, kept: dict, why: list[str], failed: bool,

@@ -11,11 +11,11 @@ from ..params.roads import TrackerConfig
 from ..pipeline import LanePipeline
 from ..records import LaneSearch, LineFit
 from ..result import FrameResult, Rejected
-from ..roads.tracked import AsphaltEdge, RoadView, Shoulder, measure_shoulders
+from ..proposers import FallbackMasks, Frame, OtherPeaks, Proposer, ShorterViews, choose
+from ..roads.proposers import AsphaltEdge, RoadView, Shoulder, measure_shoulders
 from ..search import lookahead_top_px
 from .judge import TrackChecks
-from .proposers import (FallbackMasks, Frame, OtherPeaks, Proposer, Reacquire, RememberedBases,
-                        ShorterViews, WindowsFromTrack)
+from .proposers import Reacquire, RememberedBases, WindowsFromTrack
 from .state import LostTrack, TrackState
 from .update import accept, hold_or_lose
 
@@ -34,7 +34,7 @@ class LaneTracker:
     checks : the plausibility checks; defaults to ``pipeline.config.checks``, those of
         ``pipeline.detect``.
     proposers : where to look again when a frame's first search gives no lane, in order
-        (``PROPOSERS``; the protocol in ``tracking.proposers``).
+        (``PROPOSERS``; the protocol in ``lanelib.proposers``).
 
     Call ``update`` once per frame, in order; ``reset`` before a new video. After each
     ``update``, ``retries`` names the proposers that frame needed, in the order they ran (none
@@ -147,27 +147,11 @@ class LaneTracker:
         if track is not None and s.lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
         search, images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None, top_px=top)
-        f = Frame(self, raw, track, top, prior, images, first=search, looked=[search])
-        f.best = f.judge(search, top)
-        ran = []
-        for proposer in self.proposers:
-            where = proposer.where(f)
-            if where is None:
-                continue
-            ran.append(proposer.name)
-            for candidate, note in proposer.propose(f, where):
-                if candidate is None:
-                    continue
-                f.looked.append(candidate)
-                judged = f.judge(candidate)
-                if judged.pair if proposer.rule == "a pair" else judged.lines > f.best.lines:
-                    f.best = judged
-                    if note:
-                        judged.why.append(note)
-                    if proposer.moves_lookahead:
-                        f.top = candidate.top_px
-                    break
-        self.retries = tuple(ran)
+        f = Frame(pipe, raw, None, images, track, top, prior, self, first=search)
+        candidates = s.restart_candidates[1]  # the lines this frame could restart the lane from
+        f.judge = lambda c: self.checks_of_track.judge(c, track, c.top_px, f.mask, candidates)
+        choose(f, self.proposers)
+        self.retries = tuple(f.ran)
         return self._report(f, keep_images, index)
 
     def _report(self, f: Frame, keep_images: bool, index: int) -> FrameResult:

@@ -15,7 +15,7 @@ import numpy as np
 from ..fit import normal_width_m
 from ..records import LineFit, line_source
 from ..result import FrameResult
-from .candidate import SIDES, Candidate
+from ..proposers import SIDES, Candidate
 from .state import Accepted
 
 

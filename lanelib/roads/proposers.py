@@ -1,18 +1,20 @@
-"""The tracker's hard-road proposers: the road seen from the car, the asphalt edge, a faded line.
+"""The hard-road proposers: the road seen from the car, the asphalt edge, a faded line.
 
-Each is a proposer of ``LaneTracker`` (the protocol in ``lanelib.tracking.proposers``): it says
-``where`` it has something to look for in a frame and ``propose``s candidate searches there.
+Each is a proposer (the protocol in ``lanelib.proposers``): it says ``where`` it has something
+to look for in a frame and ``propose``s candidate searches there. ``AsphaltEdge`` serves a single
+image (``LanePipeline.detect``) and the tracker; the others read the track.
 
 - ``RoadView``: when a line is refused, the look-ahead is also cut where the lane's interior
   stops looking like the road near the car (beyond a crest, a vehicle on the road).
 - ``AsphaltEdge``: a lane with one line and no paint at all on the other side takes the
-  unpainted asphalt edge there as its line (``LanePipeline.edge_search``).
+  unpainted asphalt edge there as its line (``edge_search``).
 - ``Shoulder``: while both lines are seen, each painted line's distance out to the asphalt edge
   is measured near the car (``measure_shoulders``, on one frame in ``shoulder_every``) and
   remembered; when the paint then fades, the line is placed that far inside the edge where the
   edge is seen, joined beyond to the inference or nearer the car to returning paint.
 
-The tracker is passed in (duck-typed): this package sits below the tracker in the layers.
+The pipeline and the tracker are passed in (duck-typed): this package sits below both in the
+layers.
 """
 from __future__ import annotations
 
@@ -20,8 +22,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..fit import joined_fit, row_medians
+from ..fit import joined_fit, offset_line, row_medians
 from ..records import NEAR_SHARE, LaneSearch, LineFit
+from ..search import fit_side
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
 
 SIDES = ("left", "right")
@@ -75,7 +78,7 @@ class AsphaltEdge:
     name, rule, moves_lookahead = "asphalt edge", "more lines", False
 
     def where(self, frame):
-        if not frame.tracker.pipeline.config.edge.enabled:
+        if not frame.pipeline.config.edge.enabled:
             return None
         best, track = frame.best, frame.track
         search = best.search
@@ -89,7 +92,71 @@ class AsphaltEdge:
         return replace(search, **{side: LineFit(None, reason="refused by the checks")})
 
     def propose(self, frame, where):
-        return [(frame.tracker.pipeline.edge_search(frame.birdseye(), where), "")]
+        return [(edge_search(frame.pipeline, frame.birdseye(), where), "")]
+
+
+def edge_search(pipeline, bird: np.ndarray, search: LaneSearch, guide_px=None,
+                range_m: tuple[float, float] | None = None,
+                shoulder_m: float | None = None) -> LaneSearch | None:
+    """Return ``search`` with its missing line replaced by the asphalt edge on that side,
+    when the lane then passes the checks; else None.
+
+    Only for a search that found one line, which passes its own check, and no paint at all
+    on the other side (its fit not found): a painted line that is seen is never replaced.
+    The edge (``roads.edge.road_edge``, ``PipelineConfig.edge``, read in the bird's-eye image
+    ``bird``, between ``range_m`` from ``guide_px``: by default a lane's width from the found
+    line) is then checked with the found line as a lane (``LanePipeline.check``: width within the
+    road's range, parallel, equally curved) over the rows where the edge is seen (the
+    search's look-ahead, ``top_px``, ends at its farthest point: its fit is not extrapolated
+    beyond); its search's ``edge`` flags the side. With ``shoulder_m`` (a painted line faded
+    out, ``Shoulder``) the line is placed that far inside the edge, along its
+    normal (``fit.offset_line``) where the edge is seen, joined beyond it to ``guide_px``
+    (one second-order fit to both), the look-ahead and the other line kept; the search's
+    ``shoulder`` flags the side instead, and it is returned unchecked: the tracker checks it
+    against its track (the lane's width ahead, which a grade changes in the flat view).
+    """
+    cfg = pipeline.config.edge
+    if not cfg.enabled or search.left.found == search.right.found:
+        return None
+    side, other = ("right", search.left) if search.left.found else ("left", search.right)
+    first = pipeline.check(search)
+    if first.left or first.right:
+        return None
+    p = pipeline.perspective
+    fit, _ = road_edge(bird, other, side, p.xm_per_px, p.ym_per_px, pipeline.config.checks,
+                       cfg, search.top_px, guide_px, range_m)
+    if not fit.found:
+        return None
+    h = pipeline.size[1]
+    seen_top = max(search.top_px, int(h - 1 - fit.gap_px - fit.span_px))
+    if shoulder_m is not None:
+        # the painted line the shoulder inside the edge where the edge is seen, joined beyond
+        # it to the guide (one second-order fit to both); the look-ahead and the other line
+        # are kept
+        inward = -shoulder_m if side == "right" else shoulder_m
+        placed = offset_line(fit.coeffs_px, inward, p.xm_per_px, p.ym_per_px, h, seen_top)
+        if seen_top > search.top_px and guide_px is not None:
+            near = np.arange(float(seen_top), float(h))
+            far = np.arange(float(search.top_px), float(seen_top))
+            placed = joined_fit(near, np.polyval(placed, near), guide_px, far, h)
+        return replace(search, **{side: replace(fit, coeffs_px=tuple(placed))},
+                       shoulder=(side == "left", side == "right"))
+    # the look-ahead ends where the edge is seen: its fit is not extrapolated beyond, and
+    # the other line is refitted on its pixels there (an S-bend's two halves are not one
+    # second-order curve: the whole view's fit would not be parallel to the edge's)
+    top = seen_top
+    fits = {side: fit}
+    if top > search.top_px:
+        ys, xs = search.right_pixels if side == "left" else search.left_pixels
+        near = ys >= top
+        refit, _ = fit_side((ys[near], xs[near]), "left" if side == "right" else "right",
+                            pipeline.size[1], pipeline.config.search, "no lane pixels")
+        if not refit.found:
+            return None
+        fits["left" if side == "right" else "right"] = refit
+    found = replace(search, **fits, edge=(side == "left", side == "right"), top_px=top)
+    return found if pipeline.check(found).ok else None
+
 
 
 class Shoulder:
@@ -231,7 +298,7 @@ def faded_side(tracker, raw: np.ndarray, bird: np.ndarray | None, best) -> tuple
 
 def shoulder_search(tracker, bird: np.ndarray, side: int, best, track) -> list[tuple[LaneSearch, bool]]:
     """Return the best search with its line ``side`` placed the remembered shoulder inside the
-    asphalt edge on that side (``LanePipeline.edge_search``), each with whether it is joined to
+    asphalt edge on that side (``edge_search``), each with whether it is joined to
     the line's returning paint: first so joined (``joined_paint``) where the search has pixels on
     that side, then joined beyond the edge to the line inferred from the kept one; none where no
     edge is found. The edge is looked for from the line inferred from the kept one, within the
@@ -242,8 +309,8 @@ def shoulder_search(tracker, bird: np.ndarray, side: int, best, track) -> list[t
     guide = tracker.inferred_line(np.array(kept.coeffs_px, float), track, side, search.top_px)
     shoulder, tol = shoulder_m(tracker, side), tracker.jump_limit_m(side)
     faded = replace(search, **{name: LineFit(None, reason="paint faded out"), SIDES[1 - side]: kept})
-    placed = tracker.pipeline.edge_search(bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
-                                          shoulder)
+    placed = edge_search(tracker.pipeline, bird, faded, guide, (max(0.0, shoulder - tol), shoulder + tol),
+                         shoulder)
     if placed is None:
         return []
     line = getattr(placed, name)

@@ -1,0 +1,85 @@
+"""Every lane line in one frame: the lines view's mask, the search, and the lines in the frame.
+
+``LanePipeline.detect_lines`` calls ``find_every_line`` with the lines view it made once
+(``LanePipeline.lines_view``: a ``perspective.LinesView``, its remap maps, the thresholds
+rescaled to it, its transform back to the raw frame and the pixels that see the frame).
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, replace
+from typing import Any
+
+import cv2
+import numpy as np
+
+from .. import thresholds
+from ..params import LinesConfig
+from ..result import image_line
+from . import vote
+from .trace import find_lines
+
+
+@dataclass(frozen=True)
+class LinesSetup:
+    """What the lines search needs of one camera, made once: the view (``perspective.LinesView``),
+    its remap maps from the raw frame, the thresholds rescaled to it, its transform back to the
+    raw frame, and its pixels that see the frame away from its edge (255, else 0)."""
+
+    view: Any
+    maps: tuple[np.ndarray, np.ndarray]
+    tconf: thresholds.ThresholdConfig
+    to_raw: Any
+    seen: np.ndarray
+
+
+def row_weights(setup: LinesSetup, config: LinesConfig) -> np.ndarray:
+    """Return how much each row of the lines view counts in the vote (``LinesConfig``:
+    ``row_weight_full``, ``row_weight_power``): the raw frame's rows it sees, over
+    ``row_weight_full`` and at most 1, to the power ``row_weight_power``. A far row of the view
+    is stretched from a fraction of one raw row, so a speck there would otherwise vote along
+    metres of road."""
+    view = setup.view
+    rows = np.arange(view.size[1], dtype=np.float64)
+    pts, ok = setup.to_raw.checked(np.column_stack([np.full(len(rows), view.car_x_px), rows]))
+    seen = np.where(ok, np.abs(np.gradient(pts[:, 1])), 0.0)
+    return np.clip(seen / config.row_weight_full, 0.0, 1.0) ** config.row_weight_power
+
+
+def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
+                    weights: np.ndarray | None = None) -> tuple[tuple, dict, tuple]:
+    """Return every lane line seen in a RAW frame (``result.ImageLine``s, left to right), the
+    view and its mask ("lines_birdseye", "lines_binary"), and the vote's refused lines with
+    their reasons.
+
+    The view is masked by the rescaled thresholds' rule (with ``tophat_low``, far paint, blurred
+    and dimmer, by a lower top-hat floor beyond ``near_m``), narrowed to paint (a verge or a
+    field beside the road is wider) and to the pixels that see the frame; the lines are found by
+    ``vote.vote_lines`` or ``trace.find_lines`` (``LinesConfig.method``) and mapped back to the
+    raw frame over the span where each is seen (``result.image_line``). ``weights``: the vote's
+    row weights (``row_weights``), None for every row alike.
+    """
+    view, maps, tconf = setup.view, setup.maps, setup.tconf
+    bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
+    mask = thresholds.combine(bird, tconf)
+    if config.tophat_low and tconf.line_tophat.enabled:  # far paint: blurred, dimmer
+        far = replace(tconf.line_tophat, low=min(config.tophat_low, tconf.line_tophat.low))
+        low = thresholds.mask(bird, far)
+        top = max(0, int(view.bottom_px - config.near_m / view.ym_per_px))
+        half = int(config.near_half_width_m / view.xm_per_px)
+        cx = int(view.car_x_px)
+        low[top:, max(0, cx - half):cx + half] = 0
+        mask = cv2.bitwise_or(mask, low)
+    wide = 2 * tconf.line_tophat.width_px  # paint is narrow: not a verge or a field beside the road
+    mask = cv2.subtract(mask, thresholds.morph(mask, "open", wide, 1))
+    mask = cv2.bitwise_and(mask, setup.seen)
+    to_raw = functools.partial(image_line, view_to_raw=setup.to_raw, car_x_px=view.car_x_px,
+                               bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
+    refused: tuple = ()
+    if config.method == "vote":
+        weighed = vote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
+        found = vote.reported(weighed, config, mask.shape[0], view.ym_per_px)
+        refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
+    else:
+        found = find_lines(mask, config, view.xm_per_px, view.ym_per_px)
+    return tuple(to_raw(line) for line in found), {"lines_birdseye": bird, "lines_binary": mask}, refused

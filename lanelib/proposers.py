@@ -1,0 +1,215 @@
+"""Where to look again when a frame's first search gives no lane: one chain for images and video.
+
+A proposer is any object with a ``name``, a ``rule``, ``moves_lookahead`` and two methods:
+
+- ``where(frame)`` returns what to look for in this frame (a side, the bases, a row), or None
+  when the proposer has nothing to do here;
+- ``propose(frame, where)`` returns candidate searches, each with a note for the frame's
+  reason, in the order they are to be judged.
+
+``choose`` asks the proposers in order. Each candidate is judged (``Frame.judge``: a single
+image's checks for ``LanePipeline.detect``, the track's for ``LaneTracker``) and taken under the
+proposer's ``rule``: "more lines" takes it when more of its lines pass than of the best so far;
+"a pair" takes it only when both pass. The first candidate taken ends the proposer's turn.
+
+The proposers here need no track: the fallback masks, shorter views and other histogram peaks
+(and, in ``roads.proposers``, the asphalt edge). The tracker adds its own
+(``tracking.proposers``) and the hard-road ones that read the track (``roads.proposers``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Protocol
+
+import numpy as np
+
+from .records import LaneSearch, LineFit
+from .search import candidate_bases, histogram, sliding_windows
+
+SIDES = ("left", "right")
+
+
+@dataclass
+class Candidate:
+    """A search of one frame and what the checks kept of it: the lines that pass (None where
+    refused or not found), why the others do not, and whether a check refused a found line."""
+
+    search: LaneSearch
+    left: LineFit | None
+    right: LineFit | None
+    why: list[str]
+    failed: bool
+
+    @property
+    def lines(self) -> int:
+        """Return how many lines pass."""
+        return (self.left is not None) + (self.right is not None)
+
+    @property
+    def pair(self) -> bool:
+        """Return whether both lines pass."""
+        return self.left is not None and self.right is not None
+
+
+@dataclass
+class Frame:
+    """One frame as the proposers see it: its pipeline and raw frame, the predicted lane
+    ``track`` (None without one), the look-ahead's first row ``top``, the prior fits, the
+    pipeline's images (the masks made once, when first asked), the ``judge`` of a candidate
+    search, the best candidate so far, the searches run and the proposers that ran. ``tracker``
+    is the ``LaneTracker`` of a video frame, None for a single image."""
+
+    pipeline: Any
+    raw: np.ndarray
+    judge: Callable[[LaneSearch], Candidate]
+    images: dict
+    track: tuple[np.ndarray, np.ndarray] | None = None
+    top: int = 0
+    prior: tuple[LineFit, LineFit] | None = None
+    tracker: Any = None
+    best: Candidate | None = None
+    first: LaneSearch | None = None
+    looked: list = field(default_factory=list)  # every search run: did any see a line?
+    ran: list = field(default_factory=list)  # the names of the proposers that ran
+
+    def mask(self) -> np.ndarray:
+        """Return the whole view under the fallback masks' rule, thresholded once."""
+        pipe, images = self.pipeline, self.images
+        if "fallback binary" not in images:
+            if pipe.has_fallback_masks or "binary" not in images:
+                bird = images.get("birdseye")
+                images["fallback binary"] = pipe.binary(
+                    bird if bird is not None else pipe.birdseye(self.raw), fallback=True)
+            else:
+                images["fallback binary"] = images["binary"]
+        return images["fallback binary"]
+
+    def birdseye(self) -> np.ndarray:
+        """Return the frame's bird's-eye view, warped once."""
+        if self.images.get("birdseye") is None:
+            self.images["birdseye"] = self.pipeline.birdseye(self.raw)
+        return self.images["birdseye"]
+
+
+class Proposer(Protocol):
+    """Where to look again in a frame (see the module docstring)."""
+
+    name: str
+    rule: str  # "more lines" or "a pair"
+    moves_lookahead: bool  # a candidate taken sets the frame's look-ahead (its ``top_px``)
+
+    def where(self, frame: Frame) -> Any | None: ...
+
+    def propose(self, frame: Frame, where: Any) -> list[tuple[LaneSearch | None, str]]: ...
+
+
+def choose(frame: Frame, proposers) -> Candidate:
+    """Return the best candidate of a frame after asking each proposer in turn.
+
+    ``frame.best`` starts as the judged first search (``frame.first``); ``frame.looked`` and
+    ``frame.ran`` collect the searches run and the proposers that ran.
+    """
+    if frame.best is None:
+        frame.best = frame.judge(frame.first)
+        frame.looked.append(frame.first)
+    for proposer in proposers:
+        where = proposer.where(frame)
+        if where is None:
+            continue
+        frame.ran.append(proposer.name)
+        for candidate, note in proposer.propose(frame, where):
+            if candidate is None:
+                continue
+            frame.looked.append(candidate)
+            judged = frame.judge(candidate)
+            if judged.pair if proposer.rule == "a pair" else judged.lines > frame.best.lines:
+                frame.best = judged
+                if note:
+                    judged.why.append(note)
+                if proposer.moves_lookahead:
+                    frame.top = candidate.top_px
+                break
+    return frame.best
+
+
+class FallbackMasks:
+    """Without a track and no pair: the whole view on the fallback masks
+    (``ThresholdConfig.fallback_rule``)."""
+
+    name, rule, moves_lookahead = "fallback masks", "more lines", False
+
+    def where(self, frame: Frame):
+        return True if frame.track is None and not frame.best.pair and frame.pipeline.has_fallback_masks else None
+
+    def propose(self, frame: Frame, where):
+        return [(frame.pipeline.search(frame.mask()), "")]
+
+
+class ShorterViews:
+    """Without a track and no pair: shorter look-aheads (``SearchConfig.short_views``), where a
+    tight bend's lane stays in view (``short_view_search``)."""
+
+    name, rule, moves_lookahead = "shorter views", "more lines", False
+
+    def where(self, frame: Frame):
+        ok = frame.track is None and not frame.best.pair and frame.pipeline.config.search.short_views
+        return True if ok else None
+
+    def propose(self, frame: Frame, where):
+        return [(short_view_search(frame.pipeline, frame.mask()), "")]
+
+
+class OtherPeaks:
+    """Without a track and no pair: windows from other histogram peaks (``robust_search``,
+    ``SearchConfig.candidates`` > 1)."""
+
+    name, rule, moves_lookahead = "other peaks", "more lines", False
+
+    def where(self, frame: Frame):
+        ok = frame.track is None and not frame.best.pair and frame.pipeline.config.search.candidates > 1
+        return True if ok else None
+
+    def propose(self, frame: Frame, where):
+        return [(robust_search(frame.pipeline, frame.mask(), frame.best.search), "")]
+
+
+def passes(pipeline, search: LaneSearch) -> bool:
+    """Return whether a search found both lines and they pass a single image's checks."""
+    return search.left.found and search.right.found and pipeline.check(search).ok
+
+
+def short_view_search(pipeline, binary: np.ndarray) -> LaneSearch | None:
+    """Return the first search in a shorter look-ahead whose lane passes the checks, or None.
+
+    Sliding windows over the lower ``SearchConfig.short_views`` shares of the view in turn (a
+    tight bend's lane stays in a shorter view; ``search.lookahead_top_px``). Its search's
+    ``top_px`` says which.
+    """
+    h = pipeline.size[1]
+    for share in pipeline.config.search.short_views:
+        search = pipeline.search(binary, top_px=int(round(h * (1.0 - share))))
+        if passes(pipeline, search):
+            return search
+    return None
+
+
+def robust_search(pipeline, binary: np.ndarray, first: LaneSearch) -> LaneSearch | None:
+    """Return the first search from other histogram peaks whose lane passes the checks, or None.
+
+    For a frame whose search from the strongest peaks failed its checks (a seam, a kerb or a
+    shadow edge took a line): sliding windows from each pair of the ``candidates`` strongest
+    peaks on each side (``search.candidate_bases``), the pairs with the stronger peaks first,
+    skipping the pair already tried. Its search's ``method`` is "robust".
+    """
+    sc = pipeline.config.search
+    hist = histogram(binary, sc.histogram_fraction)
+    lefts, rights = candidate_bases(hist, pipeline.car_x_px, sc.candidates, sc.margin_px)
+    pairs = sorted(((l, r) for l in lefts for r in rights),
+                   key=lambda p: -(int(hist[int(p[0])]) + int(hist[int(p[1])])))
+    for bases in pairs:
+        if first.bases_px == bases:
+            continue
+        search = sliding_windows(binary, sc, bases=bases, car_x=pipeline.car_x_px)
+        if pipeline.check(search).ok and search.left.found and search.right.found:
+            return replace(search, method="robust")
+    return None
