@@ -177,6 +177,13 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
     Images with no board (or of another size) are skipped and listed with the reason in the
     record's ``skipped`` and ``skip_reasons``; fewer than 3 usable boards raise
     ``CalibrationError``.
+
+    Examples
+    --------
+    >>> from lanelib import data
+    >>> camera = calibrate(data.bundled("camera_cal"))  # the generator's chessboards
+    >>> len(camera.used), camera.image_size, camera.rms_px < 0.5
+    (17, (1280, 720), True)
     """
     dets = detections if detections is not None else detect_boards(folder, pattern)
     reasons = {d.file: d.reason for d in dets if d.corners is None}

@@ -388,6 +388,17 @@ def evaluate_images(folder: str | os.PathLike, pipeline, max_frames: int | None 
     ------
     InputError
         If the folder does not exist or holds no images, or no Dask scheduler answers.
+
+    Examples
+    --------
+    >>> from lanelib import data
+    >>> from lanelib.pipeline import LanePipeline
+    >>> folder = data.bundled("test_images")
+    >>> camera = calibration_from_truth(folder)
+    >>> report = evaluate_images(folder, LanePipeline(calibration=camera, size=camera.image_size))
+    >>> summary = report.summary()
+    >>> summary["frames"], summary["found_rate"], summary["point_accuracy"]
+    (8, 1.0, 1.0)
     """
     files = list_images(folder)[:max_frames]
     on_dask = workers != 1 or scheduler is not None  # a bar only there, as before

@@ -261,6 +261,13 @@ class HoughLaneFinder:
     Only the bounding box of the region of interest is processed. The box and the region's mask
     depend only on the configuration and the image size, so they are made once for each size met
     and kept; ``process`` keeps no other state between frames.
+
+    Examples
+    --------
+    >>> from lanelib import data, io
+    >>> result = HoughLaneFinder().process(io.read_image(data.bundled("test_images") / "straight_1.jpg"))
+    >>> result.left is not None and result.right is not None
+    True
     """
 
     def __init__(self, config: HoughConfig = HoughConfig()):

@@ -47,6 +47,16 @@ class LanePipeline:
     Everything that depends only on the configuration (remap maps, matrices, the car's position
     in the bird's-eye view) is computed here, once. A pipeline pickles as (config, calibration,
     size) and is built again on unpickling (its maps too), so it can be sent to Dask workers.
+
+    Examples
+    --------
+    >>> from lanelib import data, evaluate, io
+    >>> folder = data.bundled("test_images")
+    >>> camera = evaluate.calibration_from_truth(folder)  # the generator's true camera
+    >>> pipe = LanePipeline(calibration=camera, size=camera.image_size)
+    >>> result = pipe.detect(io.read_image(folder / "straight_1.jpg"))
+    >>> result.found, round(float(result.lane_width_m), 1), result.method
+    (True, 3.7, 'windows')
     """
 
     def __init__(self, config: PipelineConfig = PipelineConfig(), calibration: Calibration | None = None,

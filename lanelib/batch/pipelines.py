@@ -77,6 +77,16 @@ def process_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLik
     (``LanePipeline.debug_composite``) instead of the annotated frame. ``workers``,
     ``scheduler``: the images go in chunks to Dask workers (``cluster.dask_client``,
     ``run_images``; a progress bar unless ``progress`` is false), with the rows of one process.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from lanelib import data
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     rows = process_images([data.bundled("test_images") / "straight_1.jpg"], out, progress=False)
+    ...     written = sorted(os.listdir(out))
+    >>> rows[0]["file"], rows[0]["found"], written
+    ('straight_1.jpg', True, ['results.json', 'straight_1.jpg'])
     """
     make = functools.partial(lane_image_process, config, calibration, debug)
     with cluster.dask_client(workers, scheduler) as client:

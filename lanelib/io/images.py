@@ -159,6 +159,13 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     ------
     InputError
         If the file does not exist, is not a file, or cannot be decoded as an image.
+
+    Examples
+    --------
+    >>> from lanelib import data
+    >>> image = read_image(data.bundled("test_images") / "straight_1.jpg")
+    >>> image.shape, image.dtype
+    ((720, 1280, 3), dtype('uint8'))
     """
     return read_image_info(path)[0]
 
