@@ -221,6 +221,7 @@ CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.records",
         "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
         "lanelib.hough", "lanelib.config", "lanelib.pipeline", "lanelib.tracking", "lanelib.tracking.state",
         "lanelib.tracking.judge", "lanelib.tracking.proposers", "lanelib.tracking.update",
+        "lanelib.tracking.start",
         "lanelib.tracking.tracker"}
 EXTENSIONS = ("lanelib.autogeometry", "lanelib.roads", "lanelib.lines")
 # the core modules that still call a hard-road or every-line part by name, and which: the search
