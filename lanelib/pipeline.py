@@ -11,6 +11,8 @@ per-frame engine only: runs over image folders and videos are ``batch.process_im
 """
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 
@@ -51,10 +53,9 @@ class LanePipeline:
     Examples
     --------
     >>> from lanelib import data, evaluate, io
-    >>> folder = data.bundled("test_images")
-    >>> camera = evaluate.calibration_from_truth(folder)  # the generator's true camera
+    >>> camera = evaluate.calibration_from_truth(data.bundled("test_images"))  # the true camera
     >>> pipe = LanePipeline(calibration=camera, size=camera.image_size)
-    >>> result = pipe.detect(io.read_image(folder / "straight_1.jpg"))
+    >>> result = pipe.detect(io.read_image(data.bundled("test_images") / "straight_1.jpg"))
     >>> result.found, round(float(result.lane_width_m), 1), result.method
     (True, 3.7, 'windows')
     """
@@ -187,27 +188,20 @@ class LanePipeline:
         The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
         checks is not found, and is kept apart in ``rejected``. Without a ``prior``, a lane of
         the whole view that fails is looked for again by the proposers that need no track
-        (``DETECT_PROPOSERS``, ``proposers.choose``, the tracker's chain): the fallback masks
-        (``ThresholdConfig.fallback_rule``) in the whole view, shorter views, other histogram
-        peaks (``candidates`` > 1), and, when one line was found and the other side has no
-        paint, the asphalt edge on that side. The first whose two lines pass is taken.
+        (``DETECT_PROPOSERS``, in ``proposers.choose``, the tracker's chain): the fallback masks,
+        shorter views, other histogram peaks and the asphalt edge. The first whose pair passes
+        is taken.
         """
         search, images = self.search_frame(raw, prior, keep_images)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        frame = Frame(self, raw, self._passing, images, first=search)
+        frame = Frame(self, raw, functools.partial(_passing, self), images, first=search)
         best = choose(frame, DETECT_PROPOSERS).search
         if best is not search and keep_images:
             images["binary"] = frame.mask()  # the views show the mask the lane came from
         images.pop("fallback binary", None)
         return result if best is search else self.result(best, images if keep_images else {})
-
-    def _passing(self, search: LaneSearch) -> Candidate:
-        """Return a search judged as a single image: both lines, or none when not both pass."""
-        if passes(self, search):
-            return Candidate(search, search.left, search.right, [], False)
-        return Candidate(search, None, None, [], False)
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
         """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
@@ -330,12 +324,9 @@ class LanePipeline:
         return im
 
     def debug_composite(self, result: FrameResult, raw: np.ndarray | None = None) -> np.ndarray:
-        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result.
-
-        ``result`` comes from ``process(frame, keep_images=True)``; or from ``detect`` or
-        ``LaneTracker.update`` with ``keep_images=True``, passed with its RAW frame ``raw``, from
-        which the missing views (undistorted, search, result) are drawn here (``draw_views``).
-        """
+        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result
+        (``process``, ``detect`` or ``LaneTracker.update`` with ``keep_images=True``), the views
+        missing drawn from its RAW frame ``raw`` (``draw_views``)."""
         im = result.images
         if raw is not None and "binary" in im:
             self.draw_views(result, raw)
@@ -344,6 +335,13 @@ class LanePipeline:
                              "or a kept-images result (detect, LaneTracker.update) and its raw frame")
         return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
+
+
+def _passing(pipeline: LanePipeline, search: LaneSearch) -> Candidate:
+    """Return a search judged as a single image: both lines, or none when not both pass."""
+    if passes(pipeline, search):
+        return Candidate(search, search.left, search.right, [], False)
+    return Candidate(search, None, None, [], False)
 
 
 def _rejected(fit: LineFit, why: str) -> LineFit:
