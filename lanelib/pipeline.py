@@ -105,15 +105,16 @@ class LanePipeline:
         """Return the undistorted frame."""
         return self.undistorter.undistort(raw)
 
-    def binary(self, birdseye: np.ndarray, fallback: bool = False) -> np.ndarray:
+    def binary(self, birdseye: np.ndarray, fallback: bool = False, made: dict | None = None) -> np.ndarray:
         """Return the combined 0/255 lane-pixel mask of a bird's-eye image.
 
         ``fallback``: under ``ThresholdConfig.fallback_rule`` (the fallback searches' masks), or
-        the rule itself when there is none.
+        the rule itself when there is none. ``made``: the masks of this image made already,
+        which the masks made here join (``thresholds.combine``).
         """
         tc = self.config.thresholds
         rule = tc.fallback_rule if fallback and tc.fallback_rule else None
-        return thresholds.combine(birdseye, tc, clahe=self._clahe, rule=rule)
+        return thresholds.combine(birdseye, tc, clahe=self._clahe, rule=rule, made=made)
 
     @property
     def has_fallback_masks(self) -> bool:
@@ -159,18 +160,20 @@ class LanePipeline:
         return self._bands.mask(raw, prior, whole)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-                     keep_images: bool = False, top_px: int = 0) -> tuple[LaneSearch, dict]:
+                     keep_images: bool = False, top_px: int = 0, made: dict | None = None
+                     ) -> tuple[LaneSearch, dict]:
         """Return the lane search of one RAW frame, unchecked, and the stage images kept.
 
         With a ``prior`` and no ``keep_images``, only the bands around the prior fits are
         remapped and thresholded (``band_binary``); the search sees the same pixels either way.
         ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
         without a usable prior, or with ``keep_images``). ``top_px``: the look-ahead (``search``).
+        ``made``: a dict that receives the whole view's masks, for a second rule (``binary``).
         """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
-        mask = self.binary(bird)
+        mask = self.binary(bird, made=made)
         return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
 
     def check(self, search: LaneSearch, turn_back: bool = False) -> LaneCheck:
@@ -192,11 +195,12 @@ class LanePipeline:
         shorter views, other histogram peaks and the asphalt edge. The first whose pair passes
         is taken.
         """
-        search, images = self.search_frame(raw, prior, keep_images)
+        made: dict = {}  # the masks made, which the fallback rule's mask reuses
+        search, images = self.search_frame(raw, prior, keep_images, made=made)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        frame = Frame(self, raw, functools.partial(_passing, self), images, first=search)
+        frame = Frame(self, raw, functools.partial(_passing, self), images, first=search, made=made)
         best = choose(frame, DETECT_PROPOSERS).search
         if best is not search and keep_images:
             images["binary"] = frame.mask()  # the views show the mask the lane came from

@@ -71,6 +71,7 @@ class Frame:
     first: LaneSearch | None = None
     looked: list = field(default_factory=list)  # every search run: did any see a line?
     ran: list = field(default_factory=list)  # the names of the proposers that ran
+    made: dict | None = None  # the whole view's masks made already (``LanePipeline.binary``)
 
     def mask(self) -> np.ndarray:
         """Return the whole view under the fallback masks' rule, thresholded once."""
@@ -79,7 +80,7 @@ class Frame:
             if pipe.has_fallback_masks or "binary" not in images:
                 bird = images.get("birdseye")
                 images["fallback binary"] = pipe.binary(
-                    bird if bird is not None else pipe.birdseye(self.raw), fallback=True)
+                    bird if bird is not None else pipe.birdseye(self.raw), fallback=True, made=self.made)
             else:
                 images["fallback binary"] = images["binary"]
         return images["fallback binary"]

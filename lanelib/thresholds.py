@@ -326,7 +326,8 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None,
-            rule: str | None = None, channels: Channels | None = None) -> np.ndarray:
+            rule: str | None = None, channels: Channels | None = None,
+            made: dict[str, np.ndarray] | None = None) -> np.ndarray:
     """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``,
     e.g. ``config.fallback_rule``).
 
@@ -335,8 +336,10 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
     ``make_clahe`` (else one is made for this image). ``channels``: the ``Channels`` of the
     image the masks look at, made already (``Channels.cut``; without ``config.clahe`` only).
+    ``made``: a dict of this image's masks, read like ``computed``, to which each mask made here
+    is added: a second rule on the same image (``fallback_rule``) makes only the masks it adds.
     """
-    cache = dict(computed or {})
+    cache = made if made is not None else dict(computed or {})
     # made (and equalised) only if a mask is still to compute
     channels: list[Channels] = [channels] if channels is not None and not config.clahe else []
 

@@ -146,8 +146,10 @@ class LaneTracker:
         top = 0 if track is None else self.lookahead_top_px(track)
         if track is not None and s.lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
-        search, images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None, top_px=top)
-        f = Frame(pipe, raw, None, images, track, top, prior, self, first=search)
+        made: dict = {}  # the whole view's masks, which the fallback rule's mask reuses
+        search, images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None,
+                                           top_px=top, made=made)
+        f = Frame(pipe, raw, None, images, track, top, prior, self, first=search, made=made)
         candidates = s.restart_candidates[1]  # the lines this frame could restart the lane from
         f.judge = lambda c: self.checks_of_track.judge(c, track, c.top_px, f.mask, candidates)
         choose(f, self.proposers)
