@@ -468,6 +468,8 @@ def test_bench_reports_every_figure_consistently(capsys):
             "video_to_codec"} <= set(f)
     assert f["detect_to_remap"] == pytest.approx(f["detect_ms"] / f["remap_ms"], abs=0.01)
     assert f["video_to_codec"] == pytest.approx(f["video_fps"] / f["codec_fps"], abs=0.01)
+    assert f["robust_ms"] > 0 and Path(f["robust_source"]).name in ("challenge_video.mp4", "challenge.mp4")
+    assert f["robust_to_remap"] == pytest.approx(f["robust_ms"] / f["robust_remap_ms"], abs=0.01)
     assert f["size"] == [1280, 720] and f["calibrated"]
     stages = f["stages_ms"]
     assert {"remap", "detect", "band_binary (prior bands)", "undistort (images, --debug)",
@@ -479,6 +481,7 @@ def test_bench_reports_every_figure_consistently(capsys):
     assert geo["frames"] == 50 and geo["cpu_s"] > 0 and geo["result"].startswith("confidence")
     report = bench.format_report(f)
     assert "detect_to_remap" in report and "video_to_codec" in report and f"mask {rule[0]}" in report
+    assert "robust_to_remap" in report and "every fallback runs" in report
     assert "--auto-geometry's estimate from 50 frames" in report
     # the clean clip never needs a fallback; harder's first second (tree shade hides the dashes)
     # does, and each fallback frame counts at least one run
