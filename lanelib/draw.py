@@ -26,7 +26,7 @@ def line_points(coeffs, height_px: int, samples: int = 48, top_px: float = 0) ->
     return np.column_stack([np.polyval(coeffs, ys), ys])
 
 
-def _to_int(pts: np.ndarray) -> np.ndarray:
+def pixel_points(pts: np.ndarray) -> np.ndarray:
     return np.round(pts).astype(np.int32).reshape(-1, 1, 2)
 
 
@@ -62,7 +62,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
         pts = line_points(coeffs, h, config.samples, top_px)
         mapped[side] = to_image(pts) if to_image is not None else pts
     if len(mapped) == 2:
-        poly = _to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))
+        poly = pixel_points(np.vstack([mapped["left"], mapped["right"][::-1]]))
         # blend only inside the polygon's bounding box: outside it the blend gives the image back
         x, y, bw, bh = cv2.boundingRect(poly)
         x0, y0 = max(0, x - 1), max(0, y - 1)
@@ -75,7 +75,7 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
             cv2.addWeighted(fill, config.lane_alpha, box, 1 - config.lane_alpha, 0, dst=box)
     for side, pts in mapped.items():
         color = config.held_color if held else config.left_color if side == "left" else config.right_color
-        cv2.polylines(out, [_to_int(pts)], False, color, config.line_thickness_px, cv2.LINE_AA)
+        cv2.polylines(out, [pixel_points(pts)], False, color, config.line_thickness_px, cv2.LINE_AA)
     return out
 
 
@@ -157,11 +157,11 @@ def search_view(binary: np.ndarray, search, config: DrawConfig = DrawConfig(),
     for fit in (search.left, search.right):
         if fit.found:
             pts = line_points(fit.coeffs_px, h, config.samples)
-            cv2.polylines(view, [_to_int(pts)], False, (255, 255, 0), 3, cv2.LINE_AA)
+            cv2.polylines(view, [pixel_points(pts)], False, (255, 255, 0), 3, cv2.LINE_AA)
             if search.method == "prior":
                 for dx in (-1, 1):
                     band = pts + [dx * prior_margin_px, 0]
-                    cv2.polylines(view, [_to_int(band)], False, (0, 255, 0), 1, cv2.LINE_AA)
+                    cv2.polylines(view, [pixel_points(band)], False, (0, 255, 0), 1, cv2.LINE_AA)
     return view
 
 

@@ -117,7 +117,7 @@ def truth_calibration(camera) -> Calibration:
     return camera.calibration()
 
 
-def _truth_x(xs) -> np.ndarray:
+def truth_x(xs) -> np.ndarray:
     """Return truth x positions (px) with the not-visible marker (negative, -2) as NaN."""
     x = np.asarray(xs, np.float64)
     return np.where(x >= 0, x, np.nan)
@@ -132,7 +132,7 @@ def score_frame(pipeline, result, lane) -> LineScores:
     rows = np.asarray(lane.h_samples_px, np.float64)
     gts = []
     for xs in (lane.left_x_px, lane.right_x_px):
-        gt = _truth_x(xs)
+        gt = truth_x(xs)
         gt[~in_view(pipeline, gt, rows)] = np.nan
         gts.append(gt)
     preds = [fit_x_in_raw(fit.coeffs_px, pipeline, rows) for fit in (result.left, result.right) if fit.found]

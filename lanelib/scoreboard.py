@@ -230,7 +230,7 @@ def _config_name(benchmark: str) -> str:
     return f"preset {benchmark}" if benchmark in preset_names() else "default config"
 
 
-def _fresh(folder: Path) -> Path:
+def fresh_folder(folder: Path) -> Path:
     """Return ``folder`` with an earlier run's predictions removed, so that every frame is
     predicted, and timed, in this run; a folder that holds anything else is refused."""
     if folder.is_dir() and any(folder.iterdir()):
@@ -243,7 +243,7 @@ def _fresh(folder: Path) -> Path:
 
 def _predict(benchmark: str, root: Path, out: Path, list_file: Path | None, config: PipelineConfig,
              auto_geometry: autogeometry.GeometryOptions | None = None) -> batch.PredictRun:
-    run = batch.predict_benchmark(benchmark, root, _fresh(out), list_file=list_file, config=config,
+    run = batch.predict_benchmark(benchmark, root, fresh_folder(out), list_file=list_file, config=config,
                                   auto_geometry=auto_geometry, progress=False)
     if run.failed:
         raise InputError(f"{len(run.failed)} of {run.frames} frames failed, the first: {run.failed[0].error}")

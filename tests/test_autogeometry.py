@@ -401,7 +401,7 @@ def test_the_dash_length_model_allows_for_blur_and_ignores_markers_and_merged_ru
     merged_q, merged = np.array([0.02]), np.array([3 * a + b * 0.02 ** 2])
     centre = np.concatenate([q, markers_q, merged_q])
     length = np.concatenate([dashes, markers, merged])
-    got_a, got_b = dash_period._dash_length_model(centre, length)
+    got_a, got_b = dash_period.dash_length_model(centre, length)
     assert got_a == pytest.approx(a, rel=0.02) and got_b == pytest.approx(b, rel=0.05)
     own = markers - got_b * markers_q ** 2
     assert np.all(own < dash_period.DASH_LENGTH_WINDOW[0] * got_a)

@@ -158,11 +158,11 @@ def old_lane_overlay(image, left_coeffs, right_coeffs, Minv, config, lens=None):
         pts = cv2.perspectiveTransform(pts.reshape(-1, 1, 2), Minv).reshape(-1, 2)
         mapped[side] = lens(pts) if lens is not None else pts
     fill = out.copy()
-    cv2.fillPoly(fill, [draw._to_int(np.vstack([mapped["left"], mapped["right"][::-1]]))],
+    cv2.fillPoly(fill, [draw.pixel_points(np.vstack([mapped["left"], mapped["right"][::-1]]))],
                  config.lane_color, lineType=cv2.LINE_AA)
     out = cv2.addWeighted(fill, config.lane_alpha, out, 1 - config.lane_alpha, 0)
     for side, color in (("left", config.left_color), ("right", config.right_color)):
-        cv2.polylines(out, [draw._to_int(mapped[side])], False, color, config.line_thickness_px, cv2.LINE_AA)
+        cv2.polylines(out, [draw.pixel_points(mapped[side])], False, color, config.line_thickness_px, cv2.LINE_AA)
     return out
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from lanelib.checks import pair_problem
 from lanelib.config import PipelineConfig, override
-from lanelib.evaluate import _truth_x, calibration_from_truth, evaluate_video, score_frame
+from lanelib.evaluate import truth_x, calibration_from_truth, evaluate_video, score_frame
 from lanelib.fit import normal_width_m
 from lanelib.io import VideoReader, read_frame
 from lanelib.params import EdgeConfig
@@ -124,7 +124,7 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
     raw, lane = renderer.render(pose), lane_truth(renderer, pose)
     fits = []
     for xs in (lane.left_x_px, lane.right_x_px):
-        x = _truth_x(xs)
+        x = truth_x(xs)
         ok = np.isfinite(x)
         bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
         inside = (bird[:, 1] >= 0) & (bird[:, 1] < h)
@@ -272,7 +272,7 @@ def _track_faded_road(renderer, settings=(), frames: int = 26):
     for k in range(frames):
         pose = CarPose(5.0 + 1.5 * k, 0.0)
         result, lane = tracker.update(renderer.render(pose)), lane_truth(renderer, pose)
-        x = _truth_x(lane.right_x_px)
+        x = truth_x(lane.right_x_px)
         ok = np.isfinite(x)
         bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
         bird = bird[(bird[:, 1] >= 0) & (bird[:, 1] < h)]
@@ -338,7 +338,7 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
                 returning.append((i, result.sources[1], score.fp_lines))
                 continue
             lane = truth.frames[i]
-            x = _truth_x(lane.right_x_px)
+            x = truth_x(lane.right_x_px)
             ok = np.isfinite(x)
             bird = pipe.raw_to_birdseye(np.column_stack([x[ok], np.asarray(lane.h_samples_px, float)[ok]]))
             near = bird[np.argmax(np.where(bird[:, 1] < h, bird[:, 1], -1))]
@@ -408,7 +408,7 @@ def _truth_lines_in_view(pipe: LanePipeline, lane) -> tuple[tuple[np.ndarray, np
     rows = np.asarray(lane.h_samples_px, float)
     fits, tops = [], []
     for xs in (lane.left_x_px, lane.right_x_px):
-        x = _truth_x(xs)
+        x = truth_x(xs)
         ok = np.isfinite(x)
         last = int(np.flatnonzero(ok)[-1])
         first = last

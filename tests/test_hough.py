@@ -120,16 +120,6 @@ def test_roi_mask_covers_the_polygon_in_image_fractions():
     assert mask[5, 5] == mask[5, 195] == 0
 
 
-def test_the_region_is_made_once_per_size():
-    finder = hough.HoughLaneFinder()
-    finder.process(road())
-    first = finder._region((H, W))
-    finder.process(road())
-    assert finder._region((H, W)) is first
-    finder.process(np.zeros((100, 200, 3), np.uint8))
-    assert len(finder._regions) == 2
-
-
 def test_annotate_blends_the_lines_over_a_copy():
     rgb = road()
     result = hough.HoughLaneFinder().process(rgb)

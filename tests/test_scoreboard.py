@@ -124,11 +124,11 @@ def test_the_predictions_of_an_earlier_run_are_replaced_and_nothing_else(tmp_pat
     earlier = tmp_path / "culane"
     (earlier / "a").mkdir(parents=True)
     (earlier / "predict.json").write_text("{}")
-    assert scoreboard._fresh(earlier) == earlier and not earlier.exists()
+    assert scoreboard.fresh_folder(earlier) == earlier and not earlier.exists()
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("keep")
     with pytest.raises(InputError, match="not predictions of an earlier scoreboard; pass another --out"):
-        scoreboard._fresh(tmp_path / "mine")
+        scoreboard.fresh_folder(tmp_path / "mine")
     assert (tmp_path / "mine" / "notes.txt").read_text() == "keep"
 
 

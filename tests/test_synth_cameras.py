@@ -15,7 +15,7 @@ from lanelib.perspective import Perspective
 from lanelib.synth import (Camera, CarPose, CurvatureProfile, GroundGrid, Layout, Look, Renderer, Scene,
                            camera_truth, lane_truth, load_video_truth, video_sets, write_video)
 from lanelib.synth.sets import METER_ROWS, meter_rows
-from lanelib.synth.truth import NOT_VISIBLE, H_SAMPLES_PX, _camera_from_json, _camera_json, h_samples_px
+from lanelib.synth.truth import NOT_VISIBLE, H_SAMPLES_PX, camera_from_json, camera_json, h_samples_px
 
 ROLLED = Camera.pinhole((960, 540), hfov_deg=80.0, height_m=1.4, pitch_deg=1.0, yaw_deg=-2.0, roll_deg=1.5)
 
@@ -41,13 +41,13 @@ def test_the_hood_is_as_high_in_proportion(rolled_grid):
 
 def test_camera_truth_round_trips_the_roll():
     truth = camera_truth(ROLLED)
-    obj = _camera_json(truth)
+    obj = camera_json(truth)
     assert obj["roll_deg"] == 1.5
-    back = _camera_from_json(obj, None)
+    back = camera_from_json(obj, None)
     assert back.roll_deg == 1.5 and back.camera() == ROLLED
     assert back.horizon_px() == pytest.approx(ROLLED.horizon_px())
     # the bundled camera's truth does not hold the key: its files stay as they were
-    assert "roll_deg" not in _camera_json(camera_truth(Camera()))
+    assert "roll_deg" not in camera_json(camera_truth(Camera()))
 
 
 def test_rendered_lines_lie_on_their_truth_through_a_rolled_camera(rolled_grid):

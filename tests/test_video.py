@@ -406,11 +406,11 @@ def test_the_overlay_blended_in_its_box_equals_the_whole_frame_blend():
         fill = image.copy()
         pts = [cv2.perspectiveTransform(draw.line_points(c, 720, cfg.samples).reshape(-1, 1, 2), minv)
                .reshape(-1, 2) for c in (left, right)]
-        cv2.fillPoly(fill, [draw._to_int(np.vstack([pts[0], pts[1][::-1]]))], cfg.lane_color,
+        cv2.fillPoly(fill, [draw.pixel_points(np.vstack([pts[0], pts[1][::-1]]))], cfg.lane_color,
                      lineType=cv2.LINE_AA)
         expected = cv2.addWeighted(fill, cfg.lane_alpha, image, 1 - cfg.lane_alpha, 0)
         for p, color in zip(pts, (cfg.left_color, cfg.right_color)):
-            cv2.polylines(expected, [draw._to_int(p)], False, color, cfg.line_thickness_px, cv2.LINE_AA)
+            cv2.polylines(expected, [draw.pixel_points(p)], False, color, cfg.line_thickness_px, cv2.LINE_AA)
         assert np.array_equal(draw.lane_overlay(image, left, right, persp.inverse, cfg), expected)
 
 

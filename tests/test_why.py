@@ -89,7 +89,7 @@ def test_tusimple_lines_match_by_accuracy():
     rows = np.arange(240.0, 720.0, 10.0)
     lanes = [400.0 - 0.5 * (rows - 720), 900.0 + 0.5 * (rows - 720)]
     record = tusimple.TuSimpleRecord("clips/a/1/20.jpg", tuple(tuple(l) for l in lanes), tuple(rows))
-    points, got_rows = why._label_lines("tusimple", record)
+    points, got_rows = why.label_lines("tusimple", record)
     half = lanes[1].copy()
     half[:24] = np.nan                                   # the near half only: accuracy 0.5
     lines = why.classify("tusimple", points, [lanes[0] + 5.0, half], [], got_rows, tusimple.IMAGE_SIZE)

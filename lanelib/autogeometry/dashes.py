@@ -76,7 +76,7 @@ def _dash_lines(analyses, used, ego: dict[int, tuple[int, int, float]], roll: fl
     return out
 
 
-def _dash_length_model(centre: np.ndarray, length: np.ndarray) -> tuple[float, float] | None:
+def dash_length_model(centre: np.ndarray, length: np.ndarray) -> tuple[float, float] | None:
     """Return (a, b): a run of a dash at q = 1/v is a + b q^2 long in q (a = dash_m / C, b the px
     the blur and the mask add to its ends), fitted to the long runs (10 px or more) that are
     single dashes (at most twice their median: merged dashes are three times as long), robustly
@@ -188,7 +188,7 @@ def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
     ``dashes`` are the runs of paint along the lane lines (``_dash_runs_of``), sampled at even
     steps of q = 1/v, where s = C q + s0 makes a dash pattern periodic; those no longer than a
     dash of the shortest period searched and far enough below the horizon for a gap to show
-    (3 px at the smallest C searched) may be dashes. Their lengths give a + b q^2 (``_dash_length_model``): a first
+    (3 px at the smallest C searched) may be dashes. Their lengths give a + b q^2 (``dash_length_model``): a first
     C = dash_m / a, and b, what blur adds to a run. A run is a dash when its length less b q^2
     is within DASH_LENGTH_WINDOW of a: far away a raised marker in a gap or a fleck blurs to
     half a dash's length in q, and a marker beside a dash merges with it; either would put a
@@ -211,7 +211,7 @@ def _dash_scale(dashes: _DashRuns | None, dash_m: float, gap_m: float,
     runs = _short_runs(dashes, lo, c_range[0], gap_m)
     if not runs:
         return None, 0.0
-    model = _dash_length_model(np.concatenate([r[1] for r in runs]), np.concatenate([r[2] for r in runs]))
+    model = dash_length_model(np.concatenate([r[1] for r in runs]), np.concatenate([r[2] for r in runs]))
     if model is None:
         return None, 0.0
     a_q, b_q = model

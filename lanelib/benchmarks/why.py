@@ -334,7 +334,7 @@ def _paint(mask: np.ndarray, line: np.ndarray, xm_per_px: float) -> tuple[float,
     return along, float(np.mean([s for s in side if s is not None] or [0.0]))
 
 
-def _label_lines(benchmark: str, labels) -> tuple[list[np.ndarray], np.ndarray]:
+def label_lines(benchmark: str, labels) -> tuple[list[np.ndarray], np.ndarray]:
     """Return the label lines as (n, 2) points and the rows predictions are given at."""
     if benchmark == "tusimple":
         if not isinstance(labels, tusimple.TuSimpleRecord):
@@ -391,7 +391,7 @@ def explain_frame(benchmark: str, image, labels, config: PipelineConfig | None =
     if benchmark == "tusimple":
         rgb = tusimple.full_size(rgb)
     size = (rgb.shape[1], rgb.shape[0])
-    points, rows = _label_lines(benchmark, labels)
+    points, rows = label_lines(benchmark, labels)
     pipe = pipeline if pipeline is not None else LanePipeline(config, None, size=size)
     found = pipe.detect_lines(rgb, ego=False, keep_images=True)
     per_side = culane.LINES_PER_SIDE if benchmark == "culane" else None

@@ -323,7 +323,7 @@ def lane_truth(renderer: Renderer, pose: CarPose) -> LaneTruth:
 
 # --------------------------------------------------------------------------- writing
 
-def _camera_json(cam: CameraTruth) -> dict:
+def camera_json(cam: CameraTruth) -> dict:
     """Return the JSON form of a CameraTruth."""
     p = cam.perspective
     return {
@@ -351,7 +351,7 @@ def write_image_truth(image_path: str | os.PathLike, seed: int, lane: LaneTruth,
     obj = {"format": IMAGE_FORMAT, "image": image.name, "seed": seed, **_lane_values(lane),
            "h_samples_px": list(lane.h_samples_px),
            "lines_x_px": {"left": list(lane.left_x_px), "right": list(lane.right_x_px)},
-           "camera": _camera_json(camera)}
+           "camera": camera_json(camera)}
     return write_json(image.with_suffix(".json"), obj)
 
 
@@ -370,7 +370,7 @@ def write_video_truth(video_path: str | os.PathLike, seed: int, fps: float, lane
                       v["lane_width_m"], *lane.left_x_px, *lane.right_x_px])
     csv_path = write_text(video.with_suffix(".csv"), buf.getvalue())
     meta = {"format": VIDEO_FORMAT, "video": video.name, "seed": seed, "fps": fps, "frames": len(lanes),
-            **(extra or {}), "h_samples_px": list(h), "camera": _camera_json(camera)}
+            **(extra or {}), "h_samples_px": list(h), "camera": camera_json(camera)}
     return csv_path, write_json(video.with_suffix(".json"), meta)
 
 
@@ -386,7 +386,7 @@ def _truth_file(data_path: str | os.PathLike, suffix: str) -> Path:
     return truth
 
 
-def _camera_from_json(obj: dict, where: Path) -> CameraTruth:
+def camera_from_json(obj: dict, where: Path) -> CameraTruth:
     """Return the CameraTruth stored in a truth file's ``camera`` entry."""
     try:
         p = obj["perspective"]
@@ -422,7 +422,7 @@ def load_image_truth(image_path: str | os.PathLike) -> ImageTruth:
     except (KeyError, TypeError, ValueError) as e:
         raise InputError(f"{path}: not an image ground-truth file (missing or bad {e!r}); "
                          "regenerate it") from None
-    return ImageTruth(Path(image_path), seed, lane, _camera_from_json(camera, path))
+    return ImageTruth(Path(image_path), seed, lane, camera_from_json(camera, path))
 
 
 def load_video_truth(video_path: str | os.PathLike) -> VideoTruth:
@@ -449,7 +449,7 @@ def load_video_truth(video_path: str | os.PathLike) -> VideoTruth:
                          "regenerate it") from None
     if not frames:
         raise InputError(f"{csv_path}: holds no frames; regenerate it")
-    return VideoTruth(Path(video_path), seed, fps, frames, _camera_from_json(camera, meta_path))
+    return VideoTruth(Path(video_path), seed, fps, frames, camera_from_json(camera, meta_path))
 
 
 @dataclass(frozen=True)
