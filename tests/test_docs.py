@@ -1,6 +1,6 @@
 """The README stays short and the docs hold together: the README's length, every relative link and
-file path named in the README and docs exists, and every ``python -m lanelib`` command the README
-shows parses."""
+file path named in the README and docs exists, every ``python -m lanelib`` command the README
+shows parses, and the changelog's newest version is the package's."""
 from __future__ import annotations
 
 import re
@@ -13,6 +13,7 @@ from lanelib.cli import build_parser
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+CHANGELOG = REPO / "CHANGELOG.md"
 MAX_README_LINES = 250
 # paths the pages name that are not in a clone: a file the e2e test writes, a video of the real
 # Udacity data (under LANELIB_DATA)
@@ -24,7 +25,7 @@ def test_the_readme_is_short():
     assert len(lines) <= MAX_README_LINES, f"README.md has {len(lines)} lines; move reference material to docs/"
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", [*PAGES, CHANGELOG], ids=lambda p: p.name)
 def test_every_relative_link_resolves(page):
     text = page.read_text(encoding="utf-8")
     for target in re.findall(r"\]\(([^)\s]+)\)", text):
@@ -60,3 +61,14 @@ def test_every_readme_command_parses(command):
         build_parser().parse_args(words)
     except SystemExit as e:
         pytest.fail(f"README command does not parse: {command} (exit {e.code})")
+
+
+def test_the_changelog_starts_with_the_package_version():
+    """The newest entry of CHANGELOG.md is the version pyproject.toml gives the package."""
+    pyproject = (REPO / "pyproject.toml").read_text(encoding="utf-8")
+    version = re.search(r'^version = "([^"]+)"', pyproject, re.M)
+    entries = re.findall(r"^## \[?(\d+\.\d+\.\d+)", CHANGELOG.read_text(encoding="utf-8"), re.M)
+    assert entries and version, "CHANGELOG.md needs '## X.Y.Z - date' entries; pyproject.toml a version"
+    assert entries[0] == version.group(1), (
+        f"pyproject.toml says {version.group(1)}, the newest CHANGELOG.md entry {entries[0]}: "
+        "add the entry or bump the version")
