@@ -1,6 +1,7 @@
 """The README stays short and the docs hold together: the README's length, every relative link and
-file path named in the README and docs exists, every ``python -m lanelib`` command the README
-shows parses, and the changelog's newest version is the package's."""
+file path named in the README and docs exists, every ``python -m lanelib`` command the README and
+docs show parses (``--help``-level: the parser only, nothing runs), and the changelog's newest
+version is the package's."""
 from __future__ import annotations
 
 import re
@@ -35,32 +36,47 @@ def test_every_relative_link_resolves(page):
         assert path.exists(), f"{page.name}: the link {target} leads nowhere ({path})"
 
 
+# a path into the repository, wherever a page names it: a code span, a command, a fenced block
+REPO_PATH = re.compile(r"(?<![\w./~-])((?:lanelib|tests|bench|notebooks|docs|videos|test_images|camera_cal)"
+                       r"/[\w./-]*)")
+FENCE = re.compile(r"^```[^\n]*\n(.*?)^```", re.M | re.S)
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_repository_path_named_exists(page):
-    """Code spans that name a file or folder of the repository (``tests/...``, ``bench/x.py``) exist."""
+    """Every file or folder of the repository a page names (``tests/...``, ``bench/x.py``, in
+    prose, code spans, commands and fenced blocks) exists; a placeholder (``videos/NAME.mp4``,
+    ``*``, ``…``) is left out."""
     text = page.read_text(encoding="utf-8")
-    for span in re.findall(r"`((?:lanelib|tests|bench|notebooks|docs|videos|test_images|camera_cal)/[\w./-]*)`", text):
-        if any(c in span for c in "*…") or span in NOT_IN_A_CLONE:
+    for found in REPO_PATH.findall(text):
+        path = found.rstrip(".")
+        if any(c in path for c in "*…") or re.search(r"[A-Z]{2,}", path) or path in NOT_IN_A_CLONE:
             continue
-        assert (REPO / span.rstrip("/")).exists(), f"{page.name}: `{span}` is not in the repository"
+        assert (REPO / path.rstrip("/")).exists(), f"{page.name}: `{path}` is not in the repository"
 
 
-def readme_commands() -> list[str]:
-    text = (REPO / "README.md").read_text(encoding="utf-8").replace("\\\n", " ")
-    return [m.split("#")[0].strip() for m in re.findall(r"python -m lanelib [^`\n]+", text)]
+def shown_commands(page: Path) -> list[str]:
+    """Return the ``python -m lanelib ...`` commands a page shows: each line of a fenced block, each
+    code span (one that wraps onto the next line joined), continuation lines joined."""
+    text = page.read_text(encoding="utf-8").replace("\\\n", " ")
+    pieces = [line for block in FENCE.findall(text) for line in block.splitlines()]
+    pieces += [span.replace("\n", " ") for span in re.findall(r"`([^`]+)`", FENCE.sub("", text))]
+    return [m.split("#")[0].strip() for piece in pieces for m in re.findall(r"python -m lanelib .+", piece)]
 
 
-@pytest.mark.parametrize("command", readme_commands())
-def test_every_readme_command_parses(command):
-    """A shown alternative ``a|b`` is tried as ``a``; an optional ``[...]`` is left out."""
+@pytest.mark.parametrize("page, command", [(page, c) for page in PAGES for c in shown_commands(page)],
+                         ids=lambda v: v.name if isinstance(v, Path) else v)
+def test_every_shown_command_parses(page, command):
+    """A shown alternative ``a|b`` is tried as ``a``; an optional ``[...]`` is left out; a sketch
+    (``COMMAND``, ``…``) is not a command."""
     text = re.sub(r"\[[^\]]*\]", "", command)
     words = [w.split("|")[0] for w in shlex.split(text)[3:]]
-    if not words or words[0] == "COMMAND":
+    if not words or words[0] == "COMMAND" or "…" in command:
         pytest.skip("a placeholder, not a command")
     try:
         build_parser().parse_args(words)
     except SystemExit as e:
-        pytest.fail(f"README command does not parse: {command} (exit {e.code})")
+        pytest.fail(f"{page.name}: the command does not parse: {command} (exit {e.code})")
 
 
 def test_the_changelog_starts_with_the_package_version():
