@@ -1,20 +1,25 @@
 """The README stays short and the docs hold together: the README's length, every relative link and
 file path named in the README and docs exists, every ``python -m lanelib`` command the README and
-docs show parses (``--help``-level: the parser only, nothing runs), and the changelog's newest
-version is the package's."""
+docs show parses (``--help``-level: the parser only, nothing runs), the hard-road page's defaults
+and ablation rows are the code's and ``docs/ablation.json``'s, and the changelog's newest version
+is the package's."""
 from __future__ import annotations
 
+import json
 import re
 import shlex
 from pathlib import Path
 
 import pytest
 
+from lanelib.ablation import REAL, Ablation
 from lanelib.cli import build_parser
+from lanelib.config import PipelineConfig, override
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 CHANGELOG = REPO / "CHANGELOG.md"
+HARD_ROADS = REPO / "docs" / "hard-roads.md"
 MAX_README_LINES = 250
 # paths the pages name that are not in a clone: a file the e2e test writes, a video of the real
 # Udacity data (under LANELIB_DATA)
@@ -88,3 +93,43 @@ def test_the_changelog_starts_with_the_package_version():
     assert entries[0] == version.group(1), (
         f"pyproject.toml says {version.group(1)}, the newest CHANGELOG.md entry {entries[0]}: "
         "add the entry or bump the version")
+
+
+def bullets(text: str, label: str) -> list[str]:
+    """Return the text of each ``- **label**`` bullet of a page, its wrapped lines joined."""
+    found = re.findall(rf"^- \*\*{label}\*\*:? (.*?)(?=\n- |\n\n|\n#|\Z)", text, re.M | re.S)
+    return [" ".join(b.split()) for b in found]
+
+
+def test_the_hard_road_parameters_are_the_defaults():
+    """Each ``part.key=value`` a part's Parameters name is the built-in default."""
+    named = [s for b in bullets(HARD_ROADS.read_text(encoding="utf-8"), "Parameters")
+             for s in re.findall(r"`([a-z_]+\.[\w.]+=[^`]*)`", b)]
+    assert len(named) >= 30, named
+    wrong = [s for s in named if override(PipelineConfig(), [s]) != PipelineConfig()]
+    assert not wrong, f"docs/hard-roads.md names other values than the defaults: {wrong}"
+
+
+def test_the_hard_road_ablation_rows_are_the_ablations():
+    """Each Ablation line names a part of ``docs/ablation.json`` with its switch, what the real
+    rows say of it and each real row it changes; every tracker and edge part has one."""
+    ab = Ablation.from_dict(json.loads((REPO / "docs" / "ablation.json").read_text(encoding="utf-8")))
+    keys = {r.title: r.key for r in ab.baseline}
+    rows = bullets(HARD_ROADS.read_text(encoding="utf-8"), "Ablation")
+    named = set()
+    for row in rows:
+        m = re.fullmatch(r'\("([^"]+)", (off|on): (.+?)\): (earns its place|worsens a real row|'
+                         r'no effect on the real rows|not measured)\.?(?:: (.*?)\.?)?', row)
+        assert m, f"docs/hard-roads.md: an Ablation line of another form: {row}"
+        name, how, switch, verdict, figures = m.groups()
+        part = ab.part(name)
+        assert ((how == "off") == part.default
+                and re.findall(r"`([^`]+)`", switch) == list(part.settings)), (name, how, switch)
+        assert verdict == ab.verdict(name), (name, verdict)
+        shown = {keys[t]: float(v) for t, v in re.findall(r"([A-Z][\w .]*?) ([+-]\d+\.\d)", figures or "")}
+        effects = ab.effects(name)
+        changed = {k: round(effects[k], 1) for k in REAL if effects.get(k)}
+        assert shown == changed, (name, shown, changed)
+        named.add(name)
+    hard = {p.name for p in ab.parts if p.settings[0].startswith(("tracking.", "edge."))}
+    assert hard <= named, f"docs/hard-roads.md has no Ablation line for {sorted(hard - named)}"
