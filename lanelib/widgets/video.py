@@ -69,6 +69,30 @@ class TunedVideo(widgets.Video):
         return bundle
 
 
+def played_frames(tracked: int, seconds: float | None, fps: float) -> int:
+    """Return how many of ``tracked`` frames ``VideoTuner.play(seconds=...)`` writes (all for None)."""
+    if seconds is None:
+        return tracked
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(seconds) or seconds <= 0:
+        raise InputError(f"VideoTuner.play: seconds={seconds!r}; pass a number of seconds > 0, or None "
+                         "for every tracked frame")
+    return max(1, min(tracked, round(float(seconds) * fps)))
+
+
+def played_size(shape: tuple[int, ...], width_px: int | None) -> tuple[int, int] | None:
+    """Return the (w, h) ``VideoTuner.play(width_px=...)`` scales frames of ``shape`` to (both even,
+    the height keeping the aspect ratio), or None for their own size."""
+    if width_px is None:
+        return None
+    if isinstance(width_px, bool) or not isinstance(width_px, (int, np.integer)) or width_px < 16:
+        raise InputError(f"VideoTuner.play: width_px={width_px!r}; pass a whole number of pixels >= 16, "
+                         "or None for the clip's size")
+    h, w = shape[:2]
+    even = int(width_px) // 2 * 2
+    return even, max(2, int(even * h / w) // 2 * 2)
+
+
 class VideoTuner(Tuner):
     """Tune the lane tracker on a clip: its parameters, the tracked frame and the clip at a glance.
 
@@ -91,7 +115,8 @@ class VideoTuner(Tuner):
     is the debug composite of the tracked frame (its mask is thresholded again for the view: the
     search saw the same pixels) above a strip of the per-frame confidences and offset
     (``strip``). ``play()`` writes the tracked frames as an annotated video and returns it as a
-    playable widget (``play(seconds=2, width_px=640)``: a short, small clip). ``save`` writes the ``tracking`` and ``checks`` parts.
+    playable widget (``play(seconds=2, width_px=640)``: a short, small clip). ``save`` writes the
+    ``tracking`` and ``checks`` parts.
     """
 
     columns = 1
@@ -237,8 +262,8 @@ class VideoTuner(Tuner):
             raise InputError(f"{target}: the output video needs a video suffix "
                              f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. tuned.mp4")
         fps = self._video_info(clip).fps
-        n = self._played_frames(seconds, fps)
-        size = self._played_size(width_px)
+        n = played_frames(len(self.results), seconds, fps)
+        size = played_size(self._clip[1][0].shape, width_px)
         with io.VideoWriter(target, fps, inputs=[clip]) as writer:
             for frame, result in zip(self.frames[:n], self.results[:n]):
                 out = self._annotate(frame, result)
@@ -248,28 +273,6 @@ class VideoTuner(Tuner):
         return TunedVideo(target, n, value=target.read_bytes(), format="mp4",
                           autoplay=False, loop=False, controls=True,
                           layout=widgets.Layout(max_width="100%"))
-
-    def _played_frames(self, seconds: float | None, fps: float) -> int:
-        """Return how many tracked frames ``play(seconds=...)`` writes (all of them for None)."""
-        n = len(self.results)
-        if seconds is None:
-            return n
-        if isinstance(seconds, bool) or not isinstance(seconds, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(seconds) or seconds <= 0:
-            raise InputError(f"VideoTuner.play: seconds={seconds!r}; pass a number of seconds > 0, or None for "
-                             "every tracked frame")
-        return max(1, min(n, round(float(seconds) * fps)))
-
-    def _played_size(self, width_px: int | None) -> tuple[int, int] | None:
-        """Return the (w, h) ``play(width_px=...)`` scales to, or None for the clip's own size."""
-        if width_px is None:
-            return None
-        if isinstance(width_px, bool) or not isinstance(width_px, (int, np.integer)) or width_px < 16:
-            raise InputError(f"VideoTuner.play: width_px={width_px!r}; pass a whole number of pixels >= 16, or "
-                             "None for the clip's size")
-        h, w = self._clip[1][0].shape[:2]
-        even = int(width_px) // 2 * 2
-        return even, max(2, int(even * h / w) // 2 * 2)
 
     def annotated(self) -> np.ndarray:
         """Return the tracked frame shown, annotated as ``python -m lanelib video`` draws it.
