@@ -5,7 +5,8 @@ on the machine that runs it; these checks catch, where a notebook is written, th
 that replay differently elsewhere: float noise whose last digits depend on the CPU's BLAS or SIMD
 kernel (``7e-15`` on one machine, ``9e-16`` on the next), absolute paths, timings, and cells run
 out of order. ``make test`` also replays the notebooks under other BLAS and OpenCV kernels and one
-thread (the Makefile's ``portability`` target).
+thread (the Makefile's ``portability`` target). A committed notebook also stays small: what it
+embeds (figures, a video widget's bytes) is what a clone downloads.
 """
 from __future__ import annotations
 
@@ -16,6 +17,9 @@ from pathlib import Path
 import pytest
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
+MAX_NOTEBOOK_BYTES = 1_500_000
+# notebooks held to less: 07's video widget embeds its clip (VideoTuner.play(seconds=, width_px=))
+MAX_BYTES = {"07_video.ipynb": 1_000_000}
 
 # a number in scientific notation below 1e-9: float noise, not a figure
 FLOAT_NOISE = re.compile(r"\d(?:\.\d+)?e-(?:0*(?:[1-9]\d+))\b", re.IGNORECASE)
@@ -52,6 +56,14 @@ def test_float_noise_pattern_catches_noise_and_spares_figures():
     assert FLOAT_NOISE.search("residual 1.23e-10 px")
     for fine in ("curvature 7.5e-05 1/m", "k1 -3.0e-05", "2.5e-4", "1e-9"):
         assert not FLOAT_NOISE.search(fine), fine
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_the_committed_notebook_is_small(path):
+    limit = MAX_BYTES.get(path.name, MAX_NOTEBOOK_BYTES)
+    size = path.stat().st_size
+    assert size <= limit, (f"{path.name} is {size:,} bytes, over its {limit:,}: show smaller figures "
+                           "(JPEG, lower dpi) or a shorter, smaller clip, then re-execute it")
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)

@@ -176,3 +176,17 @@ def test_play_writes_the_tracked_frames_and_returns_a_video(tuner, tmp_path):
         tuner.play(tmp_path / "tuned.txt")
     with pytest.raises(InputError, match="output would overwrite an input"):
         tuner.play(CLIP)
+
+
+def test_play_keeps_a_short_small_clip_when_asked(tuner, tmp_path):
+    """``seconds`` keeps the first tracked frames, ``width_px`` scales them (even sizes for H.264)."""
+    out = tmp_path / "short.mp4"
+    video = tuner.play(out, seconds=0.4, width_px=641)  # 10 frames at 25 fps
+    info = io.video_info(out)
+    assert (info.n_frames, info.size) == (10, (640, 360))
+    assert repr(video) == "TunedVideo('short.mp4', frames=10)" and video.value == out.read_bytes()
+    assert tuner.play(out, seconds=60).frames == N  # no more than were tracked
+    for bad in ({"seconds": 0}, {"seconds": float("nan")}, {"seconds": True}, {"width_px": 8},
+                {"width_px": 640.0}):
+        with pytest.raises(InputError, match="VideoTuner.play: (seconds|width_px)="):
+            tuner.play(out, **bad)

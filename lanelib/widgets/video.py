@@ -69,6 +69,30 @@ class TunedVideo(widgets.Video):
         return bundle
 
 
+def played_frames(tracked: int, seconds: float | None, fps: float) -> int:
+    """Return how many of ``tracked`` frames ``VideoTuner.play(seconds=...)`` writes (all for None)."""
+    if seconds is None:
+        return tracked
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(seconds) or seconds <= 0:
+        raise InputError(f"VideoTuner.play: seconds={seconds!r}; pass a number of seconds > 0, or None "
+                         "for every tracked frame")
+    return max(1, min(tracked, round(float(seconds) * fps)))
+
+
+def played_size(shape: tuple[int, ...], width_px: int | None) -> tuple[int, int] | None:
+    """Return the (w, h) ``VideoTuner.play(width_px=...)`` scales frames of ``shape`` to (both even,
+    the height keeping the aspect ratio), or None for their own size."""
+    if width_px is None:
+        return None
+    if isinstance(width_px, bool) or not isinstance(width_px, (int, np.integer)) or width_px < 16:
+        raise InputError(f"VideoTuner.play: width_px={width_px!r}; pass a whole number of pixels >= 16, "
+                         "or None for the clip's size")
+    h, w = shape[:2]
+    even = int(width_px) // 2 * 2
+    return even, max(2, int(even * h / w) // 2 * 2)
+
+
 class VideoTuner(Tuner):
     """Tune the lane tracker on a clip: its parameters, the tracked frame and the clip at a glance.
 
@@ -91,7 +115,8 @@ class VideoTuner(Tuner):
     is the debug composite of the tracked frame (its mask is thresholded again for the view: the
     search saw the same pixels) above a strip of the per-frame confidences and offset
     (``strip``). ``play()`` writes the tracked frames as an annotated video and returns it as a
-    playable widget. ``save`` writes the ``tracking`` and ``checks`` parts.
+    playable widget (``play(seconds=2, width_px=640)``: a short, small clip). ``save`` writes the
+    ``tracking`` and ``checks`` parts.
     """
 
     columns = 1
@@ -216,24 +241,36 @@ class VideoTuner(Tuner):
                            interpolation=cv2.INTER_AREA)
         return np.vstack([top, strip])
 
-    def play(self, path: str | os.PathLike | None = None) -> TunedVideo:
+    def play(self, path: str | os.PathLike | None = None, seconds: float | None = None,
+             width_px: int | None = None) -> TunedVideo:
         """Write the tracked frames annotated with the tuned lane; return the video as a widget.
 
         The frames and lanes are those of the last run (``results``), drawn as ``python -m
         lanelib video`` draws them (``LanePipeline.annotate`` on the RAW frame, or on the
         undistorted one with ``config.draw.video_undistorted``), at the clip's frame rate.
         ``path`` defaults to ``out/<clip>_tuned.mp4`` in the repository; it is written
-        atomically and never over the clip. Returns an ``ipywidgets.Video`` that plays inline.
+        atomically and never over the clip. ``seconds`` keeps only the first seconds of the
+        tracked frames and ``width_px`` scales them to that width (the height keeps the aspect
+        ratio; both are rounded down to even, as H.264 needs). The widget carries the whole file
+        in the notebook, so a short, small clip keeps a saved notebook small. By default every
+        tracked frame at the clip's size.
+        Returns an ``ipywidgets.Video`` that plays inline.
         """
         clip = self.images[self.image]
         target = Path(path) if path is not None else repo_root() / "out" / f"{clip.stem}_tuned.mp4"
         if target.suffix.lower() not in io.VIDEO_SUFFIXES:
             raise InputError(f"{target}: the output video needs a video suffix "
                              f"({', '.join(io.VIDEO_SUFFIXES)}); e.g. tuned.mp4")
-        with io.VideoWriter(target, self._video_info(clip).fps, inputs=[clip]) as writer:
-            for frame, result in zip(self.frames, self.results):
-                writer.write(self._annotate(frame, result))
-        return TunedVideo(target, len(self.results), value=target.read_bytes(), format="mp4",
+        fps = self._video_info(clip).fps
+        n = played_frames(len(self.results), seconds, fps)
+        size = played_size(self._clip[1][0].shape, width_px)
+        with io.VideoWriter(target, fps, inputs=[clip]) as writer:
+            for frame, result in zip(self.frames[:n], self.results[:n]):
+                out = self._annotate(frame, result)
+                if size is not None:
+                    out = cv2.resize(out, size, interpolation=cv2.INTER_AREA)
+                writer.write(out)
+        return TunedVideo(target, n, value=target.read_bytes(), format="mp4",
                           autoplay=False, loop=False, controls=True,
                           layout=widgets.Layout(max_width="100%"))
 
