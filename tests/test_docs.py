@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+import lanelib
 from lanelib.ablation import REAL, Ablation
 from lanelib.cli import build_parser
 from lanelib.config import PipelineConfig, override
@@ -93,6 +94,7 @@ def test_the_changelog_starts_with_the_package_version():
     assert entries[0] == version.group(1), (
         f"pyproject.toml says {version.group(1)}, the newest CHANGELOG.md entry {entries[0]}: "
         "add the entry or bump the version")
+    assert lanelib.__version__ == version.group(1), "lanelib/__init__.py's __version__ differs from pyproject.toml"
 
 
 def bullets(text: str, label: str) -> list[str]:
