@@ -109,9 +109,7 @@ class LanePipeline:
         """Return the combined 0/255 lane-pixel mask of a bird's-eye image.
 
         ``fallback``: under ``ThresholdConfig.fallback_rule`` (the fallback searches' masks), or
-        the rule itself when there is none. ``made``: the masks of this image made already,
-        which the masks made here join (``thresholds.combine``).
-        """
+        the rule itself when there is none. ``made``: this image's masks (``thresholds.combine``)."""
         tc = self.config.thresholds
         rule = tc.fallback_rule if fallback and tc.fallback_rule else None
         return thresholds.combine(birdseye, tc, clahe=self._clahe, rule=rule, made=made)
@@ -168,8 +166,7 @@ class LanePipeline:
         remapped and thresholded (``band_binary``); the search sees the same pixels either way.
         ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
         without a usable prior, or with ``keep_images``). ``top_px``: the look-ahead (``search``).
-        ``made``: a dict that receives the whole view's masks, for a second rule (``binary``).
-        """
+        ``made``: a dict that receives the whole view's masks, for a second rule (``binary``)."""
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
