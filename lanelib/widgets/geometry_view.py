@@ -4,7 +4,8 @@ lines in the readout and its horizon and vanishing point on the preview.
 ``GeometryEstimate`` is a base class of ``perspective.PerspectiveTuner`` that holds
 ``estimate``, ``set_geometry`` and the estimate button's handler apart from the tuner's point
 controls; the tuner's ``_build`` makes the state they use (``geometry_options``, ``geometry``,
-``_geometry``, ``estimate_button``). The functions below it take the estimate as an argument:
+``_geometry``, ``estimate_button``), and ``set_geometry`` sets the tuner's ``_pending`` clicks and
+``_focal_px`` as its own point setters do. The functions below it take the estimate as an argument:
 ``geometry_lines`` and ``low_confidence_line`` for the readout, ``draw_horizon`` for the preview.
 """
 from __future__ import annotations
