@@ -17,7 +17,7 @@ from lanelib import batch, io, widgets
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline
-from lanelib.widgets import base
+from lanelib.widgets import export
 
 REPO = Path(__file__).resolve().parents[1]
 CLIP = REPO / "videos" / "project.mp4"
@@ -153,7 +153,7 @@ def test_an_export_needs_an_image_suffix(tmp_path):
 
 
 def test_the_export_button_writes_to_out_and_lists_the_files(tmp_path, monkeypatch):
-    monkeypatch.setattr(base, "repo_root", lambda: tmp_path)
+    monkeypatch.setattr(export, "repo_root", lambda: tmp_path)
     t = widgets.HoughTuner({"straight": REPO / "test_images" / f"{STRAIGHT}.jpg"})
     button = t.export_button
     assert "lanelib-control-export" in button._dom_classes
@@ -168,7 +168,7 @@ def test_the_export_button_writes_to_out_and_lists_the_files(tmp_path, monkeypat
     # a failed export says why in the readout and raises nothing
     blocked = tmp_path / "blocked"
     blocked.write_text("a file where the repository's folder should be")
-    monkeypatch.setattr(base, "repo_root", lambda: blocked)
+    monkeypatch.setattr(export, "repo_root", lambda: blocked)
     button.click()
     assert t.error.startswith(f"{blocked / 'out' / STRAIGHT}_hough_preview.png: cannot be written")
     assert "color:#c00" in t.message.value and "exported" not in t.message.value

@@ -5,12 +5,14 @@ a flat road, the pixel's footprint on the road (the Jacobian of (x, z) over (col
 horizon coverage, the mipmap level of each run of rows, the sky directions, the hood and the
 lens falloff. It is about a second of work that depends on nothing of the scene, so one grid
 serves every frame and every scene through the same camera. ``_box`` and ``_dash_integral`` are
-the box filters over a footprint with which the renderer anti-aliases lines, dashes and edges.
+the box filters over a footprint with which the renderer anti-aliases lines, dashes and edges;
+``_lookup`` interpolates a table at fractional rows (the centre line, the skyline).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .camera import Camera
@@ -19,6 +21,7 @@ from .textures import GRAIN_TEXEL_M, MAP_TEXEL_M, MIP_LEVELS, hood_profile
 Z_MAX_M = 200.0         # farthest road distance shaded in detail; beyond it only haze
 Z_STEP_M = 0.05
 MAX_FOOTPRINT_M = 50.0
+FAR_M = 1e3             # lateral offset given to road points off the tabulated road
 SKYLINE_BAND_DEG = (-1.0, 7.0)
 HOOD_HEIGHT_REF_PX = 720  # image height at which the hood is textures.hood_profile's 26 px
 
@@ -32,6 +35,14 @@ def _dash_integral(s: np.ndarray, period_m: float, dash_m: float) -> np.ndarray:
     """Return the painted length of a dash pattern (dashes start at multiples of the period) up to s."""
     n = np.floor(s * (1.0 / period_m))
     return n * dash_m + np.minimum(s - n * period_m, dash_m)
+
+
+def _lookup(table: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Return rows of ``table`` (N, C) linearly interpolated at fractional ``index`` (clamped), (B, W, C)."""
+    n = table.shape[0]
+    src = np.ascontiguousarray(np.broadcast_to(table.astype(np.float32)[None], (2,) + table.shape))
+    index = np.clip(index, 0, n - 1).astype(np.float32, copy=False)
+    return cv2.remap(src, index, np.zeros_like(index), cv2.INTER_LINEAR)
 
 
 @dataclass(frozen=True)

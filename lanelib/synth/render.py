@@ -7,7 +7,8 @@ Everything that depends only on the scene is drawn once (``textures``). Per fram
 only maps car-frame road points to road coordinates (s, t) through two table lookups along the
 centre line, and shades them. Anti-aliasing is analytic: every painted line, dash, streak and
 edge is box-filtered over the pixel's footprint on the road, and the maps are sampled from the
-mipmap level that matches the footprint, so distant dashes fade instead of shimmering.
+mipmap level that matches the footprint, so distant dashes fade instead of shimmering. The rest
+of the frame (sky, skyline, overpasses, barriers, glare and wet sheen) is painted by ``scenery``.
 
 A scene with ``grades`` (a vertical profile) is not a plane: per frame the renderer tabulates the
 road's height ahead of the car along the centre line, H(z) at every distance z ahead (car frame,
@@ -24,21 +25,20 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from .grid import MAX_FOOTPRINT_M, Z_MAX_M, Z_STEP_M, GroundGrid, _box, _dash_integral, _mip_bands
+from .grid import (FAR_M, MAX_FOOTPRINT_M, Z_MAX_M, Z_STEP_M, GroundGrid, _box, _dash_integral, _lookup,
+                   _mip_bands)
 from .road import CarPose, Road, car_frame, grade, world_to_car
 from .scene import Line, Scene
-from .textures import (AMBIENT, CONCRETE, DIRECT, GRAIN_TILE_PX, MAX_STREAKS, SKYLINE_STEP_DEG, Mipmap,
-                       SurfaceMap, grain, light_table, skyline, streak_table, surface_map)
+from .scenery import barrier_faces, glare, paint_bridges, paint_skyline, plain_sky, sheen
+from .textures import (AMBIENT, CONCRETE, DIRECT, GRAIN_TILE_PX, MAX_STREAKS, Mipmap, SurfaceMap, grain,
+                       light_table, skyline, streak_table, surface_map)
 
 LOOK_AHEAD_M = 220.0    # centre line used ahead of the car
 LOOK_BEHIND_M = 10.0    # and behind it (the bottom image corners see the road beside the car)
 MAX_ROAD_ANGLE_RAD = np.radians(75.0)  # the road ahead is used until it turns this far
-FAR_M = 1e3             # lateral offset given to road points off the tabulated road
 CONCRETE_JOINT_M = 4.5  # transverse joints of concrete slabs
 NOISE_MARGIN_PX = 16
 PITCH_MARGIN_PX = 120   # rows above the flat horizon a climbing road may reach (scenes with grades)
-GLARE_WIDTHS_DEG = (2.5, 12.0)   # veiling glare: core and halo fall-off angles
-SHEEN_WIDTHS_DEG = (4.0, 15.0)   # wet sheen: around the sun's mirror image on the road
 
 
 def _sample(mip: Mipmap, bands, band_level: int, cols: np.ndarray, rows: np.ndarray,
@@ -64,14 +64,6 @@ def _sample(mip: Mipmap, bands, band_level: int, cols: np.ndarray, rows: np.ndar
             out = np.empty((cols.shape[0],) + part.shape[1:], part.dtype)
         out[r0:r1] = part
     return out
-
-
-def _lookup(table: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """Return rows of ``table`` (N, C) linearly interpolated at fractional ``index`` (clamped), (B, W, C)."""
-    n = table.shape[0]
-    src = np.ascontiguousarray(np.broadcast_to(table.astype(np.float32)[None], (2,) + table.shape))
-    index = np.clip(index, 0, n - 1).astype(np.float32, copy=False)
-    return cv2.remap(src, index, np.zeros_like(index), cv2.INTER_LINEAR)
 
 
 @dataclass(frozen=True)
@@ -132,7 +124,7 @@ class Renderer:
         w, h = grid.camera.size_px
         self.noise = rng.standard_normal((h + NOISE_MARGIN_PX, w + NOISE_MARGIN_PX, 3)).astype(np.float32)
         self.haze = (1.0 - np.exp(-grid.distance_m / self.scene.look.haze_m)).astype(np.float32)
-        self.sky = self._sky()
+        self.sky = plain_sky(self.scene.look, grid)
         look = self.scene.look
         self.unit_rays = self.pitch = None
         if look.glare > 0 or look.wet > 0 or self.road.height_m is not None:
@@ -247,77 +239,6 @@ class Renderer:
                         z_index=z_hit * (1.0 / Z_STEP_M), bands=_mip_bands(np.median(footprint, axis=1)))
         return frame, (1.0 - np.exp(-distance / self.scene.look.haze_m)).astype(np.float32)
 
-    def _sun_direction(self, heading_rad: float) -> np.ndarray:
-        """Return the unit direction to the sun in the car frame (x right, y down, z ahead)."""
-        look = self.scene.look
-        az = np.radians(look.sun_azimuth_deg) - heading_rad
-        el = np.radians(look.sun_elevation_deg)
-        return np.array([np.cos(el) * np.sin(az), -np.sin(el), np.cos(el) * np.cos(az)], np.float32)
-
-    def _barriers(self, rc: RoadCoords, pose: CarPose, grid: GroundGrid) -> tuple[np.ndarray, np.ndarray]:
-        """Return the barriers' coverage and their faces' grey under full light (band, float32).
-
-        A pixel's ray runs over the ground from the car to its road point (x, z), at offset t; it
-        crosses the face at t_b after the share f of its run where the offset of (f x, f z) is t_b
-        (three secant steps from the straight-road share (t_car - t_b) / (t_car - t)), at the
-        height h_cam (1 - f) + f H(z) - H(f z) above the road there (H: ``heights_ahead``). Only
-        rays whose end lies beyond the face are tested, so a face never covers the road on the
-        car's side of it.
-        """
-        t_car, h_cam = pose.offset_m, grid.camera.height_m
-        z_grid = np.arange(len(rc.centre)) * Z_STEP_M
-        pitched = self.road.height_m is not None
-        if pitched:
-            _, above = self.heights_ahead(pose)
-        x_c, cos_c = rc.centre[:, 0], rc.centre[:, 3]
-
-        def offset(f: np.ndarray) -> np.ndarray:
-            z = f * grid.z_m
-            return (f * grid.x_m - np.interp(z, z_grid, x_c)) * np.interp(z, z_grid, cos_c)
-
-        cover = np.zeros_like(rc.t_m)
-        grey = np.zeros_like(rc.t_m)
-        for b in self.scene.look.barriers:
-            side = t_car - b.t_m
-            beyond = ((rc.t_m - b.t_m) * side < 0) & (np.abs(rc.t_m) < FAR_M / 2)
-            f0, g0 = np.zeros_like(rc.t_m), np.full_like(rc.t_m, side)
-            f1, g1 = np.ones_like(rc.t_m), np.where(beyond, rc.t_m - b.t_m, -side)
-            for _ in range(3):
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    f2 = np.clip(f1 - g1 * (f1 - f0) / (g1 - g0), 0.0, 1.0)
-                f2 = np.where(np.isfinite(f2), f2, f1)
-                f0, g0, f1, g1 = f1, g1, f2, offset(f2) - b.t_m
-            f = np.where(beyond, f1, 2.0)
-            height = h_cam * (1.0 - f)
-            if pitched:
-                height += f * np.interp(grid.z_m, z_grid, above) - np.interp(f * grid.z_m, z_grid, above)
-            height = height.astype(np.float32)
-            s_cross = pose.s_m + f * rc.s_m
-            inside = ((s_cross >= b.s_from_m) & (s_cross <= b.s_to_m)).astype(np.float32)
-            w = np.clip(np.abs(np.gradient(height, axis=0)) + np.abs(np.gradient(height, axis=1)), 1e-4, 10.0)
-            a, lo = height + w / 2, height - w / 2
-            face = _box(a, lo, 1.0 / w, b.bottom_m, b.height_m) * inside
-            top = _box(a, lo, 1.0 / w, b.height_m - b.top_m, b.height_m) * inside
-            grey += (b.grey * (face - top) + b.top_grey * top) * (1.0 - cover)
-            cover += face * (1.0 - cover)
-        return cover, grey
-
-    def _sheen(self, grid: GroundGrid, heading_rad: float) -> np.ndarray:
-        """Return the wet road's specular sheen (grey levels, band): the sun's blurred mirror image."""
-        r = self.unit_rays[grid.row0:]
-        sun = self._sun_direction(heading_rad) * np.array([1.0, -1.0, 1.0], np.float32)
-        angle = np.degrees(np.arccos(np.clip(r @ sun, -1.0, 1.0)))
-        core, halo = SHEEN_WIDTHS_DEG
-        return self.scene.look.wet * (np.exp(-angle / core) + 0.35 * np.exp(-angle / halo))
-
-    def _glare(self, heading_rad: float) -> np.ndarray:
-        """Return the veiling glare (grey levels, whole frame): a core and a halo round the sun,
-        the sun's disc (0.5 deg) and a tenth of it everywhere (the lens's stray light)."""
-        angle = np.degrees(np.arccos(np.clip(self.unit_rays @ self._sun_direction(heading_rad), -1.0, 1.0)))
-        core, halo = GLARE_WIDTHS_DEG
-        veil = 0.7 * np.exp(-angle / core) + 0.2 * np.exp(-angle / halo) + 0.1 + 4.0 * (angle < 0.5)
-        return (self.scene.look.glare * veil).astype(np.float32)
-
     # ------------------------------------------------------------------ shading
 
     def _line_paint(self, rc: RoadCoords, pose: CarPose, a: np.ndarray, b: np.ndarray,
@@ -386,9 +307,12 @@ class Renderer:
                  + look.sun * (1.0 / 255.0) * rc.profiles[MAX_STREAKS + DIRECT] * sun)
         light *= 1.0 / (look.ambient + look.sun)
         keep = (1.0 - haze) * light
-        sheen = self._sheen(grid, heading) * paved * (1.0 - haze) * (sun * (1.0 / 255.0)) if look.wet > 0 else None
+        wet = None
+        if look.wet > 0:
+            wet = sheen(look, self.unit_rays[grid.row0:], heading) * paved * (1.0 - haze) * (sun * (1.0 / 255.0))
         if look.barriers:
-            cover, face = self._barriers(rc, pose, grid)
+            above = self.heights_ahead(pose)[1] if self.road.height_m is not None else None
+            cover, face = barrier_faces(look.barriers, rc.t_m, rc.s_m, rc.centre, pose, grid, above)
             face *= (look.ambient * rc.profiles[MAX_STREAKS + AMBIENT]
                      + look.sun * rc.profiles[MAX_STREAKS + DIRECT]) * ((1.0 - haze) / (look.ambient + look.sun))
         channels = []
@@ -397,59 +321,12 @@ class Renderer:
             colour += (grey + (look.yellow_rgb[c] - grey) * yellow - colour) * paved
             colour *= keep
             colour += look.haze_rgb[c] * haze
-            if sheen is not None:
-                colour += sheen
+            if wet is not None:
+                colour += wet
             if look.barriers:
                 colour += (face + look.haze_rgb[c] * haze - colour) * cover
             channels.append(colour)
         return cv2.merge(channels), heading, grid
-
-    def _sky(self) -> np.ndarray:
-        """Return the plain sky (sky_rows x W x 3, float32): a gradient from the horizon up."""
-        look, g = self.scene.look, self.grid
-        f = np.clip(g.elevation_deg / 25.0, 0.0, 1.0)[..., None] ** 0.6
-        return (np.asarray(look.sky_horizon_rgb, np.float32) * (1 - f)
-                + np.asarray(look.sky_top_rgb, np.float32) * f).astype(np.float32)
-
-    def _skyline(self, sky: np.ndarray, heading_rad: float) -> None:
-        """Draw the distant hills and the tree line into ``sky`` (in place) for the car's heading."""
-        look, g = self.scene.look, self.grid
-        r0, r1 = g.skyline_rows
-        el = g.elevation_deg[r0:r1]
-        n = len(self.skyline) - 1
-        az = (g.azimuth_deg[r0:r1] + float(np.degrees(heading_rad))) * (1.0 / SKYLINE_STEP_DEG)
-        tops = _lookup(self.skyline, az - np.floor(az * (1.0 / n)) * n)
-        px_deg = float(np.degrees(1.0 / g.camera.K[1, 1]))
-        for k, (rgb, haze) in enumerate(((look.hills_rgb, 0.45), (look.trees_rgb, 0.2))):
-            cover = np.clip((tops[..., k] - el) * (1.0 / px_deg) + 0.5, 0.0, 1.0)[..., None]
-            colour = np.asarray(rgb, np.float32) * (1 - haze) + np.asarray(look.haze_rgb, np.float32) * haze
-            sky[r0:r1] += (colour - sky[r0:r1]) * cover
-
-    def _bridges(self, sky: np.ndarray, pose: CarPose) -> None:
-        """Draw the overpasses ahead of (or above) the car into ``sky`` in place, anti-aliased.
-
-        A bridge is a deck (its underside ``height_m`` above the road, ``length_m`` deep) with a
-        1.6 m high front face, square to the car's axis ``s_m - pose.s_m`` ahead.
-        """
-        g, cam = self.grid, self.grid.camera
-        ry, rz = g.rays[..., 1], g.rays[..., 2]
-        for bridge in self.scene.look.bridges:
-            z0 = bridge.s_m - pose.s_m
-            z1 = z0 + bridge.length_m
-            if z1 < 0 or z0 > Z_MAX_M:
-                continue
-            with np.errstate(divide="ignore", invalid="ignore"):
-                deck_z = np.where(ry < 0, (cam.height_m - bridge.height_m) / ry * rz, -1e6)
-                surfaces = [(deck_z, z0, z1, (60.0, 60.0, 62.0))]
-                if z0 > 0:
-                    face_h = np.where(rz > 0, cam.height_m - z0 / rz * ry, -1e6)
-                    surfaces.append((face_h, bridge.height_m, bridge.height_m + 1.6, (150.0, 148.0, 142.0)))
-            for values, lo, hi, rgb in surfaces:
-                values = values.astype(np.float32)
-                w = np.abs(np.gradient(values, axis=0)) + np.abs(np.gradient(values, axis=1))
-                w = np.clip(w, 1e-4, 1e3)
-                cover = _box(values + w / 2, values - w / 2, 1.0 / w, lo, hi)[..., None]
-                sky += (np.asarray(rgb, np.float32) - sky) * cover
 
     def _hood(self, frame: np.ndarray, gain: float) -> None:
         """Draw the car hood over the bottom rows of ``frame`` (float32, in place)."""
@@ -470,8 +347,8 @@ class Renderer:
         w, h = g.camera.size_px
         ground, heading, fg = self._ground(pose)
         sky = self.sky.copy()
-        self._skyline(sky, heading)
-        self._bridges(sky, pose)
+        paint_skyline(sky, look, g, self.skyline, heading)
+        paint_bridges(sky, look, g, pose)
         frame = np.empty((h, w, 3), np.float32)
         frame[:fg.row0] = sky[:fg.row0]
         frame[fg.row0:] = ground
@@ -481,7 +358,7 @@ class Renderer:
         frame *= (g.vignette * gain)[..., None]
         self._hood(frame, gain)
         if look.glare > 0:
-            frame += (self._glare(heading) * gain)[..., None]
+            frame += (glare(look, self.unit_rays, heading) * gain)[..., None]
         dy, dx = np.random.default_rng([self.scene.seed, noise_key]).integers(0, NOISE_MARGIN_PX, 2)
         frame += self.noise[dy:dy + h, dx:dx + w] * look.sensor_noise
         out = np.clip(frame, 0, 255).astype(np.uint8)

@@ -1,5 +1,6 @@
-"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout, save/load) and the
-layout helpers of the controls; the picker's choices live in ``widgets/choices.py``.
+"""The tuners' shared machinery: ``Tuner`` (picker, controls, preview, readout) and the layout
+helpers of the controls; the picker's choices live in ``widgets/choices.py``, reading the picked
+item in ``widgets/picking.py``, export, save and load in ``widgets/export.py``.
 
 A tuner shows an image picker, its controls, one persistent ``ipywidgets.Image`` holding JPEG bytes
 of a downscaled ``draw.sheet`` of named views, and a text readout of the numbers that matter.
@@ -34,19 +35,20 @@ import numpy as np
 
 from .. import io
 from ..camera import Calibration
-from ..config import PipelineConfig, from_dict, load_config, migrate, save_parts, to_dict
-from ..data import repo_root, udacity, udacity_calibration
+from ..config import PipelineConfig
 from ..draw import sheet
-from ..errors import CalibrationError, ConfigError, InputError, LaneLibError
+from ..errors import InputError, LaneLibError
 from ..pipeline import LanePipeline
 from .choices import (UDACITY_PREFIX, VIDEO_PREFIX, folder_choices, image_choices,  # noqa: F401
                       is_video, picker_items, video_choices)
+from .export import Exports
+from .picking import Picking
 
 PARTS = tuple(f.name for f in fields(PipelineConfig))  # the parts of a PipelineConfig file
 T = TypeVar("T")
 
 
-class Tuner:
+class Tuner(Picking, Exports):
     """Shared machinery of the tuners: image picker, controls, preview Image, readout, save/load.
 
     Parameters
@@ -84,10 +86,9 @@ class Tuner:
     - ``annotated()``: the picked frame with the lane drawn (default: ``LanePipeline.process``,
       as ``python -m lanelib images`` draws it); a tuner of another pipeline overrides it.
 
-    Export: ``export(folder, name)`` writes ``<name>_preview.png`` (``preview_sheet()``) and
-    ``<name>_annotated.png`` (``annotated()``); ``write_preview(path)`` and
-    ``write_annotated(path)`` write one of them. The ``export`` button beside the picker writes
-    both to ``out/`` of the repository and lists them under the preview.
+    Export, save and load (``export``, ``write_preview``, ``write_annotated``, ``save``,
+    ``load``) come from ``export.Exports``, reading the picked item (``_pick``) from
+    ``picking.Picking``.
     """
 
     columns = 3
@@ -218,92 +219,12 @@ class Tuner:
                             lambda: LanePipeline(self.config, calibration, size=size))
         return pipe.process(raw).images["result"]
 
-    def export_name(self) -> str:
-        """Return the stem of the exported files: the picked file's name, the frame, the tuner.
-
-        ``<file stem>_<tuner>`` for an image (``straight_1_threshold``), ``<file
-        stem>_frame<index>_<tuner>`` for a video frame (``project_frame50_video``); the tuner
-        is its class name without ``Tuner``, in lower case.
-        """
-        stem = self.images[self.image].stem
-        frame = f"_frame{self.frame}" if self.is_video else ""
-        kind = type(self).__name__.removesuffix("Tuner").lower() or "tuner"
-        return f"{stem}{frame}_{kind}"
-
-    def write_preview(self, path: str | os.PathLike) -> Path:
-        """Write the preview sheet (``preview_sheet()``, full quality) to ``path``; return the path.
-
-        PNG unless the suffix says otherwise (``io.IMAGE_SUFFIXES``); written atomically and
-        never over the picked input.
-        """
-        target = self._export_target(path)
-        return io.write_image(target, self.preview_sheet(), inputs=[self.images[self.image]])
-
-    def write_annotated(self, path: str | os.PathLike) -> Path:
-        """Write the annotated frame (``annotated()``) to ``path``; return the path.
-
-        PNG unless the suffix says otherwise (``io.IMAGE_SUFFIXES``): a PNG holds exactly the
-        pixels the command line draws. Written atomically and never over the picked input.
-        """
-        target = self._export_target(path)
-        return io.write_image(target, self.annotated(), inputs=[self.images[self.image]])
-
-    def export(self, folder: str | os.PathLike | None = None, name: str | None = None) -> dict[str, Path]:
-        """Write the preview and the annotated frame as PNG; return ``{"preview": path, "annotated": path}``.
-
-        Parameters
-        ----------
-        folder : where to write (made if missing); default: ``out/`` of the repository
-            (``data.repo_root()``).
-        name : the files' stem, ``<name>_preview.png`` and ``<name>_annotated.png``; default
-            ``export_name()`` (the picked file, the frame of a video, the tuner).
-
-        Both targets are checked before either is written: a name that would write over the
-        picked input raises ``InputError`` and nothing is written.
-        """
-        out = Path(folder) if folder is not None else repo_root() / "out"
-        stem = name if name is not None else self.export_name()
-        targets = {kind: self._export_target(out / f"{stem}_{kind}.png")
-                   for kind in ("preview", "annotated")}
-        return {"preview": self.write_preview(targets["preview"]),
-                "annotated": self.write_annotated(targets["annotated"])}
-
     def set_config(self, config: PipelineConfig) -> None:
         """Show ``config`` in the controls and the preview."""
         self._show(config)
         self._prepare(self._raw, self._calibration_for(self.image))
         self._update(None)
         self._refresh()
-
-    def save(self, path: str | os.PathLike) -> Path:
-        """Write the tuned parts (``self.parts``) into the PipelineConfig JSON at ``path``; return it.
-
-        A file that exists keeps every other part it holds (e.g. the perspective that
-        ``PerspectiveTuner`` saved there) and is checked first: one that is not a valid config
-        raises ``ConfigError`` and is left as it is. A new file gets the whole config, the file
-        the CLI's ``--config`` reads. The file is replaced atomically.
-        """
-        return save_parts(self.config, path, self.parts)
-
-    def load(self, path: str | os.PathLike) -> PipelineConfig:
-        """Read a PipelineConfig JSON into the controls and the preview; return the new config.
-
-        Every key the file holds in the parts the tuner shows (``self.shows``) replaces the
-        tuner's value; what the file leaves out, and the parts the tuner does not show, keep the
-        tuner's values.
-        """
-        load_config(path)  # the strict check, with the file's name in its errors
-        held = migrate(io.read_json(path, "config file"))
-        merged = to_dict(self.config)
-        for part in self.shows:
-            if part in held:
-                merged[part] = _merged(merged[part], held[part])
-        try:
-            config = from_dict(PipelineConfig, merged)
-        except ConfigError as e:
-            raise ConfigError(f"{path}: {e}") from None
-        self.set_config(config)
-        return config
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(image={self.image!r})"
@@ -379,21 +300,6 @@ class Tuner:
         h, w = self._raw.shape[:2]
         return self.tile_width_px, max(1, round(self.tile_width_px * h / w))
 
-    def _export_target(self, path: str | os.PathLike) -> Path:
-        """Return ``path`` as an export's target: an image suffix, not the picked input."""
-        target = Path(path)
-        if target.suffix.lower() not in io.IMAGE_SUFFIXES:
-            raise InputError(f"{target}: an exported image needs an image suffix "
-                             f"({', '.join(io.IMAGE_SUFFIXES)}); e.g. {target.name or 'view'}.png")
-        io.check_not_input(target, [self.images[self.image]])
-        return target
-
-    def _calibration_for(self, label: str) -> Calibration | None:
-        camera = "udacity" if label.startswith(UDACITY_PREFIX) else "bundled"
-        if camera not in self._calibrations:
-            self._calibrations[camera] = udacity_calibration() if udacity("camera_cal") else None
-        return self._calibrations[camera]
-
     # ---- wiring ---------------------------------------------------------------------------
 
     def _on_change(self, key: str) -> None:
@@ -409,84 +315,15 @@ class Tuner:
         self._update(key)
         self._refresh()
 
-    def _on_export(self, button=None) -> None:
-        """Export to ``out/`` and list the files under the preview (or say why it failed)."""
-        try:
-            written = self.export()
-        except LaneLibError as e:
-            self._show_error(str(e))
-            return
-        self.error = ""
-        text = "\n".join(filter(None, [self.readout(), "exported: " + ", ".join(
-            str(p) for p in written.values())]))
-        self.message.value = f'<pre style="margin:0">{html.escape(text)}</pre>'
-
     def _show_error(self, text: str) -> None:
         """Show ``text`` in red in the readout and keep it in ``self.error``."""
         self.error = text
         self.message.value = f'<pre style="color:#c00;margin:0">{html.escape(text)}</pre>'
 
-    def _on_pick(self, change) -> None:
-        """Show the picked item; one that cannot be shown leaves the item before picked, and why."""
-        if self._syncing:
-            return
-        frame = int(self.frame_slider.value)
-        try:
-            self._pick(change["new"])
-        except LaneLibError as e:
-            with self._quiet():
-                self.picker.value = change["old"]
-            self._pick(change["old"], frame)
-            self._show_error(str(e))
-            return
-        self.error = ""
-
-    def _on_frame(self, change) -> None:
-        if not self._syncing and self.is_video:
-            self._pick(self.image, int(change["new"]))
-
-    def _video_info(self, path: Path) -> io.VideoInfo:
-        """Return the VideoInfo of ``path``, read once per tuner."""
-        if path not in self._video_infos:
-            self._video_infos[path] = io.video_info(path)
-        return self._video_infos[path]
-
-    def _pick(self, label: str, frame: int = 0) -> None:
-        """Show item ``label`` (at video frame ``frame``): read it, ``_prepare``, ``_update(None)``."""
-        path = self.images[label]
-        if is_video(path):
-            info = self._video_info(path)
-            frame = min(max(int(frame), 0), info.n_frames - 1)
-            self._raw = io.read_frame(path, frame, info=info)
-            with self._quiet():
-                self.frame_slider.max = info.n_frames - 1
-                self.frame_slider.value = frame
-            self.frame_slider.layout.display = None
-        else:
-            self._raw = io.read_image(path)
-            self.frame_slider.layout.display = "none"
-        try:
-            self._prepare(self._raw, self._calibration_for(label))
-        except CalibrationError as e:
-            raise CalibrationError(f"{path}: {e}; or, for frames of a camera without a calibration "
-                                   "(CULane, TuSimple), make the tuner with calibration=None") from None
-        self._update(None)
-        self._refresh()
-
     def _refresh(self) -> None:
         self.preview.value = io.encode_image(self.preview_sheet(), ".jpg", self.jpeg_quality)
         text = self.readout()
         self.message.value = f'<pre style="margin:0">{html.escape(text)}</pre>' if text else ""
-
-
-def _merged(mine, held):
-    """Return ``mine`` (a part as plain dicts) with every key ``held`` sets replaced, recursively."""
-    if not (isinstance(mine, dict) and isinstance(held, dict)):
-        return held
-    out = dict(mine)
-    for k, v in held.items():
-        out[k] = _merged(out[k], v) if k in out else v
-    return out
 
 
 def row(*children: widgets.Widget) -> widgets.HBox:

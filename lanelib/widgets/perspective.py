@@ -1,7 +1,8 @@
 """``PerspectiveTuner``: the bird's-eye transform's four src corners and dst rectangle, set one by
 one, by symmetric shortcuts, by clicks on the preview or estimated from the road itself
 (``geometry.estimate_geometry``), with the straight-line check
-(``perspective.straight_line_check``) as the measure of a good one."""
+(``perspective.straight_line_check``) as the measure of a good one. The estimate (``estimate``,
+``set_geometry``) and its readout and drawing live in ``widgets/geometry_view.py``."""
 from __future__ import annotations
 
 import html
@@ -13,15 +14,16 @@ import ipyevents
 import ipywidgets as widgets
 import numpy as np
 
-from .. import autogeometry, batch, thresholds
+from .. import autogeometry, thresholds
 from ..camera import Calibration, FastBirdseye, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
-from ..errors import GeometryError, InputError, LaneLibError
-from ..autogeometry import LOW_CONFIDENCE, RoadGeometry
+from ..errors import LaneLibError
+from ..autogeometry import RoadGeometry
 from ..perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
                            straight_line_check, trapezoid_src)
 from .base import Tuner, row, sized
+from .geometry_view import GeometryEstimate, draw_horizon, geometry_lines, low_confidence_line
 
 SRC_KEYS = ("top_y", "top_width", "bottom_width", "centre_x")  # the symmetric src shortcut
 KEYS = SRC_KEYS + ("dst_margin",)
@@ -164,7 +166,7 @@ def click_to_frame(event: dict, tile_px: tuple[int, int], columns: int,
     return round(sx * frame_px[0] / tw, 2), round(sy * frame_px[1] / th, 2)
 
 
-class PerspectiveTuner(Tuner):
+class PerspectiveTuner(GeometryEstimate, Tuner):
     """Tune the bird's-eye transform: the four src corners and the dst rectangle.
 
     Three ways to set the points, all kept in step:
@@ -245,92 +247,6 @@ class PerspectiveTuner(Tuner):
         self.error = ""
         self._pending = []
         self._show(replace(self.config, perspective=new))
-        self._update(None)
-        self._refresh()
-        return self.config
-
-    def estimate(self, start_s: float | None = None, **options) -> RoadGeometry:
-        """Estimate the road geometry from the picked item, set the points to it and return it.
-
-        A video: ``batch.estimate_road_geometry`` of the picked clip, ``seconds`` of it from
-        ``start_s`` (default: its start), ``max_frames`` frames evenly spread, what
-        ``python -m lanelib geometry CLIP`` gives. An image: ``geometry.estimate_geometry`` of
-        this frame alone (one frame measures neither the hood nor the roll and gives a low
-        confidence). Both with the tuner's calibration for the item. The result goes into the
-        controls through ``set_geometry``.
-
-        Parameters
-        ----------
-        start_s : where in the clip the frames start (s); videos only.
-        **options : fields of ``autogeometry.GeometryOptions`` that replace those of
-            ``self.geometry_options`` for this estimate: ``lane_width_m``, ``look_ahead_m``,
-            ``dash_m``, ``gap_m``, ``focal_px``, ``seconds``, ``max_frames``,
-            ``accept_low_confidence`` (on by default here: a low-confidence estimate is
-            applied and flagged in the readout; off refuses it with a ``GeometryError``).
-
-        Raises
-        ------
-        GeometryError
-            If the frames give no consistent vanishing point (the reason: no road, too few
-            segments, inconsistent, road not straight), or a low confidence is refused; the
-            points are left as they are.
-        InputError
-            For an unknown option, or ``start_s`` with an image.
-        """
-        names = set(autogeometry.GeometryOptions.__dataclass_fields__)
-        unknown = sorted(set(options) - names)
-        if unknown:
-            raise InputError(f"estimate: unknown options {unknown}; use fields of "
-                             f"autogeometry.GeometryOptions ({', '.join(sorted(names))})")
-        opts = replace(self.geometry_options, **options)
-        label, path = self.image, self.images[self.image]
-        calibration = self._calibration_for(label)
-        # a low confidence is judged below; the tuner's frames go through its own calibration
-        # (or none), so no lens is estimated from the road for points it could not undistort by
-        trial = replace(opts, accept_low_confidence=True)
-        if self.is_video:
-            start = 0.0 if start_s is None else float(start_s)
-            geo = batch.estimate_road_geometry(path, calibration, trial, start_s, lens_from_road=False)
-            source = f"the clip {label}, {opts.seconds:g} s from {start:g} s"
-        else:
-            if start_s is not None:
-                raise InputError(f"{label}: start_s is for a video; an image is estimated from "
-                                 "this frame alone")
-            try:
-                geo = trial.estimate([self._raw], calibration, lens_from_road=False)
-            except GeometryError as e:
-                raise GeometryError(f"{label}: {e}") from None
-            source = f"this frame alone ({label})"
-        if geo.low_confidence and not opts.accept_low_confidence:
-            raise GeometryError(
-                f"{label}: the road geometry estimated from {source} has confidence "
-                f"{geo.confidence:.2f}, below {LOW_CONFIDENCE} ({'; '.join(geo.assumptions)}); "
-                "the points are unchanged: estimate from a clip with a longer straight stretch, "
-                "or pass accept_low_confidence=True to apply it, flagged")
-        self.set_geometry(geo, source)
-        return geo
-
-    def set_geometry(self, geo: RoadGeometry, source: str = "") -> PipelineConfig:
-        """Set the points of a road geometry (``geo.perspective_config()``); return the new config.
-
-        The src and dst points, the lane width, the visible length and the car's centre line
-        (``car_x_px``) become exactly those of ``geo`` (scaled to the picked item when ``geo``
-        was estimated on frames of another size). The readout shows ``geo``'s summary, what it
-        assumed and, below ``geometry.LOW_CONFIDENCE``, a "low confidence" flag; the preview
-        draws its horizon and vanishing point. ``source`` says in the readout where ``geo``
-        came from (e.g. "out/geometry.json").
-        """
-        pc = geo.perspective_config()
-        size = (self._raw.shape[1], self._raw.shape[0])
-        if tuple(pc.size_px) != size:
-            pc = scaled(pc, size)
-        Perspective(pc)  # refuses collinear points with a ConfigError
-        self.error = ""
-        self._pending = []
-        self.geometry = geo
-        self._geometry = (self.image, pc, source)
-        self._show(replace(self.config, perspective=pc))
-        self._focal_px = implied_focal_px(pc)
         self._update(None)
         self._refresh()
         return self.config
@@ -439,7 +355,7 @@ class PerspectiveTuner(Tuner):
         s = np.array([tw / w, th / h])
         road = self._small.copy()
         if self.geometry is not None:
-            self._draw_horizon(road)
+            draw_horizon(road, self.geometry)
         src = np.round(np.asarray(self.config.perspective.src_px) * s).astype(np.int32)
         cv2.polylines(road, [src.reshape(-1, 1, 2)], True, (255, 0, 0), 2, cv2.LINE_AA)
         for x, y in self._pending:
@@ -465,7 +381,7 @@ class PerspectiveTuner(Tuner):
             text += (f"\nplacing points: click the {CORNER_NAMES[corner]} corner on the undistorted "
                      f"frame ({len(self._pending) + 1} of 4)")
         if self.geometry is not None:
-            text += "\n" + "\n".join(self._geometry_lines())
+            text += "\n" + "\n".join(geometry_lines(self.geometry, *self._geometry[1:], self.config.perspective))
         return text
 
     # ---- points and clicks ----------------------------------------------------------------
@@ -537,59 +453,9 @@ class PerspectiveTuner(Tuner):
         except LaneLibError as e:
             self._show_error(f"placed points {src}: {e}")
 
-    # ---- the estimate -----------------------------------------------------------------------
-
-    def _low_confidence_line(self) -> str:
-        geo = self.geometry
-        if geo is None or not geo.low_confidence:
-            return ""
-        n = len(geo.frames_used)
-        return (f"low confidence: {geo.confidence:.2f}, below {LOW_CONFIDENCE} ({n} frame"
-                f"{'' if n == 1 else 's'} on straight road) - check the points before saving")
-
-    def _geometry_lines(self) -> list[str]:
-        """Return the readout's lines about the last estimate (``self.geometry``)."""
-        geo = self.geometry
-        _, applied, source = self._geometry
-        lines = [f"road geometry estimated from {source}:" if source else "road geometry estimated:"]
-        flag = self._low_confidence_line()
-        if flag:
-            lines.append(flag)
-        lines += ["  " + line for line in geo.summary().splitlines()]
-        lines.append("  assumed: " + "; ".join(geo.assumptions))
-        if self.config.perspective != applied:
-            lines.append("  (the points have been changed since this estimate)")
-        return lines
-
-    def _draw_horizon(self, tile: np.ndarray) -> None:
-        """Draw the estimate's horizon and vanishing point on the undistorted tile, in place."""
-        geo = self.geometry
-        th, tw = tile.shape[:2]
-        gw, gh = geo.size_px
-        sx, sy = tw / gw, th / gh
-        ends = [(x, geo.horizon_row_px + geo.horizon_slope * (x - gw / 2)) for x in (0.0, float(gw))]
-        (x0, y0), (x1, y1) = ((round(x * sx), round(y * sy)) for x, y in ends)
-        cv2.line(tile, (x0, y0), (x1, y1), (0, 255, 255), 1, cv2.LINE_AA)
-        vx, vy = geo.vanishing_point_px
-        cv2.drawMarker(tile, (round(vx * sx), round(vy * sy)), (0, 255, 255), cv2.MARKER_CROSS, 14, 2,
-                       cv2.LINE_AA)
-
-    def _on_estimate(self, button=None) -> None:
-        """Estimate from the picked item (``estimate``), or show why it failed in red."""
-        what = "clip" if self.is_video else "frame"
-        self.message.value = (f'<pre style="margin:0">estimating the road geometry from this {what} '
-                              "...</pre>")
-        self.estimate_button.disabled = True
-        try:
-            self.estimate()
-        except LaneLibError as e:
-            self._show_error(str(e))
-        finally:
-            self.estimate_button.disabled = False
-
     def _refresh(self) -> None:
         super()._refresh()
-        flag = self._low_confidence_line()
+        flag = low_confidence_line(self.geometry)
         if flag:  # the flag in orange, the rest as the base shows it
             text = html.escape(self.readout()).replace(
                 html.escape(flag), f'<b style="color:#c60">{html.escape(flag)}</b>')
