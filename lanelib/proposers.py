@@ -211,6 +211,6 @@ def robust_search(pipeline, binary: np.ndarray, first: LaneSearch) -> LaneSearch
         if first.bases_px == bases:
             continue
         search = sliding_windows(binary, sc, bases=bases, car_x=pipeline.car_x_px)
-        if pipeline.check(search).ok and search.left.found and search.right.found:
+        if passes(pipeline, search):
             return replace(search, method="robust")
     return None

@@ -67,11 +67,11 @@ class TrackChecks:
                 kept[side] = distant[side] = fit
                 continue
             if track is not None:
-                problem = self.track_problem(fit, track[i], rows, i)
+                problem, bends = self.track_problem(fit, track[i], rows, i)
                 if problem:
                     why.append(problem)
                     failed = True
-                    if " bent " in problem:
+                    if bends:
                         bent[side] = fit
                     continue
             kept[side] = fit
@@ -107,8 +107,9 @@ class TrackChecks:
 
     # ---- a line against its track ---------------------------------------------------------
 
-    def track_problem(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray, side: int) -> str:
-        """Return why a line is no continuation of its tracked line ("" when it is): it jumped
+    def track_problem(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray, side: int) -> tuple[str, bool]:
+        """Return why a line is no continuation of its tracked line ("" when it is), and whether
+        it is refused only for its shape (a bend that the other line may share): it jumped
         more than the jump limit at the car (``jump_limit_m``), or its shape bent more than
         ``max_bend_m`` from the track over the rows where both lie in view (unless the track
         inferred that line: a seen line is not checked against one never seen)."""
@@ -118,11 +119,11 @@ class TrackChecks:
         dx = dx[self.bend_rows(fit, tracked, rows)]
         jump_m = t.jump_limit_m(side)
         if abs(dx[-1]) > jump_m:
-            return f"{name} line jumped {abs(dx[-1]):.2f} m at the car (limit {round(jump_m, 2)} m)"
+            return f"{name} line jumped {abs(dx[-1]):.2f} m at the car (limit {round(jump_m, 2)} m)", False
         if dx.max() - dx.min() > t.config.max_bend_m and not t.state.newest_inferred(side):
             return (f"{name} line bent {dx.max() - dx.min():.2f} m away from its track "
-                    f"(limit {t.config.max_bend_m} m)")
-        return ""
+                    f"(limit {t.config.max_bend_m} m)"), True
+        return "", False
 
     def bend_rows(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """Return which ``rows`` a line's bend against its tracked line is read on: those where

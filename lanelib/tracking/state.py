@@ -56,11 +56,11 @@ class TrackState:
     ``key`` is.
     """
 
-    history: deque
-    trend: deque
-    seen_widths: deque
-    shoulders: tuple[deque, deque]
-    base_history: deque
+    history: deque = field(default_factory=deque)
+    trend: deque = field(default_factory=deque)
+    seen_widths: deque = field(default_factory=deque)
+    shoulders: tuple[deque, deque] = field(default_factory=lambda: (deque(), deque()))
+    base_history: deque = field(default_factory=deque)
     frame: int = 0
     lost: int = 0
     blind: int = 0
@@ -72,17 +72,15 @@ class TrackState:
     lost_track: LostTrack | None = None
     # (side, pixel coefficients) of the lines that could restart the lane in the previous frame
     # and in this one, each waiting for the next frame to confirm it
-    restart_candidates: tuple[list, list] = ([], [])
+    restart_candidates: tuple[list, list] = field(default_factory=lambda: ([], []))
     # (frames in a row, left and right pixel coefficients) of the pitched pairs of the previous
     # frame and of this one
-    pitched: tuple[list, list] = ([], [])
+    pitched: tuple[list, list] = field(default_factory=lambda: ([], []))
 
     @classmethod
     def new(cls, config: TrackerConfig) -> "TrackState":
         """Return the state of a tracker that has seen nothing (a new video)."""
-        return cls(deque(), deque(), deque(), (deque(), deque()),
-                   deque(maxlen=config.base_history_frames), restart_candidates=([], []),
-                   pitched=([], [])).forgot_track(config)
+        return cls(base_history=deque(maxlen=config.base_history_frames)).forgot_track(config)
 
     def forgot_track(self, config: TrackerConfig) -> "TrackState":
         """Forget the track (the lane was lost too long) and return the state; the frame
