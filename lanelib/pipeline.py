@@ -22,6 +22,7 @@ from .camera import Calibration, Undistorter
 from .checks import LaneCheck, check_lane, holds_from_px, search_bands_px
 from .config import PipelineConfig
 from .errors import InputError
+from .thresholds import Made
 from .fit import measure
 from .lines.detect import LinesSetup, find_every_line, row_weights
 from .params import LinesConfig
@@ -105,7 +106,7 @@ class LanePipeline:
         """Return the undistorted frame."""
         return self.undistorter.undistort(raw)
 
-    def binary(self, birdseye: np.ndarray, fallback: bool = False, made: dict | None = None) -> np.ndarray:
+    def binary(self, birdseye: np.ndarray, fallback: bool = False, made: Made | None = None) -> np.ndarray:
         """Return the combined 0/255 lane-pixel mask of a bird's-eye image.
 
         ``fallback``: under ``ThresholdConfig.fallback_rule`` (the fallback searches' masks), or
@@ -121,17 +122,17 @@ class LanePipeline:
         return bool(tc.fallback_rule) and tc.fallback_rule.replace(" ", "") != tc.rule.replace(" ", "")
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-               bases: tuple[float, float] | None = None, top_px: int = 0) -> LaneSearch:
+               bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None) -> LaneSearch:
         """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows.
 
         The windows start from ``bases``, the lines' x (px) on the bottom row, when given (e.g.
         the tracked lane's), else from the histogram peaks nearest the car. ``top_px`` is the
-        first row of the look-ahead (0: the whole view; ``search.lookahead_top_px``).
+        first row of the look-ahead (0: the whole view). ``pixels``: the mask's ``lane_pixels``.
         """
         if prior is not None:
             return search_around(binary, prior[0], prior[1], self.config.search, top_px)
         return sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
-                               top_px=top_px)
+                               top_px=top_px, pixels=pixels)
 
     def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``checks.search_bands_px``)."""
@@ -158,7 +159,7 @@ class LanePipeline:
         return self._bands.mask(raw, prior, whole)
 
     def search_frame(self, raw: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-                     keep_images: bool = False, top_px: int = 0, made: dict | None = None
+                     keep_images: bool = False, top_px: int = 0, made: Made | None = None
                      ) -> tuple[LaneSearch, dict]:
         """Return the lane search of one RAW frame, unchecked, and the stage images kept.
 
@@ -166,7 +167,7 @@ class LanePipeline:
         remapped and thresholded (``band_binary``); the search sees the same pixels either way.
         ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
         without a usable prior, or with ``keep_images``). ``top_px``: the look-ahead (``search``).
-        ``made``: a dict that receives the whole view's masks, for a second rule (``binary``)."""
+        ``made``: gets the whole view's masks and colour spaces, for a second rule (``binary``)."""
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
@@ -192,7 +193,7 @@ class LanePipeline:
         shorter views, other histogram peaks and the asphalt edge. The first whose pair passes
         is taken.
         """
-        made: dict = {}  # the masks made, which the fallback rule's mask reuses
+        made = Made()  # the masks made, which the fallback rule's mask reuses
         search, images = self.search_frame(raw, prior, keep_images, made=made)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:

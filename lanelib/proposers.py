@@ -24,7 +24,8 @@ from typing import Any, Callable, Protocol
 import numpy as np
 
 from .records import LaneSearch, LineFit
-from .search import candidate_bases, histogram, sliding_windows
+from .search import candidate_bases, histogram, lane_pixels, sliding_windows
+from .thresholds import Made
 
 SIDES = ("left", "right")
 
@@ -71,7 +72,8 @@ class Frame:
     first: LaneSearch | None = None
     looked: list = field(default_factory=list)  # every search run: did any see a line?
     ran: list = field(default_factory=list)  # the names of the proposers that ran
-    made: dict | None = None  # the whole view's masks made already (``LanePipeline.binary``)
+    made: Made | None = None  # the whole view's masks made already (``LanePipeline.binary``)
+    mask_pixels: tuple[np.ndarray, np.ndarray] | None = None  # ``mask()``'s, once extracted
 
     def mask(self) -> np.ndarray:
         """Return the whole view under the fallback masks' rule, thresholded once."""
@@ -84,6 +86,18 @@ class Frame:
             else:
                 images["fallback binary"] = images["binary"]
         return images["fallback binary"]
+
+    def pixels(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the lane pixels (``search.lane_pixels``) of ``mask()``, extracted once."""
+        if self.mask_pixels is None:
+            self.mask_pixels = lane_pixels(self.mask())
+        return self.mask_pixels
+
+    def search(self, prior: tuple[LineFit, LineFit] | None = None,
+               bases: tuple[float, float] | None = None, top_px: int = 0) -> LaneSearch:
+        """Return ``LanePipeline.search`` of ``mask()``, its pixels extracted once for all the
+        window searches of the frame."""
+        return self.pipeline.search(self.mask(), prior, bases=bases, top_px=top_px, pixels=self.pixels())
 
     def birdseye(self) -> np.ndarray:
         """Return the frame's bird's-eye view, warped once."""
@@ -143,7 +157,7 @@ class FallbackMasks:
         return True if frame.track is None and not frame.best.pair and frame.pipeline.has_fallback_masks else None
 
     def propose(self, frame: Frame, where):
-        return [(frame.pipeline.search(frame.mask()), "")]
+        return [(frame.search(), "")]
 
 
 class ShorterViews:
@@ -157,7 +171,7 @@ class ShorterViews:
         return True if ok else None
 
     def propose(self, frame: Frame, where):
-        return [(short_view_search(frame.pipeline, frame.mask()), "")]
+        return [(short_view_search(frame.pipeline, frame.mask(), frame.pixels()), "")]
 
 
 class OtherPeaks:
@@ -171,7 +185,7 @@ class OtherPeaks:
         return True if ok else None
 
     def propose(self, frame: Frame, where):
-        return [(robust_search(frame.pipeline, frame.mask(), frame.best.search), "")]
+        return [(robust_search(frame.pipeline, frame.mask(), frame.best.search, frame.pixels()), "")]
 
 
 def passes(pipeline, search: LaneSearch) -> bool:
@@ -179,28 +193,32 @@ def passes(pipeline, search: LaneSearch) -> bool:
     return search.left.found and search.right.found and pipeline.check(search).ok
 
 
-def short_view_search(pipeline, binary: np.ndarray) -> LaneSearch | None:
+def short_view_search(pipeline, binary: np.ndarray,
+                      pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch | None:
     """Return the first search in a shorter look-ahead whose lane passes the checks, or None.
 
     Sliding windows over the lower ``SearchConfig.short_views`` shares of the view in turn (a
     tight bend's lane stays in a shorter view; ``search.lookahead_top_px``). Its search's
-    ``top_px`` says which.
+    ``top_px`` says which. ``pixels``: the mask's ``search.lane_pixels`` when made already.
     """
     h = pipeline.size[1]
+    pixels = lane_pixels(binary) if pixels is None else pixels
     for share in pipeline.config.search.short_views:
-        search = pipeline.search(binary, top_px=int(round(h * (1.0 - share))))
+        search = pipeline.search(binary, top_px=int(round(h * (1.0 - share))), pixels=pixels)
         if passes(pipeline, search):
             return search
     return None
 
 
-def robust_search(pipeline, binary: np.ndarray, first: LaneSearch) -> LaneSearch | None:
+def robust_search(pipeline, binary: np.ndarray, first: LaneSearch,
+                  pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch | None:
     """Return the first search from other histogram peaks whose lane passes the checks, or None.
 
     For a frame whose search from the strongest peaks failed its checks (a seam, a kerb or a
     shadow edge took a line): sliding windows from each pair of the ``candidates`` strongest
     peaks on each side (``search.candidate_bases``), the pairs with the stronger peaks first,
-    skipping the pair already tried. Its search's ``method`` is "robust".
+    skipping the pair already tried. Its search's ``method`` is "robust". ``pixels``: the mask's
+    ``search.lane_pixels`` when made already.
     """
     sc = pipeline.config.search
     hist = histogram(binary, sc.histogram_fraction)
@@ -210,7 +228,7 @@ def robust_search(pipeline, binary: np.ndarray, first: LaneSearch) -> LaneSearch
     for bases in pairs:
         if first.bases_px == bases:
             continue
-        search = sliding_windows(binary, sc, bases=bases, car_x=pipeline.car_x_px)
+        search = sliding_windows(binary, sc, bases=bases, car_x=pipeline.car_x_px, pixels=pixels)
         if passes(pipeline, search):
             return replace(search, method="robust")
     return None

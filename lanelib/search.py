@@ -91,17 +91,19 @@ def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
 
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     bases: tuple[float | None, float | None] | None = None,
-                    car_x: float | None = None, top_px: int = 0) -> LaneSearch:
+                    car_x: float | None = None, top_px: int = 0,
+                    pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch:
     """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
 
     With ``top_px`` > 0 the search reads only the rows from ``top_px`` down (a shorter
     look-ahead, ``lookahead_top_px``): the histogram covers the lower ``histogram_fraction`` of
     those rows and the windows, as tall as in the whole view, stop there. The fits stay in the
-    view's coordinates and their span rules in its rows (``fit_line``).
+    view's coordinates and their span rules in its rows (``fit_line``). ``pixels``: the mask's
+    ``lane_pixels``, when a mask searched several times has them already.
     """
     h = binary.shape[0]
     top_px = int(min(max(top_px, 0), h - 1))
-    ys, xs = lane_pixels(binary)
+    ys, xs = lane_pixels(binary) if pixels is None else pixels
     if top_px:
         first = int(np.searchsorted(ys, top_px))
         ys, xs = ys[first:], xs[first:]

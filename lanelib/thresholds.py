@@ -15,7 +15,7 @@ from __future__ import annotations
 import ast
 import functools
 import math
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import cv2
@@ -324,10 +324,20 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     return {n: mask(ch, getattr(config, n)) for n in wanted if getattr(config, n).enabled}
 
 
+@dataclass
+class Made:
+    """What ``combine`` made of one image: its masks by name and its colour conversions, so a
+    second rule on the same image (``fallback_rule``) makes only the masks it adds, and converts
+    no colour space twice."""
+
+    masks: dict[str, np.ndarray] = field(default_factory=dict)
+    channels: Channels | None = None
+
+
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None,
             rule: str | None = None, channels: Channels | None = None,
-            made: dict[str, np.ndarray] | None = None) -> np.ndarray:
+            made: Made | None = None) -> np.ndarray:
     """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``,
     e.g. ``config.fallback_rule``).
 
@@ -336,21 +346,23 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
     ``make_clahe`` (else one is made for this image). ``channels``: the ``Channels`` of the
     image the masks look at, made already (``Channels.cut``; without ``config.clahe`` only).
-    ``made``: a dict of this image's masks, read like ``computed``, to which each mask made here
-    is added: a second rule on the same image (``fallback_rule``) makes only the masks it adds.
+    ``made``: what was made of this image already (``Made``), read like ``computed``; each mask
+    and colour conversion made here is added to it.
     """
-    cache = made if made is not None else dict(computed or {})
-    # made (and equalised) only if a mask is still to compute
-    channels: list[Channels] = [channels] if channels is not None and not config.clahe else []
+    if made is None:
+        made = Made(dict(computed or {}))
+    if channels is not None and not config.clahe and made.channels is None:
+        made.channels = channels
+    cache = made.masks
 
     def get(name: str) -> np.ndarray | None:
         spec = getattr(config, name)
         if not spec.enabled:
             return None
         if name not in cache:
-            if not channels:
-                channels.append(Channels(mask_input(rgb, config, clahe)))
-            cache[name] = mask(channels[0], spec)
+            if made.channels is None:  # made (and equalised) only if a mask is still to compute
+                made.channels = Channels(mask_input(rgb, config, clahe))
+            cache[name] = mask(made.channels, spec)
         return cache[name]
 
     out = _evaluate(compile_rule(rule or config.rule, mask_names(config)), get)

@@ -45,7 +45,7 @@ class RoadView:
 
     def propose(self, frame, where):
         t = frame.tracker
-        return [(t.pipeline.search(frame.mask(), frame.prior, bases=t.bases(frame.track), top_px=where), "")]
+        return [(frame.search(frame.prior, bases=t.bases(frame.track), top_px=where), "")]
 
 
 def road_view_top(tracker, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]) -> int:

@@ -27,7 +27,7 @@ class WindowsFromTrack:
         return frame.tracker.bases(frame.track) if frame.track is not None and not frame.best.pair else None
 
     def propose(self, frame: Frame, where):
-        return [(frame.pipeline.search(frame.mask(), bases=where, top_px=frame.top), "")]
+        return [(frame.search(bases=where, top_px=frame.top), "")]
 
 
 class RememberedBases:
@@ -53,7 +53,7 @@ class RememberedBases:
         return (out[0], out[1]) if weak else None
 
     def propose(self, frame: Frame, where):
-        return [(frame.pipeline.search(frame.mask(), bases=where),
+        return [(frame.search(bases=where),
                  "windows started from the remembered bases (weak histogram peak)")]
 
 

@@ -14,6 +14,7 @@ from ..result import FrameResult, Rejected
 from ..proposers import FallbackMasks, Frame, OtherPeaks, Proposer, ShorterViews, choose
 from ..roads.proposers import AsphaltEdge, RoadView, Shoulder, measure_shoulders
 from ..search import lookahead_top_px
+from ..thresholds import Made
 from .judge import TrackChecks
 from .proposers import Reacquire, RememberedBases, WindowsFromTrack
 from .state import LostTrack, TrackState
@@ -146,7 +147,7 @@ class LaneTracker:
         top = 0 if track is None else self.lookahead_top_px(track)
         if track is not None and s.lost == 0:
             prior = (LineFit(tuple(track[0])), LineFit(tuple(track[1])))
-        made: dict = {}  # the whole view's masks, which the fallback rule's mask reuses
+        made = Made()  # the whole view's masks, which the fallback rule's mask reuses
         search, images = pipe.search_frame(raw, prior=prior, keep_images=keep_images or prior is None,
                                            top_px=top, made=made)
         f = Frame(pipe, raw, None, images, track, top, prior, self, first=search, made=made)
