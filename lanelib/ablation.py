@@ -19,12 +19,13 @@ synthetic rows stand beside them; a part that helps only there is no reason to b
 from __future__ import annotations
 
 import concurrent.futures
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .config import PipelineConfig, override
+from .config import PRESETS_DIR, PipelineConfig, override
 from .errors import InputError
 from .scoreboard import ROWS, Row, run as run_scoreboard, select
 
@@ -66,34 +67,39 @@ class Part:
     what: str
 
 
+# the ``hard-roads`` preset's settings: every part from "fallback masks" to "shoulder" below
+HARD_ROADS = tuple(f"{part}.{key}={value if isinstance(value, str) else json.dumps(value)}"
+                   for part, keys in json.loads((PRESETS_DIR / "hard-roads.json").read_text()).items()
+                   for key, value in keys.items())
+
 PARTS: tuple[Part, ...] = (
-    Part("fallback masks", ("thresholds.fallback_rule=",), True,
+    Part("fallback masks", ("thresholds.fallback_rule=yellow | (white & line_tophat) | shade_tophat",), False,
          "a lane refused on the main mask is looked for again on the fallback rule's mask"),
-    Part("shorter views", ("search.short_views=[]",), True,
+    Part("shorter views", ("search.short_views=[0.6, 0.4]",), False,
          "a refused lane is looked for again in shorter look-aheads (tight bends)"),
-    Part("growing margin", ("search.grow_margin_px=0",), True,
+    Part("growing margin", ("search.grow_margin_px=15",), False,
          "a sliding window widens after each empty window"),
-    Part("inner stripe of a double line", ("search.double_line_px=0",), True,
+    Part("inner stripe of a double line", ("search.double_line_px=38",), False,
          "a line of two stripes is fitted to the stripe nearer the lane"),
-    Part("asphalt edge", ("edge.enabled=false",), True,
+    Part("asphalt edge", ("edge.enabled=true",), False,
          "a side with no paint takes the edge of the asphalt as its line"),
-    Part("lane trend", ("tracking.trend_frames=0",), True,
+    Part("lane trend", ("tracking.trend_frames=5",), False,
          "the tracked lane is predicted along the trend of its recent centre lines"),
-    Part("blind hold", ("tracking.blind_hold_frames=0",), True,
+    Part("blind hold", ("tracking.blind_hold_frames=12",), False,
          "frames that see nothing at all hold the lane without counting toward a reset"),
-    Part("near-gap join", ("tracking.near_gap_m=0",), True,
+    Part("near-gap join", ("tracking.near_gap_m=1",), False,
          "on a bend, a line seen only ahead of the car is joined to the inferred line near it"),
-    Part("grade pair check", ("tracking.grade_pair_check=false",), True,
+    Part("grade pair check", ("tracking.grade_pair_check=true", "search.double_line_px=38"), False,
          "a pair refused as not parallel is checked again against a grade read from stripes"),
-    Part("stripe spread", ("tracking.stripe_spread=false",), True,
+    Part("stripe spread", ("tracking.stripe_spread=true", "search.double_line_px=38"), False,
          "an inferred line follows the width change read from the seen line's double stripes"),
-    Part("re-acquisition", ("tracking.reacquire_after_frames=0",), True,
+    Part("re-acquisition", ("tracking.reacquire_after_frames=3",), False,
          "a line inferred for frames is looked for in a wider band"),
-    Part("restart from one line", ("tracking.restart_frames=0",), True,
+    Part("restart from one line", ("tracking.restart_frames=25",), False,
          "after a reset one line alone restarts the lane where the lost track was"),
-    Part("road view", ("tracking.road_view_run_m=0",), True,
+    Part("road view", ("tracking.road_view_run_m=1",), False,
          "a refused frame's look-ahead ends where the lane no longer looks like the road"),
-    Part("shoulder", ("tracking.shoulder_frames=0",), True,
+    Part("shoulder", ("tracking.shoulder_frames=10", "edge.enabled=true"), False,
          "a faded line is placed its measured shoulder inside the asphalt edge"),
     Part("pitched start", ("tracking.pitched_start_frames=0",), True,
          "a track starts from a pair that is parallel in a pitched view"),
@@ -117,6 +123,8 @@ PARTS: tuple[Part, ...] = (
          "a refused lane is looked for again from weaker histogram peaks"),
     Part("history of bases", ("tracking.base_history_frames=25",), False,
          "a weak histogram base is replaced by a remembered one"),
+    Part("every hard-road part", HARD_ROADS, False,
+         "the fourteen parts above from fallback masks to shoulder at once: the hard-roads preset"),
 )
 
 

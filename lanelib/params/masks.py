@@ -155,9 +155,10 @@ class ThresholdConfig:
     auto-exposure lowers; the top-hat also drops what is under 12 px (7 cm in the default view)
     across, a light seam or crack rather than paint (``TopHatMask.min_width_px``).
 
-    ``fallback_rule`` ("": none) is the rule of the fallback searches only, which run when the
-    lane of ``rule`` fails its checks (``LanePipeline.detect``, ``LaneTracker``): by default it
-    adds ``shade_tophat``, whose cost (a second top-hat, about 2 ms a view) a clean road never
+    ``fallback_rule`` ("": none, the default; the ``hard-roads`` and ``country`` presets set
+    ``yellow | (white & line_tophat) | shade_tophat``) is the rule of the fallback searches
+    only, which run when the lane of ``rule`` fails its checks (``LanePipeline.detect``,
+    ``LaneTracker``): the presets' rule adds ``shade_tophat``, whose cost (a second top-hat, about 2 ms a view) a clean road never
     pays. ``shade_tophat`` finds paint, white or yellow, in deep shade, where the colour masks'
     floors (HSV V >= 120, HLS L >= 160) and the top-hat's 30 levels miss it: a top-hat of HSV V
     (the brightest of R, G, B, so yellow counts as much as white) that keeps a pixel at least
@@ -194,7 +195,7 @@ class ThresholdConfig:
     sobel_mag: SobelMask = SobelMask("mag", "hls", "l", 3, 30.0, 255.0, enabled=False)
     sobel_dir: SobelMask = SobelMask("dir", "hls", "l", 7, 0.0, 0.7, enabled=False)
     rule: str = "yellow | (white & line_tophat)"
-    fallback_rule: str = "yellow | (white & line_tophat) | shade_tophat"
+    fallback_rule: str = ""
     close_px: int = 0
     open_px: int = 0
     clahe: bool = False

@@ -22,7 +22,8 @@ class EdgeConfig:
     Parameters
     ----------
     enabled : look for the asphalt edge where a side has no paint line (the lane's other line
-        found); off: a side without paint gives no line.
+        found); off (the default; the ``hard-roads`` and ``country`` presets switch it on): a
+        side without paint gives no line.
     scale : the bird's-eye view is shrunk by this factor each way before the edge is looked for
         (the edge is a wide step, not a thin stroke; 4: a 320 x 180 grid in the default view).
     step_m : width (m) of the window inside a candidate edge whose verge score is compared with
@@ -52,7 +53,7 @@ class EdgeConfig:
         measure the shoulder between them (``roads.proposers.Shoulder``).
     """
 
-    enabled: bool = True
+    enabled: bool = False
     scale: int = 4
     step_m: float = 0.4
     min_saturation_step: float = 0.15
@@ -213,9 +214,11 @@ class TrackerConfig:
         lane. A second-order fit extrapolated 3 m errs by about 3**2 * dk / 2, a few cm for the
         curvature changes of a clothoid between frames; the view opens fully in 5 frames.
     trend_frames : accepted frames whose lane centre line gives the trend that the predicted lane
-        follows (``TrackState.predicted_lane``), from the third accepted frame on; below 3 turns the prediction off.
+        follows (``TrackState.predicted_lane``), from the third accepted frame on; below 3 (0, the
+        default) turns the prediction off, the presets ``hard-roads`` and ``country`` use 5.
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
         the lane is held for, beside ``hold_frames`` (``tracking.update.hold_or_lose``); they do not count toward it.
+        0 by default; 12 in the ``hard-roads`` and ``country`` presets.
     max_gap_m : largest distance (m of road) between the view's bottom row and a line's pixels
         nearest it (``records.LineFit.gap_px``) for the line to be taken as seen at the car
         (``TrackChecks.judge``). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
@@ -223,7 +226,7 @@ class TrackerConfig:
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
         has paint within it.
-    grade_pair_check : with a track, a pair whose width changes along the view otherwise than the
+    grade_pair_check : (off by default; on in the ``hard-roads`` and ``country`` presets) with a track, a pair whose width changes along the view otherwise than the
         tracked width's does (``checks.pair_problem``: "lines not parallel") is checked again
         against the width the road ahead's grade gives it in the flat view: its width at the car
         times the view's scale across the road read from a double line's stripes in this frame
@@ -232,7 +235,7 @@ class TrackerConfig:
         comes into view it lags, and the pair is refused though it is the lane. Not without a
         track: a pair that only this check keeps, with nothing to compare it with, is more often
         false than the lane.
-    stripe_spread : while one line is inferred, take the change of the lane's width
+    stripe_spread : (off by default; on in the ``hard-roads`` and ``country`` presets) while one line is inferred, take the change of the lane's width
         ahead from the seen line's double stripes (``roads.stripes.stripe_spacing_px``) when they show on
         enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
         the stripes' spacing with it, so the lane's width on a row is its tracked width at the car
@@ -240,9 +243,10 @@ class TrackerConfig:
         the distance from the bottom row). Without such stripes the tracked width is kept. The
         tracked width ahead is only as new as the last frame that saw both lines, while over a
         crest the flat view's lane ahead widens far beyond its width at the car.
-    reacquire_after_frames : 0 (off), or the accepted frames in a row a line must have been
+    reacquire_after_frames : 0 (off, the default), or the accepted frames in a row a line must have been
         inferred (or seen only short of the car, ``max_gap_m``) before it is looked for in a wider
-        band around its inference (``tracking.proposers.Reacquire``): twice ``prior_margin_px`` either side, one
+        band around its inference (``tracking.proposers.Reacquire``; 3 in the ``hard-roads`` and ``country``
+        presets): twice ``prior_margin_px`` either side, one
         ``prior_margin_px`` more for each further frame, up to ``reacquire_band_m``; the jump
         limit against it (``max_jump_m``) is as wide. Three frames: a line missing for one or two
         frames (a gap in a dashed line, a shadow) is still near its track.
@@ -250,20 +254,20 @@ class TrackerConfig:
         1.2 m, about a third of a lane: paint returning after a line was inferred for many frames
         (over a crest) may lie a metre outside the inference; a line farther out makes a lane
         outside the width checks' range with the seen line anyway.
-    restart_frames : 0 (off), or the frames after a reset in which one line alone may restart
+    restart_frames : 0 (off, the default; 25 in the ``hard-roads`` and ``country`` presets), or the frames after a reset in which one line alone may restart
         the lane where the lost track's line on its side was (``tracking.start.restart``). 25 frames (a second at
         25 fps): within it the car has moved across the lane by little (at 0.5 m/s of lateral
         speed, half a metre); later the lost track tells nothing about where the lines are.
     restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
         its side to restart the lane. 0.5 m, ``max_jump_m``'s default: a line of the
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
-    road_view_run_m : 0 (off), or the least run (m of road) of rows whose lane interior does not
+    road_view_run_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or the least run (m of road) of rows whose lane interior does not
         look like the road near the car that ends the look-ahead of a frame whose lines were
         refused (``roads.proposers.RoadView``). 1 m: a patch of dirt or a shadow's tinted
         edge across one or two rows does not; a crest's grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
-    shoulder_frames : 0 (off), or the newest measurements of a painted line's shoulder (the
+    shoulder_frames : 0 (off, the default; 10 in the ``hard-roads`` and ``country`` presets), or the newest measurements of a painted line's shoulder (the
         distance from the paint out to the asphalt edge beyond it, ``roads.proposers.Shoulder``) that are remembered;
         the shoulder is their median once half of them are in and they agree within
         ``shoulder_spread_m``, and a line whose paint then fades out is placed that far inside
@@ -284,7 +288,7 @@ class TrackerConfig:
         is joined nearer the car to the line placed the shoulder inside the asphalt edge. Paint
         returning beyond a crest, into a sag, is seen metres ahead, and its fit extrapolated to
         the car lies inside the lane there (the flat view widens the lane ahead in a sag).
-    near_gap_m : 0 (off), or ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
+    near_gap_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
         car in the newest accepted frames, when the other line of the frame reaches the car
         within it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen
         now only from farther ahead (its paint near the car in a tree's shade) it is kept where
@@ -326,23 +330,23 @@ class TrackerConfig:
     base_history_frames: int = 0
     min_base_peak: float = 3.0
     lookahead_growth_m: float = 3.0
-    trend_frames: int = 5
-    blind_hold_frames: int = 12
+    trend_frames: int = 0
+    blind_hold_frames: int = 0
     max_gap_m: float = 12.0
-    stripe_spread: bool = True
-    grade_pair_check: bool = True
-    reacquire_after_frames: int = 3
+    stripe_spread: bool = False
+    grade_pair_check: bool = False
+    reacquire_after_frames: int = 0
     reacquire_band_m: float = 1.2
-    restart_frames: int = 25
+    restart_frames: int = 0
     restart_distance_m: float = 0.5
-    road_view_run_m: float = 1.0
+    road_view_run_m: float = 0.0
     road_view_step_px: int = 8
-    shoulder_frames: int = 10
+    shoulder_frames: int = 0
     shoulder_near_m: float = 6.0
     shoulder_spread_m: float = 0.05
     shoulder_every: int = 4
     return_gap_m: float = 2.0
-    near_gap_m: float = 1.0
+    near_gap_m: float = 0.0
     near_gap_bend_m: float = 0.05
     pitched_start_frames: int = 3
     max_pitch_change: float = 0.5

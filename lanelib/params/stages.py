@@ -112,8 +112,8 @@ class SearchConfig:
         none does), so a verge or kerb beyond the line does not pull the window out.
     short_views : shares of the view's height, from its bottom row, tried in order as the
         look-ahead when the lane of the whole view fails its checks and there is no track (off:
-        ``()``); see ``lookahead_top_px`` for why a shorter view finds a lane on a tight bend. The
-        defaults, 0.6 and 0.4 of the 23.5 m view (14 m and 9.4 m of road), keep the lane of a
+        ``()``, the default); see ``lookahead_top_px`` for why a shorter view finds a lane on a
+        tight bend. The ``hard-roads`` and ``country`` presets' 0.6 and 0.4 of the 23.5 m view (14 m and 9.4 m of road), keep the lane of a
         60 m and of a 35 m bend in the view (a line 1.9 m from the view's side leaves it after
         sqrt(2 * R * 1.9 m) of road, less the 4.8 m to the bottom row).
     min_view_fraction : the shortest look-ahead, as a share of the view's height, that
@@ -126,13 +126,14 @@ class SearchConfig:
     grow_margin_px : 0 (off), or px added to a window's half width for each empty window (fewer
         than ``minpix`` pixels) in a row below it; the margin is back to ``margin_px`` after a
         window with pixels. A line lost over a gap (a missing dash, a shadow) is caught again.
-        On by default (15 px; notebook 09 compares the switches on the bundled sets); every
-        other switch but ``double_line_px`` is off by default.
+        Off by default, 15 px in the ``hard-roads`` and ``country`` presets (notebook 09 compares
+        the switches).
     double_line_px : 0 (off), or the distance (px) between the centres of the two stripes of a
         double line (a double yellow centre line): where a line's pixels form two such stripes,
         the line is fitted to the inner one, the stripe nearer the lane (``inner_stripe``), as
-        the lane's boundary is marked. 38 px is 0.22 m in the default 1280x720 view (0.10-0.15 m
-        stripes 0.10 m apart); stripes 0.6-1.5 times as far apart are taken.
+        the lane's boundary is marked. Off by default; the ``hard-roads`` and ``country`` presets'
+        38 px is 0.22 m in the default 1280x720 view (0.10-0.15 m stripes 0.10 m apart); stripes
+        0.6-1.5 times as far apart are taken.
     """
 
     n_windows: int = 9
@@ -147,11 +148,11 @@ class SearchConfig:
     trim_outliers_pct: float = 0.0
     window_histogram: bool = False
     centre_first: bool = False
-    grow_margin_px: int = 15
+    grow_margin_px: int = 0
     candidates: int = 1
-    short_views: tuple[float, ...] = (0.6, 0.4)
+    short_views: tuple[float, ...] = ()
     min_view_fraction: float = 0.4
-    double_line_px: float = 38.0
+    double_line_px: float = 0.0
 
     def __post_init__(self):
         if self.double_line_px < 0:
