@@ -19,13 +19,12 @@ synthetic rows stand beside them; a part that helps only there is no reason to b
 from __future__ import annotations
 
 import concurrent.futures
-import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
-from .config import PRESETS_DIR, PipelineConfig, override
+from .config import PipelineConfig, override, preset_settings
 from .errors import InputError
 from .scoreboard import ROWS, Row, run as run_scoreboard, select
 
@@ -68,9 +67,7 @@ class Part:
 
 
 # the ``hard-roads`` preset's settings: every part from "fallback masks" to "shoulder" below
-HARD_ROADS = tuple(f"{part}.{key}={value if isinstance(value, str) else json.dumps(value)}"
-                   for part, keys in json.loads((PRESETS_DIR / "hard-roads.json").read_text()).items()
-                   for key, value in keys.items())
+HARD_ROADS = preset_settings("hard-roads")
 
 PARTS: tuple[Part, ...] = (
     Part("fallback masks", ("thresholds.fallback_rule=yellow | (white & line_tophat) | shade_tophat",), False,

@@ -225,6 +225,27 @@ def preset(name: str) -> PipelineConfig:
     return load_config(PRESETS_DIR / f"{name}.json")
 
 
+def preset_settings(name: str) -> tuple[str, ...]:
+    """Return the ``"part.key=value"`` settings (``override``'s) that preset ``name`` makes, e.g.
+    to switch the ``hard-roads`` parts on over another config.
+
+    Examples
+    --------
+    >>> override(PipelineConfig(), preset_settings("hard-roads")) == preset("hard-roads")
+    True
+    """
+    preset(name)  # an unknown name raises here, listing the presets
+    data = json.loads((PRESETS_DIR / f"{name}.json").read_text(encoding="utf-8"))
+
+    def flat(node: dict, prefix: str):
+        for key, value in node.items():
+            if isinstance(value, dict):
+                yield from flat(value, f"{prefix}{key}.")
+            else:
+                yield f"{prefix}{key}={value if isinstance(value, str) else json.dumps(value)}"
+    return tuple(flat(data, ""))
+
+
 def benchmark_config(benchmark: str) -> PipelineConfig:
     """Return the config a benchmark's frames are predicted with by default: the bundled preset
     named like it (``tusimple``, ``culane``: the benchmark's fixed camera), else the built-in one.

@@ -47,10 +47,10 @@ def test_the_seeds_switches_round_trip(tmp_path):
     saved = json.loads((tmp_path / "c.json").read_text())
     assert saved["search"]["trim_outliers_pct"] == 95.0 and saved["search"]["grow_margin_px"] == 30
     assert saved["thresholds"]["clahe"] is True and saved["thresholds"]["yellow"]["open_px"] == 3
-    # the defaults: every switch off but the growing margin, which helps (notebook 09)
+    # the defaults: every switch off (the growing margin is a part of the hard-roads preset)
     d = to_dict(PipelineConfig())
     assert (d["search"]["trim_outliers_pct"], d["search"]["window_histogram"], d["search"]["centre_first"],
-            d["search"]["grow_margin_px"]) == (0.0, False, False, 15)
+            d["search"]["grow_margin_px"]) == (0.0, False, False, 0)
     assert d["thresholds"]["clahe"] is False and d["thresholds"]["white"]["open_px"] == 0
 
 
@@ -166,12 +166,13 @@ def test_the_trend_and_blind_hold_of_the_tracker_round_trip(tmp_path):
     import dataclasses
 
     cfg = PipelineConfig()
-    assert (cfg.tracking.trend_frames, cfg.tracking.blind_hold_frames) == (5, 12)
-    cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, trend_frames=0, blind_hold_frames=4))
+    assert (cfg.tracking.trend_frames, cfg.tracking.blind_hold_frames) == (0, 0)  # off: hard-roads parts
+    assert (config.preset("hard-roads").tracking.trend_frames, config.preset("hard-roads").tracking.blind_hold_frames) == (5, 12)
+    cfg = dataclasses.replace(cfg, tracking=dataclasses.replace(cfg.tracking, trend_frames=3, blind_hold_frames=4))
     back = load_config(save_config(cfg, tmp_path / "c.json"))
     assert back == cfg
     saved = json.loads((tmp_path / "c.json").read_text())["tracking"]
-    assert (saved["trend_frames"], saved["blind_hold_frames"]) == (0, 4)
+    assert (saved["trend_frames"], saved["blind_hold_frames"]) == (3, 4)
 
 
 def test_the_lines_part_is_set_saved_and_loaded(tmp_path):

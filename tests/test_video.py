@@ -108,7 +108,7 @@ def test_p1_preset_is_found_by_name_and_unknown_names_are_refused(tmp_path):
     assert load_config_or_preset("p1") == cfg
     with pytest.raises(ConfigError, match="no such config file and no bundled preset.*p1"):
         load_config_or_preset(tmp_path / "missing.json")
-    with pytest.raises(ConfigError, match="bundled presets: country, culane, highway, p1, tusimple"):
+    with pytest.raises(ConfigError, match="bundled presets: country, culane, hard-roads, highway, p1, tusimple"):
         preset("nope")
 
 

@@ -290,6 +290,8 @@ def test_fit_controls_change_the_windows_and_the_preview(road):
     assert t.preview.value != bytes0
     t.controls["margin_px"].value = 50
     assert t.config.search.margin_px == 50
+    assert {w.x_high - w.x_low for w in t.windows.windows} == {100}  # no growing margin (default)
+    t.controls["grow_margin_px"].value = 15
     assert {w.x_high - w.x_low for w in t.windows.windows} > {100}  # wider over a gap in the dashes
     t.controls["grow_margin_px"].value = 0  # no growing margin: every window is 2 x margin_px wide
     assert {w.x_high - w.x_low for w in t.windows.windows} == {100}

@@ -34,7 +34,7 @@ def test_the_controls_exist_and_show_the_config(tuner):
                       "tracking.trend_frames", "tracking.blind_hold_frames", "tracking.max_gap_m",
                       "checks.width_m", "max_frames"}
     assert (c["tracking.trend_frames"].value, c["tracking.blind_hold_frames"].value,
-            c["tracking.max_gap_m"].value) == (tc.trend_frames, tc.blind_hold_frames, tc.max_gap_m) == (5, 12, 12.0)
+            c["tracking.max_gap_m"].value) == (tc.trend_frames, tc.blind_hold_frames, tc.max_gap_m) == (0, 0, 12.0)
     assert c["tracking.base_history_frames"].value == tc.base_history_frames == 0  # off by default
     assert c["tracking.min_base_peak"].value == tc.min_base_peak
     assert (c["tracking.smooth_frames"].value, c["tracking.hold_frames"].value) == (tc.smooth_frames,
@@ -73,11 +73,11 @@ def test_a_tracker_parameter_re_runs_the_tracker(tuner):
     tuner.controls["tracking.min_base_peak"].value = 4.5
     assert (tuner.config.tracking.base_history_frames, tuner.config.tracking.min_base_peak) == (30, 4.5)
     assert tuner.runs == 7
-    tuner.controls["tracking.trend_frames"].value = 0
+    tuner.controls["tracking.trend_frames"].value = 5
     tuner.controls["tracking.blind_hold_frames"].value = 20
     tuner.controls["tracking.max_gap_m"].value = 18.0
     assert (tuner.config.tracking.trend_frames, tuner.config.tracking.blind_hold_frames,
-            tuner.config.tracking.max_gap_m) == (0, 20, 18.0)
+            tuner.config.tracking.max_gap_m) == (5, 20, 18.0)
     assert tuner.runs == 10
 
 
