@@ -30,7 +30,7 @@ import importlib
 from .errors import (CalibrationError, ConfigError, DecodeStoppedError, InputError, LaneLibError,
                      PartialOutputError)
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 # public name -> the module that owns it
 _PUBLIC = {

@@ -18,7 +18,8 @@
   Udacity challenge video when present, else the bundled ``videos/challenge.mp4``), where the
   whole view's lane fails its checks and, with the ``hard-roads`` preset's parts switched on
   (``ROBUST``), every fallback search runs (``proposers.choose``), one thread, interleaved with
-  a remap of the same frames; ``robust_to_remap`` = their ratio (goal <= 3).
+  a remap of the same frames; ``robust_to_remap`` = their ratio (goal <= 3). Beside it,
+  ``default_to_remap``: the same frames with the default config, whose opt-in parts are off.
 - ``stages_ms``: each stage alone on the same frames (one thread): the remap, the thresholds and
   each mask the rule uses, the searches, the measurements, the tracker's update, the overlay on
   the raw frame (the video path) and the full-frame undistort the images path and --debug add;
@@ -260,6 +261,7 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         pipe = LanePipeline(config, calibration, size=size)
         stages = stage_times(pipe, frames, repeats)
         robust = robust_times(override(config, ROBUST), repeats)
+        plain = robust_times(config, repeats)
         options = GeometryOptions()
         sampled = sample_frames(video, options.seconds, options.max_frames)
         c0, w0 = time.process_time(), time.perf_counter()
@@ -292,6 +294,8 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         "robust_ms": round(robust["detect_ms"], 2), "robust_remap_ms": round(robust["remap_ms"], 2),
         "robust_source": robust["source"],
         "robust_to_remap": round(robust["detect_ms"] / robust["remap_ms"], 2),
+        "default_ms": round(plain["detect_ms"], 2),
+        "default_to_remap": round(plain["detect_ms"] / plain["remap_ms"], 2),
         "video_fps": round(video_fps, 1), "codec_fps": round(codec_fps, 1),
         "video_to_codec": round(video_fps / codec_fps, 2),
         "video_cpu_ms_per_frame": round(video_cpu, 1), "codec_cpu_ms_per_frame": round(codec_cpu, 1),
@@ -324,6 +328,8 @@ def format_report(f: dict) -> str:
              f"robust_ms       {f['robust_ms']:8.2f}   detect, no prior, on the first {ROBUST_FRAMES} frames "
              f"of {Path(f['robust_source']).name} (hard-roads parts: every fallback runs)",
              f"robust_to_remap {f['robust_to_remap']:8.2f}   {goal('robust_to_remap')}",
+             f"default_ms      {f['default_ms']:8.2f}   the same frames, default config (opt-in parts off)",
+             f"default_to_remap{f['default_to_remap']:8.2f}",
              f"video_fps       {f['video_fps']:8.1f}   `video` on {f['clip_frames']} frames "
              f"(runs: {', '.join(map(str, f['video_fps_runs']))})",
              f"codec_fps       {f['codec_fps']:8.1f}   decode + encode only "

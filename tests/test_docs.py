@@ -15,7 +15,7 @@ import pytest
 import lanelib
 from lanelib.ablation import REAL, Ablation
 from lanelib.cli import build_parser
-from lanelib.config import PipelineConfig, override
+from lanelib.config import override, preset, preset_settings
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
@@ -103,13 +103,18 @@ def bullets(text: str, label: str) -> list[str]:
     return [" ".join(b.split()) for b in found]
 
 
-def test_the_hard_road_parameters_are_the_defaults():
-    """Each ``part.key=value`` a part's Parameters name is the built-in default."""
+def test_the_hard_road_parameters_are_the_presets():
+    """Each ``part.key=value`` a part's Parameters name is the ``hard-roads`` preset's value, and
+    the page names each setting by which that preset differs from the built-in defaults."""
     named = [s for b in bullets(HARD_ROADS.read_text(encoding="utf-8"), "Parameters")
              for s in re.findall(r"`([a-z_]+\.[\w.]+=[^`]*)`", b)]
     assert len(named) >= 30, named
-    wrong = [s for s in named if override(PipelineConfig(), [s]) != PipelineConfig()]
-    assert not wrong, f"docs/hard-roads.md names other values than the defaults: {wrong}"
+    hard = preset("hard-roads")
+    wrong = [s for s in named if override(hard, [s]) != hard]
+    assert not wrong, f"docs/hard-roads.md names other values than the hard-roads preset's: {wrong}"
+    keys = {s.partition("=")[0] for s in named}
+    missing = [s for s in preset_settings("hard-roads") if s.partition("=")[0] not in keys]
+    assert not missing, f"docs/hard-roads.md names no Parameters line for {missing}"
 
 
 def test_the_hard_road_ablation_rows_are_the_ablations():

@@ -470,6 +470,7 @@ def test_bench_reports_every_figure_consistently(capsys):
     assert f["video_to_codec"] == pytest.approx(f["video_fps"] / f["codec_fps"], rel=0.01)
     assert f["robust_ms"] > 0 and Path(f["robust_source"]).name in ("challenge_video.mp4", "challenge.mp4")
     assert f["robust_to_remap"] == pytest.approx(f["robust_ms"] / f["robust_remap_ms"], rel=0.01)
+    assert 0 < f["default_ms"] and f["default_to_remap"] > 0
     assert f["size"] == [1280, 720] and f["calibrated"]
     stages = f["stages_ms"]
     assert {"remap", "detect", "band_binary (prior bands)", "undistort (images, --debug)",

@@ -156,19 +156,19 @@ class ThresholdConfig:
     across, a light seam or crack rather than paint (``TopHatMask.min_width_px``).
 
     ``fallback_rule`` ("": none, the default; the ``hard-roads`` and ``country`` presets set
-    ``yellow | (white & line_tophat) | shade_tophat``) is the rule of the fallback searches
-    only, which run when the lane of ``rule`` fails its checks (``LanePipeline.detect``,
-    ``LaneTracker``): the presets' rule adds ``shade_tophat``, whose cost (a second top-hat, about 2 ms a view) a clean road never
-    pays. ``shade_tophat`` finds paint, white or yellow, in deep shade, where the colour masks'
-    floors (HSV V >= 120, HLS L >= 160) and the top-hat's 30 levels miss it: a top-hat of HSV V
-    (the brightest of R, G, B, so yellow counts as much as white) that keeps a pixel at least
-    1.65x the road beside it (``ratio`` 0.65) and at least 8 levels above it (the floor: a step
-    of a few levels on a road at level 20 is sensor noise and video compression), 12 px wide or
+    ``yellow | (white & line_tophat) | shade_tophat``) is the rule of the fallback searches only,
+    which run when the lane of ``rule`` fails its checks (``LanePipeline.detect``, ``LaneTracker``):
+    the presets' rule adds ``shade_tophat``, whose cost (a second top-hat, about 2 ms a view) a
+    clean road never pays. ``shade_tophat`` finds paint, white or yellow, in deep shade, where the
+    colour masks' floors (HSV V >= 120, HLS L >= 160) and the top-hat's 30 levels miss it: a top-hat
+    of HSV V (the brightest of R, G, B, so yellow counts as much as white) that keeps a pixel at
+    least 1.65x the road beside it (``ratio`` 0.65) and at least 8 levels above it (the floor: a
+    step of a few levels on a road at level 20 is sensor noise and video compression), 12 px wide or
     more. Paint reflects a fixed multiple of the light on the road, so the test holds in sun and
-    shade alike; in an overpass's shade paint is still about 1.5-2x the road. In the cheap rule
-    it would cost every frame the second top-hat, and where it finds one line in shade but not
-    the other, the pair it changes can fail the parallel check. A lower ``ratio`` takes a sunlit gap between
-    two tree shadows for paint (it is as many times brighter than the shade beside it).
+    shade alike; in an overpass's shade paint is still about 1.5-2x the road. In the cheap rule it
+    would cost every frame the second top-hat, and where it finds one line in shade but not the
+    other, the pair it changes can fail the parallel check. A lower ``ratio`` takes a sunlit gap
+    between two tree shadows for paint (it is as many times brighter than the shade beside it).
 
     The other masks are there to tune and combine (notebook 03); the rule leaves them out
     because they add noise rather than lines (``python -m lanelib evaluate`` measures such a

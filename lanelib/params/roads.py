@@ -217,8 +217,8 @@ class TrackerConfig:
         follows (``TrackState.predicted_lane``), from the third accepted frame on; below 3 (0, the
         default) turns the prediction off, the presets ``hard-roads`` and ``country`` use 5.
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
-        the lane is held for, beside ``hold_frames`` (``tracking.update.hold_or_lose``); they do not count toward it.
-        0 by default; 12 in the ``hard-roads`` and ``country`` presets.
+        the lane is held for, beside ``hold_frames`` (``tracking.update.hold_or_lose``); they do not
+        count toward it. 0 by default; 12 in the ``hard-roads`` and ``country`` presets.
     max_gap_m : largest distance (m of road) between the view's bottom row and a line's pixels
         nearest it (``records.LineFit.gap_px``) for the line to be taken as seen at the car
         (``TrackChecks.judge``). A line seen only farther ahead (its paint near the car in an overpass's shade or worn
@@ -226,52 +226,55 @@ class TrackerConfig:
         over 15 m puts it 0.26 m off there, where the lane's position, width and offset are
         read. 12 m is the period of a dashed line (3 m dashes, 9 m gaps): a dashed line always
         has paint within it.
-    grade_pair_check : (off by default; on in the ``hard-roads`` and ``country`` presets) with a track, a pair whose width changes along the view otherwise than the
-        tracked width's does (``checks.pair_problem``: "lines not parallel") is checked again
-        against the width the road ahead's grade gives it in the flat view: its width at the car
-        times the view's scale across the road read from a double line's stripes in this frame
-        (``stripe_spread``'s measure, along either line), and kept when it passes. The tracked
-        width ahead is only as new as the last frame that saw both lines; where a crest or a dip
-        comes into view it lags, and the pair is refused though it is the lane. Not without a
-        track: a pair that only this check keeps, with nothing to compare it with, is more often
-        false than the lane.
-    stripe_spread : (off by default; on in the ``hard-roads`` and ``country`` presets) while one line is inferred, take the change of the lane's width
-        ahead from the seen line's double stripes (``roads.stripes.stripe_spacing_px``) when they show on
-        enough rows: where the road pitches, the flat view spreads (or narrows) the lane ahead, and
-        the stripes' spacing with it, so the lane's width on a row is its tracked width at the car
-        times the stripes' spacing there over their spacing at the car (a straight line fitted in
-        the distance from the bottom row). Without such stripes the tracked width is kept. The
-        tracked width ahead is only as new as the last frame that saw both lines, while over a
-        crest the flat view's lane ahead widens far beyond its width at the car.
-    reacquire_after_frames : 0 (off, the default), or the accepted frames in a row a line must have been
-        inferred (or seen only short of the car, ``max_gap_m``) before it is looked for in a wider
-        band around its inference (``tracking.proposers.Reacquire``; 3 in the ``hard-roads`` and ``country``
-        presets): twice ``prior_margin_px`` either side, one
-        ``prior_margin_px`` more for each further frame, up to ``reacquire_band_m``; the jump
-        limit against it (``max_jump_m``) is as wide. Three frames: a line missing for one or two
-        frames (a gap in a dashed line, a shadow) is still near its track.
+    grade_pair_check : (off by default; on in the ``hard-roads`` and ``country`` presets) with a
+        track, a pair whose width changes along the view otherwise than the tracked width's does
+        (``checks.pair_problem``: "lines not parallel") is checked again against the width the road
+        ahead's grade gives it in the flat view: its width at the car times the view's scale across
+        the road read from a double line's stripes in this frame (``stripe_spread``'s measure, along
+        either line), and kept when it passes. The tracked width ahead is only as new as the last
+        frame that saw both lines; where a crest or a dip comes into view it lags, and the pair is
+        refused though it is the lane. Not without a track: a pair that only this check keeps, with
+        nothing to compare it with, is more often false than the lane.
+    stripe_spread : (off by default; on in the ``hard-roads`` and ``country`` presets) while one
+        line is inferred, take the change of the lane's width ahead from the seen line's double
+        stripes (``roads.stripes.stripe_spacing_px``) when they show on enough rows: where the road
+        pitches, the flat view spreads (or narrows) the lane ahead, and the stripes' spacing with
+        it, so the lane's width on a row is its tracked width at the car times the stripes' spacing
+        there over their spacing at the car (a straight line fitted in the distance from the bottom
+        row). Without such stripes the tracked width is kept. The tracked width ahead is only as new
+        as the last frame that saw both lines, while over a crest the flat view's lane ahead widens
+        far beyond its width at the car.
+    reacquire_after_frames : 0 (off, the default), or the accepted frames in a row a line must have
+        been inferred (or seen only short of the car, ``max_gap_m``) before it is looked for in a
+        wider band around its inference (``tracking.proposers.Reacquire``; 3 in the ``hard-roads``
+        and ``country`` presets): twice ``prior_margin_px`` either side, one ``prior_margin_px``
+        more for each further frame, up to ``reacquire_band_m``; the jump limit against it
+        (``max_jump_m``) is as wide. Three frames: a line missing for one or two frames (a gap in a
+        dashed line, a shadow) is still near its track.
     reacquire_band_m : the widest half band (m) a long-inferred line is looked for in.
         1.2 m, about a third of a lane: paint returning after a line was inferred for many frames
         (over a crest) may lie a metre outside the inference; a line farther out makes a lane
         outside the width checks' range with the seen line anyway.
-    restart_frames : 0 (off, the default; 25 in the ``hard-roads`` and ``country`` presets), or the frames after a reset in which one line alone may restart
-        the lane where the lost track's line on its side was (``tracking.start.restart``). 25 frames (a second at
-        25 fps): within it the car has moved across the lane by little (at 0.5 m/s of lateral
-        speed, half a metre); later the lost track tells nothing about where the lines are.
+    restart_frames : 0 (off, the default; 25 in the ``hard-roads`` and ``country`` presets), or the
+        frames after a reset in which one line alone may restart the lane where the lost track's
+        line on its side was (``tracking.start.restart``). 25 frames (a second at 25 fps): within it
+        the car has moved across the lane by little (at 0.5 m/s of lateral speed, half a metre);
+        later the lost track tells nothing about where the lines are.
     restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
         its side to restart the lane. 0.5 m, ``max_jump_m``'s default: a line of the
         neighbouring lane lies a lane's width (2.5-4.5 m) away.
-    road_view_run_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or the least run (m of road) of rows whose lane interior does not
-        look like the road near the car that ends the look-ahead of a frame whose lines were
-        refused (``roads.proposers.RoadView``). 1 m: a patch of dirt or a shadow's tinted
-        edge across one or two rows does not; a crest's grass spans many.
+    road_view_run_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or the
+        least run (m of road) of rows whose lane interior does not look like the road near the car
+        that ends the look-ahead of a frame whose lines were refused (``roads.proposers.RoadView``).
+        1 m: a patch of dirt or a shadow's tinted edge across one or two rows does not; a crest's
+        grass spans many.
     road_view_step_px : rows of the bird's-eye view between the rows sampled for it (8: 90 rows
         of the 720, 0.26 m apart; only the columns the interior covers are remapped).
-    shoulder_frames : 0 (off, the default; 10 in the ``hard-roads`` and ``country`` presets), or the newest measurements of a painted line's shoulder (the
-        distance from the paint out to the asphalt edge beyond it, ``roads.proposers.Shoulder``) that are remembered;
-        the shoulder is their median once half of them are in and they agree within
-        ``shoulder_spread_m``, and a line whose paint then fades out is placed that far inside
-        the asphalt edge.
+    shoulder_frames : 0 (off, the default; 10 in the ``hard-roads`` and ``country`` presets), or the
+        newest measurements of a painted line's shoulder (the distance from the paint out to the
+        asphalt edge beyond it, ``roads.proposers.Shoulder``) that are remembered; the shoulder is
+        their median once half of them are in and they agree within ``shoulder_spread_m``, and a
+        line whose paint then fades out is placed that far inside the asphalt edge.
     shoulder_near_m : the road (m from the view's bottom row) the shoulder is measured on: at
         the car, where the paint and the edge are sharpest and the flat view least pitched.
     shoulder_spread_m : the largest robust spread (1.4826 x the median distance from the median,
@@ -288,17 +291,17 @@ class TrackerConfig:
         is joined nearer the car to the line placed the shoulder inside the asphalt edge. Paint
         returning beyond a crest, into a sag, is seen metres ahead, and its fit extrapolated to
         the car lies inside the lane there (the flat view widens the lane ahead in a sag).
-    near_gap_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
-        car in the newest accepted frames, when the other line of the frame reaches the car
-        within it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen
-        now only from farther ahead (its paint near the car in a tree's shade) it is kept where
-        seen and joined nearer the car to the line inferred from the other line, not
-        extrapolated. On a bend a line seen only a few metres ahead, extrapolated, lies tens of
-        centimetres off at the car, and a double line's far rows sweeping sideways across the
-        view can turn its fit back there. Not on straight roads (``near_gap_bend_m``): there a
-        dashed line's gaps are extrapolated well, and a join to a track whose other line is
-        missing too is worse. The same rule keeps a frame whose line is so extrapolated out of
-        the width seen at the car (``seen_width_m``).
+    near_gap_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or
+        ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
+        car in the newest accepted frames, when the other line of the frame reaches the car within
+        it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen now only
+        from farther ahead (its paint near the car in a tree's shade) it is kept where seen and
+        joined nearer the car to the line inferred from the other line, not extrapolated. On a bend
+        a line seen only a few metres ahead, extrapolated, lies tens of centimetres off at the car,
+        and a double line's far rows sweeping sideways across the view can turn its fit back there.
+        Not on straight roads (``near_gap_bend_m``): there a dashed line's gaps are extrapolated
+        well, and a join to a track whose other line is missing too is worse. The same rule keeps a
+        frame whose line is so extrapolated out of the width seen at the car (``seen_width_m``).
     pitched_start_frames : 0 (off), or the frames in a row, without a track, whose pair is refused
         only as not parallel but is a lane in a pitched flat view (``checks.pitched_pair_problem``:
         its width changes linearly along the view by at most ``max_pitch_change``, and is
