@@ -386,9 +386,9 @@ def test_udacity_images_use_the_udacity_camera(road, udacity_advanced):
     images = dict(road)
     images["udacity/straight_lines1.jpg"] = udacity_advanced / "test_images" / "straight_lines1.jpg"
     t = widgets.PerspectiveTuner(images, image="udacity/straight_lines1.jpg")
-    cal = t._calibration_for("udacity/straight_lines1.jpg")
+    cal = t.calibration_for("udacity/straight_lines1.jpg")
     assert "calibration2.jpg" in cal.used  # the Udacity boards, calibrated on first pick
-    assert t._calibration_for(STRAIGHT) is None  # no calibration was given for the bundled images
+    assert t.calibration_for(STRAIGHT) is None  # no calibration was given for the bundled images
     assert abs(t.check.left_slope) < 2.0 and abs(t.check.right_slope) < 2.0
     assert t.check.lane_width_m == pytest.approx(3.7, abs=0.15)
 
@@ -575,7 +575,7 @@ def test_load_reads_what_the_file_holds_of_the_parts_shown_and_keeps_the_rest(ro
     assert f.config.hough == HoughConfig()
 
 
-def test_apply_returns_the_new_config_and_changes_nothing(road):
+def test_config_for_returns_the_new_config_and_changes_nothing(road):
     moves = [(widgets.ThresholdTuner, "white.range1", (215, 255)),
              (widgets.ThresholdTuner, "s_channel.space", "lab"),
              (widgets.PerspectiveTuner, "top_y", 480.0),
@@ -584,15 +584,17 @@ def test_apply_returns_the_new_config_and_changes_nothing(road):
         t = cls(road)
         config, preview, views = t.config, t.preview.value, dict(vars(t))
         options = {k: getattr(c, "options", None) for k, c in t.controls.items()}
-        with t._quiet():
-            t.controls[key].value = value
-        new = t._apply(key)
+        shown = t.controls[key].value
+        new = t.config_for(key, value)
         assert new != config, key
         assert t.config is config and t.preview.value == preview, key
         assert all(vars(t)[k] is v for k, v in views.items()), key  # no view was recomputed
         assert {k: getattr(c, "options", None) for k, c in t.controls.items()} == options, key
-        t._on_change(key)  # what the control's observe runs
+        assert t.controls[key].value == shown, key
+        t.controls[key].value = value  # the user moves the control: its observer takes the value
         assert t.config == new and t.preview.value != preview, key
+    with pytest.raises(InputError, match="'no_such' is not a control of FitTuner"):
+        t.config_for("no_such", 1)
 
 
 # --------------------------------------------------------------------------- the base class

@@ -160,15 +160,15 @@ def test_load_takes_only_the_hough_part(images, tmp_path):
     assert t.config.search == PipelineConfig().search  # not the Hough tuner's to show
 
 
-def test_apply_returns_the_new_config_and_changes_nothing(images):
+def test_config_for_returns_the_new_config_and_changes_nothing(images):
     t = widgets.HoughTuner(images)
     config, result, preview = t.config, t.result, bytes(t.preview.value)
-    with t._quiet():
-        t.controls["canny"].value = (200, 400)
-    new = t._apply("canny")
+    shown = t.controls["canny"].value
+    new = t.config_for("canny", (200, 400))
     assert (new.hough.canny_low, new.hough.canny_high) == (200, 400)
     assert t.config is config and t.result is result and bytes(t.preview.value) == preview
-    t._on_change("canny")
+    assert t.controls["canny"].value == shown
+    t.controls["canny"].value = (200, 400)  # the user moves the slider: its observer takes it
     assert t.config == new and t.result is not result
 
 

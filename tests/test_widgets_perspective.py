@@ -39,12 +39,6 @@ def tuner(camera):
     return widgets.PerspectiveTuner({STRAIGHT: REPO / "test_images" / STRAIGHT}, calibration=camera)
 
 
-def _click(x: int, y: int) -> dict:
-    """An ipyevents click at pixel (x, y) of the preview image (400 px tiles, shown at half size)."""
-    return {"type": "click", "dataX": x, "dataY": y, "relativeX": x / 2, "relativeY": y / 2,
-            "boundingRectWidth": 600, "boundingRectHeight": 112.5}
-
-
 @pytest.mark.parametrize("src, dst_x", PUBLISHED)
 def test_published_points_are_taken_exactly_and_checked(tuner, src, dst_x):
     bird0 = tuner.birdseye.copy()
@@ -238,17 +232,17 @@ def test_four_clicks_place_the_four_corners(tuner):
     assert isinstance(tuner._events, ipyevents.Event)
     assert tuner._events.source is tuner.preview and tuner._events.watched_events == ["click"]
     before = tuner.config
-    tuner._on_click(_click(181, 144))  # not armed: ignored
+    tuner.click(181, 144)  # not armed: ignored
     assert tuner.config == before
     tuner.place.value = True
     assert "top left corner" in tuner.readout()
     # preview tiles are 400x225 for a 1280x720 frame: 3.2 frame px per preview px
-    tuner._on_click(_click(181, 144))
-    tuner._on_click(_click(650, 100))  # on the bird's-eye tile: ignored
-    tuner._on_click(_click(63, 224))
-    tuner._on_click(_click(352, 224))
+    tuner.click(181, 144)
+    tuner.click(650, 100)  # on the bird's-eye tile: ignored
+    tuner.click(63, 224)
+    tuner.click(352, 224)
     assert tuner.config == before and "top right corner" in tuner.readout()
-    tuner._on_click(_click(222, 144))
+    tuner.click(222, 144)
     assert tuner.config.perspective.src_px == ((579.2, 460.8), (201.6, 716.8), (1126.4, 716.8),
                                                (710.4, 460.8))
     assert tuner.config.perspective.dst_px == before.perspective.dst_px
@@ -260,7 +254,7 @@ def test_clicks_that_make_no_trapezoid_are_refused(tuner):
     before = tuner.config
     tuner.place.value = True
     for x, y in ((50, 100), (150, 200), (250, 200), (350, 100)):  # top wider than the bottom
-        tuner._on_click(_click(x, y))
+        tuner.click(x, y)
     assert tuner.config == before
     assert "narrower than the bottom" in tuner.error and tuner.place.value is False
 

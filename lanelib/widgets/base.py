@@ -61,7 +61,7 @@ class Tuner(Picking, Exports):
     config : the PipelineConfig to start from.
     calibration : the camera of the bundled images (None: frames are taken as undistorted).
         Images labelled ``"udacity/..."`` use the Udacity camera, calibrated from its
-        ``camera_cal/`` the first time one of them is picked.
+        ``camera_cal/`` the first time one of them is picked (``calibration_for``).
     image : label of the image to show first (default: the first one).
     tile_width_px : width of one view in the preview sheet.
     jpeg_quality : JPEG quality of the preview bytes.
@@ -80,7 +80,8 @@ class Tuner(Picking, Exports):
     - ``_update(key)``: recompute the views after control ``key`` changed (None: all of them,
       after a pick or a load), and fit controls whose choices follow another control's value;
     - ``_apply(key)``: return the new PipelineConfig after control ``key`` changed, changing
-      nothing (raise ``LaneLibError`` to refuse the value: the readout then shows why);
+      nothing (raise ``LaneLibError`` to refuse the value: the readout then shows why); what
+      ``config_for`` returns;
     - ``_sync()``: set the controls from ``self.config`` (after ``load``);
     - ``render()``: the named views of the preview; ``readout()``: the numbers as text;
     - ``annotated()``: the picked frame with the lane drawn (default: ``LanePipeline.process``,
@@ -213,7 +214,7 @@ class Tuner(Picking, Exports):
         ``VideoTuner.annotated``).
         """
         raw = self._raw
-        calibration = self._calibration_for(self.image)
+        calibration = self.calibration_for(self.image)
         size = (raw.shape[1], raw.shape[0])
         pipe = self._cached("export pipeline", (id(calibration), size, self.config),
                             lambda: LanePipeline(self.config, calibration, size=size))
@@ -222,9 +223,30 @@ class Tuner(Picking, Exports):
     def set_config(self, config: PipelineConfig) -> None:
         """Show ``config`` in the controls and the preview."""
         self._show(config)
-        self._prepare(self._raw, self._calibration_for(self.image))
+        self._prepare(self._raw, self.calibration_for(self.image))
         self._update(None)
         self._refresh()
+
+    def config_for(self, key: str, value: object) -> PipelineConfig:
+        """Return the PipelineConfig that control ``key`` at ``value`` describes, taking nothing.
+
+        Parameters
+        ----------
+        key : a key of ``controls`` (another raises ``InputError``).
+        value : a value of that control. The config is what moving the control there makes it
+            (``_apply``); the control keeps its value and the config, views and preview stay the
+            same objects. A value the tuner refuses raises ``LaneLibError`` (the readout's reason).
+        """
+        if key not in self.controls:
+            raise InputError(f"config_for: {key!r} is not a control of {type(self).__name__}; "
+                             f"pass one of {sorted(self.controls)}")
+        control, before = self.controls[key], self.controls[key].value
+        with self._quiet():
+            control.value = value
+            try:
+                return self._apply(key)
+            finally:
+                control.value = before
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(image={self.image!r})"

@@ -61,7 +61,7 @@ class GeometryEstimate:
                              f"autogeometry.GeometryOptions ({', '.join(sorted(names))})")
         opts = replace(self.geometry_options, **options)
         label, path = self.image, self.images[self.image]
-        calibration = self._calibration_for(label)
+        calibration = self.calibration_for(label)
         # a low confidence is judged below; the tuner's frames go through its own calibration
         # (or none), so no lens is estimated from the road for points it could not undistort by
         trial = replace(opts, accept_low_confidence=True)

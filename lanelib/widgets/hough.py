@@ -148,8 +148,10 @@ class HoughTuner(Tuner):
                                                   getattr(hc, f"{color}_hls_hi"), HLS_MAX)):
                 c[f"{color}.range{i}"].value = _shown(lo, hi, top)
 
-    def _calibration_for(self, label: str) -> Calibration | None:
-        return None  # the Hough pipeline works on raw frames
+    def calibration_for(self, label: str) -> Calibration | None:
+        """Return None for every item: the Hough pipeline works on the raw frame, undistorted by no
+        camera's calibration."""
+        return None
 
     # ---- config <-> controls --------------------------------------------------------------
 

@@ -183,11 +183,10 @@ class PerspectiveTuner(GeometryEstimate, Tuner):
       (corners tl, bl, br, tr, the order of ``PerspectiveConfig.src_px``) and ``dst.left_x``,
       ``dst.right_x``, ``dst.top_y``, ``dst.bottom_y``; each moves only its own corner or side.
       ``set_points`` sets all of them at once;
-    - clicks on the undistorted frame (the preview's first tile): the ``place_points`` toggle
-      arms it, the next four clicks give the corners tl, bl, br, tr, and after the fourth the
-      four are set together (one corner at a time could pass through shapes that are no
+    - clicks on the undistorted frame (the preview's first tile; ``click``): the ``place_points``
+      toggle arms it, the next four clicks give the corners tl, bl, br, tr, and after the fourth
+      the four are set together (one corner at a time could pass through shapes that are no
       trapezoid) and the toggle disarms (``click_to_frame`` maps a click to frame pixels).
-
     - "estimate from this clip" (a video) or "estimate from this frame" (an image), the
       ``estimate`` button beside ``place_points``: the road geometry estimated from the road
       itself (``estimate``, ``set_geometry``) sets the src and dst points, the visible length
@@ -250,6 +249,18 @@ class PerspectiveTuner(GeometryEstimate, Tuner):
         self._update(None)
         self._refresh()
         return self.config
+
+    def click(self, x: float, y: float) -> None:
+        """Do what a click at pixel (x, y) of the preview image does.
+
+        Parameters
+        ----------
+        x, y : the pixel, in the preview image's own pixels (ipyevents' ``dataX``, ``dataY``).
+            While ``place_points`` is armed, a pixel on the undistorted frame (the first tile) is
+            the next src corner; the fourth sets the four (the dst stays) and disarms the toggle,
+            or the readout says why they are no trapezoid. Otherwise the click is ignored.
+        """
+        self._on_click({"type": "click", "dataX": x, "dataY": y})
 
     # ---- hooks ----------------------------------------------------------------------------
 
@@ -429,13 +440,7 @@ class PerspectiveTuner(GeometryEstimate, Tuner):
         self._refresh()
 
     def _on_click(self, event: dict) -> None:
-        """Take a click on the preview (an ``ipyevents`` event dict) as the next src corner.
-
-        Ignored unless ``place_points`` is armed and the click falls on the undistorted frame
-        (the first tile). The fourth click sets the four collected corners (the dst stays) and
-        disarms the toggle; points that are no trapezoid are refused with the reason in the
-        readout.
-        """
+        """Take an ``ipyevents`` click on the preview as ``click`` does (``click_to_frame``)."""
         if not self.place.value:
             return
         h, w = self.undistorted.shape[:2]

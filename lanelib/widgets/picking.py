@@ -20,12 +20,21 @@ from .choices import UDACITY_PREFIX, is_video
 
 class Picking:
     """Read and show the item the picker (or the frame slider) picks; a subclass may override
-    ``_calibration_for`` (the camera of an item) and ``_on_frame`` (what a frame change does)."""
+    ``calibration_for`` (the camera of an item) and ``_on_frame`` (what a frame change does)."""
 
-    def _calibration_for(self, label: str) -> Calibration | None:
-        """Return the calibration of item ``label``'s camera: the Udacity camera's for a
-        ``udacity/...`` label (calibrated the first time, None without its ``camera_cal/``), else
-        the one the tuner was given."""
+    def calibration_for(self, label: str) -> Calibration | None:
+        """Return the calibration the picker's item ``label`` is undistorted with.
+
+        Parameters
+        ----------
+        label : the item's label in the picker (a key of ``images``).
+
+        Returns
+        -------
+        The Udacity camera's calibration for a ``udacity/...`` label (calibrated from its
+        ``camera_cal/`` the first time one is asked for; None without those boards), else the
+        calibration the tuner was given (None: frames are taken as undistorted).
+        """
         camera = "udacity" if label.startswith(UDACITY_PREFIX) else "bundled"
         if camera not in self._calibrations:
             self._calibrations[camera] = udacity_calibration() if udacity("camera_cal") else None
@@ -71,7 +80,7 @@ class Picking:
             self._raw = io.read_image(path)
             self.frame_slider.layout.display = "none"
         try:
-            self._prepare(self._raw, self._calibration_for(label))
+            self._prepare(self._raw, self.calibration_for(label))
         except CalibrationError as e:
             raise CalibrationError(f"{path}: {e}; or, for frames of a camera without a calibration "
                                    "(CULane, TuSimple), make the tuner with calibration=None") from None
