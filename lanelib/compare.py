@@ -10,7 +10,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 from .config import PipelineConfig, override
 from .evaluate import EvalReport, calibration_from_truth, evaluate_images, evaluate_video_many, format_cell
@@ -35,7 +35,7 @@ def applies(settings: Sequence[str], detector: str) -> bool:
 
 def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str | os.PathLike],
                     config: PipelineConfig = PipelineConfig(),
-                    max_frames: int | None = None) -> list[MethodScore]:
+                    max_frames: int | None = None, on_frame: Callable | None = None) -> list[MethodScore]:
     """Return every method scored on every source, each against the truth beside the source.
 
     Parameters
@@ -46,6 +46,8 @@ def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str 
         (tracked, ``evaluate_video``), each with its ground truth beside it.
     config : the config the settings change.
     max_frames : score only the first this many images or frames of each source.
+    on_frame : ``on_frame(source, index, raw, {method: (pipeline, result)})`` is called on each
+        frame of a video as it is scored, e.g. to draw chosen frames without tracking them again.
 
     Each source is scored with its true camera (``calibration_from_truth``), so the figures are
     the lane finding's alone. A method whose settings only touch the tracker is not run on images
@@ -62,7 +64,10 @@ def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str 
         if detector == "frame":
             reports = [evaluate_images(path, p, max_frames) for p in pipes]
         else:  # the clip decoded once, every method tracking it in step
-            reports = evaluate_video_many(path, pipes, True, max_frames)
+            seen = None if on_frame is None else (
+                lambda i, raw, results, path=path, run=run, pipes=pipes:
+                on_frame(path, i, raw, dict(zip(run, zip(pipes, results)))))
+            reports = evaluate_video_many(path, pipes, True, max_frames, seen)
         got = dict(zip(run, reports))
         for name, settings in methods.items():
             out.append(MethodScore(str(path), name, tuple(settings), got.get(name),

@@ -46,7 +46,7 @@ import math
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from tqdm import tqdm
@@ -516,11 +516,13 @@ def _score_segment(path: Path, pipeline, tracker, truth, first: int, start: int,
 
 
 def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracker: bool = True,
-                        max_frames: int | None = None) -> list[EvalReport]:
+                        max_frames: int | None = None, on_frame: Callable | None = None) -> list[EvalReport]:
     """Return ``evaluate_video`` of each pipeline on one video, decoding it once for all.
 
     Each pipeline runs on its own (its own ``LaneTracker``) over the same frames, in step; the
     reports are those ``evaluate_video`` gives one by one (``compare.compare_methods`` uses this).
+    ``on_frame(index, raw, results)``, when given, sees each frame and the pipelines' results in
+    their order (e.g. to draw chosen frames while they are scored, without a second run).
     """
     truth = load_video_truth(path)
     frames = truth.frames[:max_frames]
@@ -536,9 +538,13 @@ def evaluate_video_many(path: str | os.PathLike, pipelines: Sequence, use_tracke
                                          f"{Path(path).with_suffix('.csv')} ({len(truth.frames)}); "
                                          "regenerate the truth with `python -m lanelib synth --all`")
                     break
+                results = []
                 for pipeline, tracker, col in runners:
                     result = tracker.update(raw, index=i) if tracker is not None else pipeline.detect(raw)
                     col.add(str(i), result, frames[i])
+                    results.append(result)
+                if on_frame is not None:
+                    on_frame(i, raw, results)
                 n += 1
                 if max_frames is not None and i + 1 >= max_frames:
                     break  # not one frame more: the video may end (or break off) right here
