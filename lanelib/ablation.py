@@ -253,6 +253,7 @@ def format_table(ablation: Ablation) -> str:
         eff = ablation.effects(p.name)
         cells = [("-" if eff.get(k) is None else f"{eff[k]:+.1f}") for k in keys]
         how = "off" if p.default else "on"
-        lines.append(f"| {p.name} | {how}: `{' '.join(p.settings)}` | " + " | ".join(cells)
+        switch = " ".join(p.settings).replace("|", "\\|")  # a rule's | would end the cell
+        lines.append(f"| {p.name} | {how}: `{switch}` | " + " | ".join(cells)
                      + f" | {ablation.verdict(p.name)} |")
     return "\n".join(lines)

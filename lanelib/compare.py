@@ -29,8 +29,15 @@ class MethodScore:
 
 
 def applies(settings: Sequence[str], detector: str) -> bool:
-    """Return False for settings that change nothing for ``detector`` (``tracking.*`` on single frames)."""
-    return detector == "tracker" or not any(s.startswith("tracking.") for s in settings)
+    """Return False for settings that change nothing for ``detector``: only ``tracking.*`` keys,
+    on single frames (a mix, such as a preset's, changes single frames by its other keys).
+
+    Examples
+    --------
+    >>> applies(["tracking.hold_frames=3"], "frame"), applies(["tracking.hold_frames=3", "search.minpix=9"], "frame")
+    (False, True)
+    """
+    return detector == "tracker" or not settings or not all(s.startswith("tracking.") for s in settings)
 
 
 def compare_methods(methods: Mapping[str, Sequence[str]], sources: Sequence[str | os.PathLike],
