@@ -7,13 +7,16 @@ into the camera frame.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from functools import reduce
 
 import cv2
 import numpy as np
 import pytest
 
 from lanelib.checks import pair_problem
-from lanelib.config import PipelineConfig, load_config_or_preset, preset, preset_names
+from lanelib import ablation
+from lanelib.config import PipelineConfig, load_config_or_preset, override, preset, preset_names, to_dict
 from lanelib.fit import fit_line, parallel_fits
 from lanelib.params import LaneChecks, SearchConfig
 from lanelib.perspective import PerspectiveConfig
@@ -54,7 +57,19 @@ def pipe() -> LanePipeline:
     return LanePipeline(PipelineConfig())
 
 
-def test_a_50m_bend_is_found_in_a_short_view_and_not_in_the_whole_view(pipe):
+@pytest.fixture(scope="module")
+def short_pipe() -> LanePipeline:
+    """The default pipeline with the shorter views switched on (``search.short_views``, off by
+    default; 0.6 and 0.4 of the view in the ``hard-roads`` preset)."""
+    return LanePipeline(override(PipelineConfig(), ["search.short_views=[0.6, 0.4]"]))
+
+
+def test_a_50m_bend_is_found_in_a_short_view_and_not_in_the_whole_view():
+    # the shorter views and the growing margin switched on (both off by default): with the
+    # margin the whole view's windows follow the lines up the bend, where the pair fails its
+    # checks ("lines cross"); without it they lose the lines after 248 rows and fit the rest
+    pipe = LanePipeline(override(PipelineConfig(), ["search.short_views=[0.6, 0.4]",
+                                                    "search.grow_margin_px=15"]))
     bird = bend_birdseye(50.0, 3.6)
     mask = pipe.binary(bird)
     whole = pipe.search(mask)
@@ -76,7 +91,8 @@ def test_a_50m_bend_is_found_in_a_short_view_and_not_in_the_whole_view(pipe):
     assert m.curvature_per_m > 0  # a right bend
 
 
-def test_detect_retries_the_short_view_and_off_turns_it_off(pipe):
+def test_detect_retries_the_short_view_and_off_turns_it_off(short_pipe):
+    pipe = short_pipe
     raw = pipe.perspective.unwarp(bend_birdseye(50.0, 3.6))
     r = pipe.detect(raw)
     assert r.found and r.search.top_px > 0 and r.radius_m == pytest.approx(50.0, rel=0.4)
@@ -84,7 +100,8 @@ def test_detect_retries_the_short_view_and_off_turns_it_off(pipe):
     assert not off.detect(raw).found
 
 
-def test_the_tracker_keeps_a_50m_bend_in_a_shortened_look_ahead(pipe):
+def test_the_tracker_keeps_a_50m_bend_in_a_shortened_look_ahead(short_pipe):
+    pipe = short_pipe
     raw = pipe.perspective.unwarp(bend_birdseye(50.0, 3.6))
     tracker = LaneTracker(pipe)
     results = [tracker.update(raw) for _ in range(4)]
@@ -154,13 +171,71 @@ def test_the_country_preset_allows_the_curvature_difference_of_a_hairpin():
     assert abs(kl - kr) < preset("country").checks.max_curvature_diff_per_m
 
 
+def flat(config) -> dict:
+    """Return a config as {dotted key: value}, e.g. {"search.grow_margin_px": 0, ...}."""
+    def walk(d, prefix):
+        for k, v in d.items():
+            if isinstance(v, dict):
+                yield from walk(v, f"{prefix}{k}.")
+            else:
+                yield f"{prefix}{k}", v
+    return dict(walk(to_dict(config), ""))
+
+
+def changed_keys(config, base=PipelineConfig()) -> set[str]:
+    a, b = flat(config), flat(base)
+    return {k for k in a if a[k] != b[k]}
+
+
+HARD_ROAD_KEYS = {s.partition("=")[0] for s in ablation.HARD_ROADS}
+
+
 def test_presets_load_by_name_and_keep_the_other_defaults():
     highway = load_config_or_preset("highway")
     assert highway.checks == LaneChecks()  # the highway preset spells out the defaults
+    assert highway == PipelineConfig()  # ... and nothing else: no hard-road part
     country = load_config_or_preset("country")
+    hard = load_config_or_preset("hard-roads")
     assert country.perspective == PipelineConfig().perspective
-    assert country.search == PipelineConfig().search
     assert (country.checks.min_width_m, country.checks.max_width_m) == (2.5, 5.0)
+    # country is the hard-roads preset plus its wider checks
+    assert country == replace(hard, checks=country.checks)
+    assert changed_keys(country, hard) == {"checks.min_width_m", "checks.max_width_m",
+                                           "checks.max_curvature_diff_per_m"}
+    # hard-roads changes nothing but the fourteen hard-road switches' keys
+    assert changed_keys(hard) == HARD_ROAD_KEYS and len(HARD_ROAD_KEYS) == 14
+    assert hard.checks == LaneChecks() and hard.perspective == PipelineConfig().perspective
+
+
+def test_the_hard_roads_preset_switches_on_exactly_the_fourteen_parts():
+    """The fourteen hard-road parts are off by default (opt-in, the ablation showed no effect on a
+    real row) and all on in the ``hard-roads`` preset: its settings (``ablation.HARD_ROADS``) on
+    the defaults are the preset, each part's switch is off ("", (), 0, false) by default and on
+    there, and they are the ablation's fourteen opt-in parts from "fallback masks" to "shoulder"."""
+    default, hard = PipelineConfig(), preset("hard-roads")
+    assert override(default, ablation.HARD_ROADS) == hard
+    assert len(ablation.HARD_ROADS) == len(HARD_ROAD_KEYS) == 14
+    on, off = flat(hard), flat(default)
+    for key in HARD_ROAD_KEYS:
+        assert not off[key] and off[key] in ("", [], 0, False), key  # off by default
+        assert on[key], key  # on in the preset
+    assert (off["thresholds.fallback_rule"], off["search.short_views"], off["edge.enabled"]) == ("", [], False)
+    names = ["fallback masks", "shorter views", "growing margin", "inner stripe of a double line",
+             "asphalt edge", "lane trend", "blind hold", "near-gap join", "grade pair check",
+             "stripe spread", "re-acquisition", "restart from one line", "road view", "shoulder"]
+    parts = [p for p in ablation.PARTS if p.name in names]
+    assert [p.name for p in parts] == names and not any(p.default for p in parts)
+    switched = set()
+    for part in parts:  # each part alone switches keys of the preset to the preset's values
+        one = override(default, part.settings)
+        keys = changed_keys(one)
+        assert keys and keys <= HARD_ROAD_KEYS, part.name
+        assert all(flat(one)[k] == on[k] for k in keys), part.name
+        switched |= keys
+    assert switched == HARD_ROAD_KEYS
+    assert override(default, [s for p in parts for s in p.settings]) == hard
+    every = ablation.PARTS[[p.name for p in ablation.PARTS].index("every hard-road part")]
+    assert override(default, every.settings) == hard
 
 
 def test_a_shorter_look_ahead_allows_its_share_of_the_width_spread():
@@ -209,7 +284,7 @@ def draw_lines_birdseye(lines, dash_m: float = 3.0, period_m: float = 12.0) -> n
     return bird
 
 
-def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
+def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m():
     # country's hairpin: from straight to a 35 m left bend in 15 m of road, a 3.4 m lane whose
     # right line is dashed, 0.48 m per frame (12 m/s at 25 fps). The lines' fitted curvatures in
     # the 9.4 m look-ahead differ by more than the highway's 0.004 1/m while the bend tightens
@@ -220,6 +295,9 @@ def test_the_tracker_follows_a_bend_tightening_to_35m_within_15m(pipe):
     # inferred from the left one (``TrackerConfig.near_gap_m``); such a joined line's curvature
     # may differ by more (one frame, 0.0105 1/m): it is refused and the right line inferred, as
     # accurate there (the worst error 0.218 m, 0.220 m without the join).
+    # The lane trend (the predicted lane follows the tightening bend) and the near-gap join are
+    # switched on (both off by default); with the trend off the lines lag the bend (0.30 m).
+    pipe = LanePipeline(override(PipelineConfig(), ["tracking.trend_frames=5", "tracking.near_gap_m=1"]))
     start, ramp, step = 20.0, 15.0, 0.48
     tracker = LaneTracker(pipe)
     worst, joined_refused = 0.0, 0

@@ -226,13 +226,15 @@ def test_a_double_line_in_a_prior_band_is_a_line_at_its_inner_stripe(spacing_m):
     line passes the line checks; stripes 0.6-1.5 x ``double_line_px`` apart (0.22 and 0.3 m) are
     fitted to the inner stripe, as the truth marks a double centre line; at 0.12 m, under that
     range, the fit runs between them and the line still passes as two stripes (the search
-    records their spread, ``LineFit.stripe_scatter_px``)."""
+    records their spread, ``LineFit.stripe_scatter_px``). The inner stripe is switched on
+    (``double_line_px`` 38; off by default)."""
     spacing = spacing_m / XM
     width = int(round(min(spacing_m / 2, 0.12) / XM))
     mask = double_line(spacing, width)
     prior = LineFit(BEND)
-    s = search_around(mask, prior, LineFit(None), SearchConfig(prior_margin_px=40))
-    band = search_bands_px(s, (W, H), SearchConfig(prior_margin_px=40))[0]
+    config = SearchConfig(prior_margin_px=40, double_line_px=38.0)
+    s = search_around(mask, prior, LineFit(None), config)
+    band = search_bands_px(s, (W, H), config)[0]
     assert band == 80.0
     assert line_problem(s.left, band, LaneChecks(), XM, "left") == ""
     inner = np.polyval(BEND, H - 1) + spacing / 2

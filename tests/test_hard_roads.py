@@ -1,6 +1,10 @@
 """Known-answer tests of the pipeline on the hard-road failure classes (issue 16), scored against
 the bundled clips' ground truth with ``lanelib.evaluate``: what a change to the lane finding
-buys on a class, and that the cheap path's failure there is real (the same frames without it)."""
+buys on a class, and that the cheap path's failure there is real (the same frames without it).
+
+The hard-road parts are off by default (opt-in): a test of one part switches that part on; a test
+on a whole hard clip (country, shadows) runs it with the ``hard-roads`` preset (every part on, the
+config its known answers were measured with) and switches the part under test off from there."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -11,7 +15,7 @@ import numpy as np
 import pytest
 
 from lanelib.checks import pair_problem
-from lanelib.config import PipelineConfig, override
+from lanelib.config import PipelineConfig, override, preset
 from lanelib.evaluate import truth_x, calibration_from_truth, evaluate_video, score_frame
 from lanelib.fit import normal_width_m
 from lanelib.io import VideoReader, read_frame
@@ -31,8 +35,8 @@ COUNTRY = REPO / "videos" / "country.mp4"
 SHADOWS = REPO / "videos" / "shadows.mp4"
 
 
-def tracked(clip: Path, frames: int, *settings: str):
-    pipe = LanePipeline(override(PipelineConfig(), settings), calibration_from_truth(clip))
+def tracked(clip: Path, frames: int, *settings: str, config: PipelineConfig = PipelineConfig()):
+    pipe = LanePipeline(override(config, settings), calibration_from_truth(clip))
     return evaluate_video(clip, pipe, use_tracker=True, max_frames=frames).summary()
 
 
@@ -55,10 +59,12 @@ def test_a_double_yellow_centre_line_is_read_at_its_inner_stripe():
     points and 15 % of the lines found are false (14 % before the stripes were fitted with a
     shared curve, ``roads.stripes.two_stripes``: more frames are taken, one more line is false); fitted
     between the stripes, about 25 % and 18 %. (Per frame, not tracked: the tracker's choices on
-    this clip's hairpins blur the comparison.)"""
-    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    this clip's hairpins blur the comparison.) Both with the ``hard-roads`` preset, the inner
+    stripe on (its 38 px) and off."""
+    pipe = LanePipeline(preset("hard-roads"), calibration_from_truth(COUNTRY))
+    assert pipe.config.search.double_line_px == 38.0
     fixed = evaluate_video(COUNTRY, pipe, use_tracker=False, max_frames=100)
-    off = LanePipeline(override(PipelineConfig(), ["search.double_line_px=0"]),
+    off = LanePipeline(override(preset("hard-roads"), ["search.double_line_px=0"]),
                        calibration_from_truth(COUNTRY))
     before = evaluate_video(COUNTRY, off, use_tracker=False, max_frames=100)
     assert np.nanmean(fixed.line_accuracy[:, 0]) >= 0.28 > 0.26 >= np.nanmean(before.line_accuracy[:, 0])
@@ -70,10 +76,11 @@ def test_lines_seen_only_beyond_an_overpass_shade_are_not_extrapolated_to_the_ca
     14-20 m ahead (frames 127-131 and 184-193). Taken as seen, their fits extrapolated to the
     car put the reported line 45-65 px off there (raw image): 2.5 % of the lines found are
     false. Kept where seen and joined nearer the car to the line inferred from the other line,
-    or to the track (``TrackerConfig.max_gap_m``), none is."""
-    fixed = tracked(SHADOWS, 200)
+    or to the track (``TrackerConfig.max_gap_m``), none is. Both with the ``hard-roads`` preset."""
+    hard = preset("hard-roads")
+    fixed = tracked(SHADOWS, 200, config=hard)
     assert fixed["found_rate"] == 1.0 and fixed["fp_rate"] == 0.0 and fixed["point_accuracy"] >= 0.999
-    before = tracked(SHADOWS, 200, "tracking.max_gap_m=100")
+    before = tracked(SHADOWS, 200, "tracking.max_gap_m=100", config=hard)
     assert before["fp_rate"] >= 0.02 and before["point_accuracy"] < 0.995
 
 
@@ -90,8 +97,10 @@ def _shaded_lane(pipe: LanePipeline) -> np.ndarray:
 def test_a_lane_in_deep_shade_is_found_by_the_fallback_masks_and_shown_on_them():
     """The cheap masks see nothing in deep shade; the fallback searches threshold the view
     again with the shade top-hat and find the 3.7 m lane; the kept views show that mask (the
-    one the lane came from), in a single image and in the tracker alike."""
-    pipe = LanePipeline(PipelineConfig())
+    one the lane came from), in a single image and in the tracker alike. The fallback masks are
+    switched on (``thresholds.fallback_rule``, "" by default: no fallback search)."""
+    pipe = LanePipeline(override(PipelineConfig(), [
+        "thresholds.fallback_rule=yellow | (white & line_tophat) | shade_tophat"]))
     raw = _shaded_lane(pipe)
     bird = pipe.birdseye(raw)
     assert cv2.countNonZero(pipe.binary(bird)) == 0  # the cheap rule: nothing
@@ -113,8 +122,11 @@ def test_the_double_stripes_read_the_flat_views_spread_ahead_on_a_rendered_climb
     500 / 300 / 100 (the generator's truth lines mapped into the view). The double yellow's two
     stripes spread alike, and their spacing (``roads.stripes.stripe_spread``, a straight line in
     the distance from the bottom row) reads the spread within 0.15 (about 0.1 high: the grade
-    begins some metres ahead, not at the car); a level road reads 1 within 0.03."""
-    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    begins some metres ahead, not at the car); a level road reads 1 within 0.03. Read on the
+    fallback masks' view with the double line's spacing (both switched on; off by default)."""
+    pipe = LanePipeline(override(PipelineConfig(), [
+        "thresholds.fallback_rule=yellow | (white & line_tophat) | shade_tophat",
+        "search.double_line_px=38"]), calibration_from_truth(COUNTRY))
     h = pipe.size[1]
     look = replace(SUNNY, tree_shadows_per_100m=0.0, patches_per_100m=0.0)
     scene = Scene(CurvatureProfile(), country_layout(3.4), look, seed=5,
@@ -209,11 +221,12 @@ def test_no_asphalt_edge_on_the_seams_and_barrier_stills(name):
 
 def test_a_lane_whose_right_side_is_only_the_asphalt_edge_is_found_and_says_so():
     """A still whose right side has no paint, only the asphalt edge and grass: ``detect`` finds the
-    lane with the edge as its right line, and the result's ``sources`` say so ("seen", "edge");
-    with ``edge.enabled=false`` the right line is not found, as before."""
+    lane with the edge as its right line, and the result's ``sources`` say so ("seen", "edge"),
+    with the asphalt edge switched on (``edge.enabled``, off by default); with
+    ``edge.enabled=false`` the right line is not found, as before."""
     from lanelib.records import LaneSearch
     bird, edge_x = _edge_view((96, 120, 60))
-    pipe = LanePipeline(PipelineConfig())
+    pipe = LanePipeline(override(PipelineConfig(), ["edge.enabled=true"]))
     raw = pipe.perspective.unwarp(bird)
     result = pipe.detect(raw)
     assert result.found and result.sources == ("seen", "edge")
@@ -265,8 +278,10 @@ def _track_faded_road(renderer, settings=(), frames: int = 26):
     """Track the car along ``renderer``'s road from s = 5 m, 1.5 m a frame; return each frame's
     sources and the right line's error (m, + outward) at the car against the truth. The shoulder
     is measured on every frame (``shoulder_every=1``): 1.5 m a frame is four frames of a video at
-    25 fps and 37 m/s, whose every fourth frame the default measures."""
-    settings = ["tracking.shoulder_every=1", *settings]
+    25 fps and 37 m/s, whose every fourth frame the default measures. The shoulder part is
+    switched on (``tracking.shoulder_frames`` 10 and ``edge.enabled``; off by default);
+    ``settings`` go over it."""
+    settings = ["tracking.shoulder_every=1", "tracking.shoulder_frames=10", "edge.enabled=true", *settings]
     pipe = LanePipeline(override(PipelineConfig(), settings), calibration_from_truth(COUNTRY))
     tracker, h, out = LaneTracker(pipe), pipe.size[1], []
     for k in range(frames):
@@ -322,8 +337,10 @@ def test_country_right_line_follows_the_asphalt_edge_where_its_paint_is_missing(
     the flat view widens the lane ahead there. Extrapolated to the car, or joined to the line
     inferred from the double yellow, it lay 15-47 cm inside the truth at the car (13 false lines
     in 210-223); joined nearer the car to the line placed inside the asphalt edge
-    (``roads.proposers.joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false."""
-    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    (``roads.proposers.joined_paint``, ``TrackerConfig.return_gap_m``) no right line is false.
+    Tracked with the ``hard-roads`` preset (the shoulder, the asphalt edge and the clip's other
+    parts on)."""
+    pipe = LanePipeline(preset("hard-roads"), calibration_from_truth(COUNTRY))
     truth = load_video_truth(COUNTRY)
     tracker, h, errors, sources, returning = LaneTracker(pipe), pipe.size[1], [], [], []
     with VideoReader(COUNTRY) as reader:
@@ -426,8 +443,10 @@ def test_the_road_view_ends_at_the_rendered_crest_of_country(frame):
     """country.mp4 where the road crests a hill while turning (frames 116-160): beyond the crest
     the view's far rows hold grass and the road farther round the turn. Between the truth lines,
     the road seen from the car (``roads.proposers.road_view_top``) ends within 0.6 m (18 rows)
-    beyond the truth's crest row (the last row where the lines are seen), and not before it."""
-    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(COUNTRY))
+    beyond the truth's crest row (the last row where the lines are seen), and not before it
+    (the road view switched on, ``tracking.road_view_run_m`` 1 m; off by default)."""
+    pipe = LanePipeline(override(PipelineConfig(), ["tracking.road_view_run_m=1"]),
+                        calibration_from_truth(COUNTRY))
     lines, crest = _truth_lines_in_view(pipe, load_video_truth(COUNTRY).frames[frame])
     top = road_view_top(LaneTracker(pipe), read_frame(COUNTRY, frame), lines)
     assert crest - 18 <= top <= crest
@@ -435,8 +454,10 @@ def test_the_road_view_ends_at_the_rendered_crest_of_country(frame):
 
 def test_the_road_view_keeps_the_whole_view_of_a_shadowed_road():
     """shadows.mp4 (tree shadows, an overpass's shade): between the truth lines the road is seen
-    to the view's top on every 25th frame; a shadow keeps the road's hue and low saturation."""
-    pipe = LanePipeline(PipelineConfig(), calibration_from_truth(SHADOWS))
+    to the view's top on every 25th frame; a shadow keeps the road's hue and low saturation
+    (the road view switched on, as above)."""
+    pipe = LanePipeline(override(PipelineConfig(), ["tracking.road_view_run_m=1"]),
+                        calibration_from_truth(SHADOWS))
     truth = load_video_truth(SHADOWS)
     tracker = LaneTracker(pipe)
     for frame in range(0, len(truth.frames), 25):

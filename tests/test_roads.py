@@ -17,6 +17,9 @@ from lanelib.search import fit_side, lane_pixels, sliding_windows
 
 H, W = 720, 1280
 XM_DEFAULT, YM_DEFAULT = 0.00578125, 0.03263888888888889  # the default 1280x720 view (m/px)
+# the inner stripe of a double line switched on (``double_line_px``, off by default; 38 px in the
+# ``hard-roads`` preset): what the search and fits of these tests are about
+DOUBLE = SearchConfig(double_line_px=38.0)
 
 
 def draw_curve(mask, coeffs, thickness=20):
@@ -39,7 +42,7 @@ def test_a_double_line_is_fitted_to_its_inner_stripe():
     """Stripes 38 px apart (0.22 m): the left line is fitted to the stripe nearer the lane, as the
     truth marks a double centre line; with the switch off the fit runs between the stripes."""
     mask = double_line_mask(338.0, 300.0)
-    on = sliding_windows(mask)
+    on = sliding_windows(mask, DOUBLE)
     assert on.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
     assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
     off = sliding_windows(mask, SearchConfig(double_line_px=0))
@@ -123,7 +126,7 @@ def test_a_double_line_blurred_ahead_is_fitted_to_its_inner_stripe_at_the_car(cl
     mask = blurred_double_line(338.0, clear_from)
     between = sliding_windows(mask, SearchConfig(double_line_px=0))
     assert abs(between.left.x_at(H - 1) - 338.0) * XM_DEFAULT > 0.1
-    on = sliding_windows(mask)
+    on = sliding_windows(mask, DOUBLE)
     assert abs(on.left.x_at(H - 1) - 338.0) < 2
     assert on.right.x_at(H - 1) == pytest.approx(960.0, abs=2)  # one stripe: unchanged
     ys, xs = on.left_pixels
@@ -142,7 +145,7 @@ def test_a_stub_of_inner_stripe_does_not_replace_the_whole_line():
     keep = xs < 640
     ys, xs = ys[keep], xs[keep]
     assert len(inner_stripe(ys, xs, "left", 38.0, H)[0]) < len(ys)  # a stub of inner stripe
-    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    fit, used = fit_side((ys, xs), "left", H, DOUBLE, "none")
     assert len(used[0]) == len(ys)
     assert fit.coeffs_px == fit_line(ys, xs, H).coeffs_px
 
@@ -158,7 +161,7 @@ def test_near_rows_are_judged_on_their_own_stripes_when_the_blur_bends_the_curve
     ys, xs = lane_pixels(blurred_double_line(338.0, 420, lean_px=lean_px))
     keep = xs < 640
     ys, xs = ys[keep], xs[keep]
-    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none")
+    fit, used = fit_side((ys, xs), "left", H, DOUBLE, "none")
     assert used[0].min() >= 420  # the blob is left out
     assert abs(fit.x_at(H - 1) - 338.0) < 1
 
@@ -178,7 +181,7 @@ def test_a_short_patch_of_double_line_is_not_fitted_through_both_stripes():
     whole = fit_line(ys, xs, H)
     assert whole.found  # the stray pixel lends the patch a span of 119 px
     assert inner_stripe(ys, xs, "left", 38.0, H)[0].max() < 650  # resolved as a whole
-    fit, used = fit_side((ys, xs), "left", H, SearchConfig(), "none", top_px=432)
+    fit, used = fit_side((ys, xs), "left", H, DOUBLE, "none", top_px=432)
     assert not fit.found and "span" in fit.reason
     assert (np.abs(used[1] - 338) <= 11).all()
 
@@ -192,7 +195,7 @@ def test_a_single_line_or_a_double_line_blurred_at_the_car_is_left_whole():
         keep = xs < 640
         out = inner_stripe(ys[keep], xs[keep], "left", 38.0, H)
         assert len(out[0]) == np.count_nonzero(keep)
-    single = sliding_windows(blurred_double_line(338.0, 300, single=True))
+    single = sliding_windows(blurred_double_line(338.0, 300, single=True), DOUBLE)
     assert single.left.x_at(H - 1) == pytest.approx(338.0, abs=2)
 
 

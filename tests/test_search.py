@@ -143,8 +143,9 @@ def test_centre_first_takes_the_cluster_nearest_the_lane_centre():
     assert set(np.unique(search.right_pixels[1])) == set(range(980, 990))
     plain = sliding_windows(m, SearchConfig(double_line_px=0), bases=(280.0, 1000.0))
     assert set(np.unique(plain.left_pixels[1])) == set(range(240, 250)) | set(range(290, 300))
-    # two stripes 50 px apart on every row also pass for a double line: its inner stripe is kept
-    double = sliding_windows(m, SearchConfig(), bases=(280.0, 1000.0))
+    # two stripes 50 px apart on every row also pass for a double line: with the inner stripe of
+    # a double line switched on (off by default) its inner stripe is kept
+    double = sliding_windows(m, SearchConfig(double_line_px=38.0), bases=(280.0, 1000.0))
     assert set(np.unique(double.left_pixels[1])) == set(range(290, 300))
 
 

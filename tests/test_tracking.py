@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lanelib.checks import gap_problem, pitched_pair_problem
-from lanelib.config import PipelineConfig
+from lanelib.config import PipelineConfig, override
 from lanelib.errors import ConfigError
 from lanelib.fit import fit_line, least_squares_poly, normal_width_m, offset_line
 from lanelib.perspective import PerspectiveConfig
@@ -41,6 +41,20 @@ def frame(pipe: LanePipeline, left_x: float | None = LEFT_X, right_x: float | No
 @pytest.fixture(scope="module")
 def pipe() -> LanePipeline:
     return LanePipeline(PipelineConfig())
+
+
+@pytest.fixture(scope="module")
+def double_pipe() -> LanePipeline:
+    """The default pipeline with the inner stripe of a double line on (``search.double_line_px``,
+    off by default), which the stripes' spread of ``stripe_spread`` and ``grade_pair_check`` reads."""
+    return LanePipeline(override(PipelineConfig(), ["search.double_line_px=38"]))
+
+
+# the opt-in parts these tests switch on (off by default; the ``hard-roads`` preset's values)
+TREND = dict(trend_frames=5)
+NEAR_GAP = dict(near_gap_m=1.0)
+REACQUIRE = dict(reacquire_after_frames=3)
+RESTART = dict(restart_frames=25)
 
 
 def number_after(text: str, prefix: str) -> float:
@@ -318,7 +332,7 @@ def _true_lane(a: float, c_left: float) -> tuple[np.ndarray, np.ndarray]:
 def test_the_predicted_lane_follows_the_trend_of_a_tightening_bend(pipe):
     # the bend tightens and the lane drifts right at a steady rate: a linear trend per frame
     a0, da, c0, dc = 0.0, 4e-5, LEFT_X, 4.0
-    tracker = LaneTracker(pipe)
+    tracker = LaneTracker(pipe, TrackerConfig(**TREND))
     rows = np.linspace(250.0, H - 1.0, 20)  # the near 2/3 of the view, where the bend shows most
     lag, err = [], []
     for n in range(8):
@@ -340,7 +354,7 @@ def test_the_predicted_lane_follows_the_trend_of_a_tightening_bend(pipe):
 
 
 def test_the_trend_keeps_the_width_and_stops_at_the_frame_after_the_last_seen_one(pipe):
-    tracker = LaneTracker(pipe)
+    tracker = LaneTracker(pipe, TrackerConfig(**TREND))
     for n in range(5):
         tracker.update(frame(pipe, LEFT_X + 5.0 * n, RIGHT_X + 5.0 * n))  # the car drifts left
     nxt = tracker.predicted_lane(tracker.frame_number + 1)
@@ -508,9 +522,10 @@ def test_a_line_seen_only_from_a_few_metres_ahead_on_a_bend_is_joined_to_the_inf
     own fit extrapolated to the car lies 40 px (0.23 m) outside the truth's. The tracked right
     line bends 0.13 m over those 6.6 m (more than ``near_gap_bend_m``) and the left line
     reaches the car, so the line is joined near the car to the line inferred from the left one
-    (``near_gap_m``): it lies where the whole line's fit does, to 3 px (2 cm). Rule off
-    (``near_gap_m`` 0): the extrapolation is reported, over 25 px out."""
+    (``near_gap_m``, switched on here: off by default): it lies where the whole line's fit does,
+    to 3 px (2 cm). Rule off (``near_gap_m`` 0): the extrapolation is reported, over 25 px out."""
     one = dict(smooth_frames=1, trend_frames=0)  # the frame's own line is reported
+    on = dict(one, **NEAR_GAP)
 
     def shaded(config: TrackerConfig, **kwargs):
         tracker = LaneTracker(pipe, config)
@@ -519,7 +534,7 @@ def test_a_line_seen_only_from_a_few_metres_ahead_on_a_bend_is_joined_to_the_inf
         return tracker.update(_sweeping_frame(pipe, **kwargs.get("now", {})))
 
     truth = _sweep_fit_at_car(RIGHT_X)
-    r = shaded(TrackerConfig(**one), now=dict(right_from=H - 1 - 200))
+    r = shaded(TrackerConfig(**on), now=dict(right_from=H - 1 - 200))
     assert r.found and "right line seen only from 6.6 m ahead" in r.reason
     assert "nearer the car the line inferred from the other line is taken" in r.reason
     assert bottom_x(r, "right") == pytest.approx(truth, abs=3)
@@ -528,7 +543,7 @@ def test_a_line_seen_only_from_a_few_metres_ahead_on_a_bend_is_joined_to_the_inf
     assert bottom_x(off, "right") - truth > 25
     # the left line stops short of the car too: nothing near the car to join to, so both are
     # extrapolated as before (joined to the track alone they drift while the car moves)
-    both = shaded(TrackerConfig(**one), now=dict(right_from=H - 1 - 200, left_from=H - 1 - 200))
+    both = shaded(TrackerConfig(**on), now=dict(right_from=H - 1 - 200, left_from=H - 1 - 200))
     assert "seen only" not in both.reason
 
 
@@ -536,8 +551,8 @@ def test_a_line_stopping_short_of_the_car_on_a_straight_road_is_extrapolated(pip
     """The same gap on a straight road (a dashed line's): the tracked line bends less than
     ``near_gap_bend_m`` over it, the curvature plays no part in the extrapolation, and the
     line is taken as seen (slanted here, 60 px out at the top row: extrapolated, it lies
-    23-28 px inside at the car)."""
-    tracker = LaneTracker(pipe, TrackerConfig(smooth_frames=1, trend_frames=0))
+    23-28 px inside at the car; ``near_gap_m`` switched on, and it does not join it)."""
+    tracker = LaneTracker(pipe, TrackerConfig(smooth_frames=1, trend_frames=0, **NEAR_GAP))
     for _ in range(4):
         tracker.update(_sweeping_frame(pipe, sweep_px=0.0))
     r = tracker.update(_sweeping_frame(pipe, right_from=H - 1 - 200, sweep_px=0.0, slant_px=60.0))
@@ -550,9 +565,10 @@ def test_a_width_extrapolated_to_the_car_on_a_bend_is_not_measured_there(pipe):
     the right one slanted 60 px out at the top row), so neither is joined to an inference and
     both are extrapolated to the car, where the pair is 0.19 m narrower than the lane: the
     frame's lines are reported, but its width is no measurement and ``seen_width_m`` (the width
-    a line lost later is inferred at) keeps the 3.70 m seen down to the car before. Rule off
-    (``near_gap_m`` 0) it takes the 3.50 m; on a straight road (a dashed line's gaps) the
-    extrapolation does not rest on the curvature and its width counts as before."""
+    a line lost later is inferred at) keeps the 3.70 m seen down to the car before (with
+    ``near_gap_m`` switched on; off by default). Rule off (``near_gap_m`` 0) it takes the
+    3.50 m; on a straight road (a dashed line's gaps) the extrapolation does not rest on the
+    curvature and its width counts as before."""
     def width_after(config: TrackerConfig, sweep_px: float = 200.0):
         tracker = LaneTracker(pipe, config)
         for _ in range(4):
@@ -563,12 +579,13 @@ def test_a_width_extrapolated_to_the_car_on_a_bend_is_not_measured_there(pipe):
         return r, before, tracker.seen_width_m
 
     one = dict(smooth_frames=1, trend_frames=0)  # the newest frame's width is the median
-    r, before, after = width_after(TrackerConfig(**one))
+    on = dict(one, **NEAR_GAP)
+    r, before, after = width_after(TrackerConfig(**on))
     assert r.found and r.sources == ("seen", "seen")
     assert before == pytest.approx(3.70, abs=0.01) and after == before
     r, before, after = width_after(TrackerConfig(near_gap_m=0.0, **one))
     assert r.found and after == pytest.approx(3.50, abs=0.02)
-    r, before, after = width_after(TrackerConfig(**one), sweep_px=0.0)
+    r, before, after = width_after(TrackerConfig(**on), sweep_px=0.0)
     assert r.found and before == pytest.approx(3.70, abs=0.01)
     assert after == pytest.approx(3.54, abs=0.02)
 
@@ -604,11 +621,12 @@ def _pitched_frame(pipe: LanePipeline, spread_top: float, right: bool,
 
 @pytest.mark.parametrize("stripe_spread, top_x",
                          [(True, LEFT_X + 1.25 * (RIGHT_X - LEFT_X)), (False, RIGHT_X)])
-def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, stripe_spread, top_x):
+def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(double_pipe, stripe_spread, top_x):
     """A straight lane tracked with both lines; then the right line goes and the view spreads the
     road ahead by 1.25 at the top row: the double left line's stripes spread with it, and the
     inferred right line follows (at the car it stays at the tracked width). With the switch off
-    it keeps the tracked width on every row."""
+    it keeps the tracked width on every row. (The stripes are read with ``double_line_px`` on.)"""
+    pipe = double_pipe
     tracker = LaneTracker(pipe, replace(pipe.config.tracking, stripe_spread=stripe_spread))
     for _ in range(3):
         tracker.update(_pitched_frame(pipe, 1.0, True))
@@ -621,11 +639,12 @@ def test_an_inferred_line_widens_ahead_as_the_seen_double_lines_stripes(pipe, st
     assert top == pytest.approx(top_x, abs=12)
 
 
-def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(pipe):
+def test_stripes_seen_only_near_the_car_do_not_widen_the_lane_ahead(double_pipe):
     """The double left line's outer stripe only on the bottom half of the view: its spacing is
     read on four bands of rows, but over under half the look-ahead, too short to scale the
-    width ahead: the inferred line keeps the tracked width."""
-    tracker = LaneTracker(pipe)
+    width ahead: the inferred line keeps the tracked width (``stripe_spread`` switched on)."""
+    pipe = double_pipe
+    tracker = LaneTracker(pipe, replace(pipe.config.tracking, stripe_spread=True))
     for _ in range(3):
         tracker.update(_pitched_frame(pipe, 1.0, True))
     bird = pipe.perspective.warp(_pitched_frame(pipe, 1.25, False))
@@ -679,8 +698,9 @@ def _short_track(grade_pair_check: bool = True) -> LaneTracker:
     on a tight bend), so its look-ahead is some 390 rows (``TrackerConfig.lookahead_growth_m``),
     where the pair's width may vary by 0.4 m; searched 150 px either side of the track, so the
     search around it sees a line that spreads away from it by 87 px at the look-ahead's top (on
-    a clip the windows from the track find such a line, ``LaneTracker.update``)."""
-    config = PipelineConfig()
+    a clip the windows from the track find such a line, ``LaneTracker.update``). The double
+    line's stripes are read with ``double_line_px`` on (off by default)."""
+    config = override(PipelineConfig(), ["search.double_line_px=38"])
     pipe = LanePipeline(replace(config, search=replace(config.search, prior_margin_px=150),
                                 tracking=replace(config.tracking, grade_pair_check=grade_pair_check)))
     tracker = LaneTracker(pipe)
@@ -714,7 +734,9 @@ def test_a_lane_that_spreads_unlike_its_double_stripes_stays_refused(pipe, strip
     r = tracker.update(_pitched_frame(tracker.pipeline, 1.25, True, stripes_top=stripes_top))
     assert "lines not parallel" in r.reason and "road ahead's grade" not in r.reason
     assert "right line inferred" in r.reason
-    fresh = LaneTracker(pipe).update(_pitched_frame(pipe, 1.3, True))
+    checked = LanePipeline(override(PipelineConfig(), ["search.double_line_px=38",
+                                                       "tracking.grade_pair_check=true"]))
+    fresh = LaneTracker(checked).update(_pitched_frame(checked, 1.3, True))
     assert not fresh.found and "lines not parallel" in fresh.reason
 
 
@@ -754,10 +776,10 @@ def test_a_line_inferred_for_long_is_reacquired_where_its_paint_returns(pipe):
     while it is seen only more than ``max_gap_m`` ahead it is joined to the inference near the
     car, and that pair is not parallel, so it stays inferred; from the frame its paint comes
     within 12 m of the car it is seen, and 4 frames later the smoothed line lies within 3 px
-    of it at the car and at the top row, the lane 4.3 m wide. Without the re-acquisition it is
-    never found again (the lane reads 3.7 m)."""
+    of it at the car and at the top row, the lane 4.3 m wide (the re-acquisition switched on;
+    off by default). Without the re-acquisition it is never found again (the lane reads 3.7 m)."""
     dx = 0.6 / XM
-    results = _after_missing_paint(pipe, TrackerConfig(), dx)
+    results = _after_missing_paint(pipe, TrackerConfig(**REACQUIRE), dx)
     sources = [r.sources[1] for r in results]
     first = sources.index("seen")
     assert sources[:first] == ["inferred"] * first and set(sources[first:]) == {"seen"}
@@ -776,8 +798,9 @@ def test_a_line_inferred_for_long_is_reacquired_where_its_paint_returns(pipe):
 def test_a_line_too_far_from_the_inference_for_a_lane_stays_refused(pipe):
     """The right paint returns 1.0 m outside the inference: inside the re-acquisition band
     (1.2 m), but the lane it would make is 4.7 m wide (limit 4.5 m): refused every frame, the
-    line stays inferred where it was. A confident wrong line is worse than an inferred one."""
-    results = _after_missing_paint(pipe, TrackerConfig(), 1.0 / XM)
+    line stays inferred where it was. A confident wrong line is worse than an inferred one.
+    (The re-acquisition switched on, as its band is what this is about.)"""
+    results = _after_missing_paint(pipe, TrackerConfig(**REACQUIRE), 1.0 / XM)
     assert all(r.found and r.sources[1] == "inferred" for r in results)
     assert all(bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=3) for r in results)
 
@@ -785,8 +808,9 @@ def test_a_line_too_far_from_the_inference_for_a_lane_stays_refused(pipe):
 def test_the_reacquisition_band_widens_with_the_inferred_run(pipe):
     """No wider search before ``reacquire_after_frames`` inferred frames; then the band's half
     width starts at twice ``prior_margin_px`` and grows by it each frame, up to
-    ``reacquire_band_m``; the jump limit against the inferred line is the band's."""
-    tracker = LaneTracker(pipe)
+    ``reacquire_band_m``; the jump limit against the inferred line is the band's (the
+    re-acquisition switched on, ``reacquire_after_frames`` 3; off by default)."""
+    tracker = LaneTracker(pipe, TrackerConfig(**REACQUIRE))
     for _ in range(3):
         tracker.update(frame(pipe))
     margin = pipe.config.search.prior_margin_px
@@ -829,8 +853,9 @@ def test_one_line_restarts_a_lane_lost_recently_with_the_other_inferred(pipe, si
     """Known answer: after the reset only one line shows, 0.2 m from where it was tracked (the
     car drifted); the lane's true other line lies 3.7 m (640 px) beside it. The first frame waits
     for the next to agree; the second restarts the lane, the other line inferred at the width
-    seen before the loss, within 0.05 m of the truth, and the track goes on from it."""
-    tracker = _lose_track(pipe)
+    seen before the loss, within 0.05 m of the truth, and the track goes on from it (the restart
+    from one line switched on, ``restart_frames`` 25; off by default)."""
+    tracker = _lose_track(pipe, **RESTART)
     shift = 0.2 / XM
     lone = dict(left_x=LEFT_X + shift, right_x=None) if side == "left" else dict(left_x=None, right_x=RIGHT_X + shift)
     other = "right" if side == "left" else "left"
@@ -877,7 +902,7 @@ def test_one_line_does_not_restart_a_lane_lost_long_ago_or_elsewhere(pipe, case)
 
 
 def test_a_restarted_track_that_never_saw_both_lines_is_not_restarted_again(pipe):
-    tracker = _lose_track(pipe)
+    tracker = _lose_track(pipe, **RESTART)
     lone = frame(pipe, right_x=None)
     assert [tracker.update(lone).found for _ in range(2)] == [False, True]
     blank = frame(pipe, left_x=None, right_x=None)
@@ -911,7 +936,7 @@ def _double_line_mask(coeffs, spread_top: float, first_row: int = 0) -> np.ndarr
     return mask
 
 
-def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(pipe):
+def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(double_pipe):
     """A double line on a tight bend leaves the view sideways on row 420 (of 720): its stripes
     show only below it, 300 rows, short of half the view, but all of the view where the line
     is, and the spread they tell (drawn: 1.09 on row 500) is read (``roads.stripes.stripe_spread``).
@@ -920,7 +945,9 @@ def test_the_stripes_spread_is_read_over_the_rows_where_the_line_is_in_view(pipe
     a = -0.004  # x = 320 on the bottom row, 0 on row 420, outside the view above
     b = (320.0 - a * ((H - 1.0) ** 2 - 420.0 ** 2)) / (H - 1.0 - 420.0)
     bent = np.array([a, b, -a * 420.0 ** 2 - b * 420.0])
+    pipe = double_pipe
     spacing = pipe.config.search.double_line_px
+    assert spacing == 38.0
     spread = stripe_spread(_double_line_mask(bent, 1.3), bent, spacing, 0, pipe.size)
     assert spread is not None
     assert np.polyval(spread, H - 1.0 - 500.0) == pytest.approx(1.0 + 0.3 * 219.0 / 719.0, abs=0.03)
