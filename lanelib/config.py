@@ -211,12 +211,15 @@ def preset(name: str) -> PipelineConfig:
 
     Presets are partial JSON files in ``lanelib/presets/``; the keys they leave out keep their
     defaults. An unknown name raises ``ConfigError`` listing the presets. The road presets set
-    the plausibility checks (``params.LaneChecks``) for a kind of road, with the default camera:
+    the plausibility checks (``params.LaneChecks``) for a kind of road, with the default camera,
+    and ``hard-roads`` and ``country`` switch on the fourteen opt-in hard-road parts
+    (``docs/hard-roads.md``: off by default, as no real row of the scoreboard needs them):
 
     - ``highway``: the defaults spelled out, lanes of 3.0-4.5 m whose lines' curvatures differ
       by at most 0.004 1/m (a measurement allowance: on a highway's 250 m+ curves a 3.7 m lane's
       lines differ by w / R**2 < 0.0001 1/m);
-    - ``country``: lanes of 2.5-5.0 m (narrow rural lanes of 2.5-2.75 m, wide ones up to 4.8 m
+    - ``hard-roads``: the highway's checks and the hard-road parts;
+    - ``country``: the hard-road parts, and lanes of 2.5-5.0 m (narrow rural lanes of 2.5-2.75 m, wide ones up to 4.8 m
       with 0.2 m of measurement spread) and curvatures that may differ by 0.009 1/m: the
       highway's allowance plus w / R**2 of a 4.8 m lane on a 30 m hairpin (0.0053 1/m).
     """
