@@ -346,11 +346,11 @@ def same_reports(a, b) -> bool:
 
 
 def test_evaluate_video_on_dask_scores_the_frames_of_one_process(scheduler):
-    """110 frames of country.mp4 with the tracker: segments 0..54 and 55..109 (warmed up from 5,
-    not enough on the hairpin: 23 frames differ unless the second segment is scored again from
-    the first one's tracker)."""
+    """110 frames of country.mp4 with the tracker and the hard-roads parts: segments 0..54 and
+    55..109 (warmed up from 5, not enough on the hairpin, where the parts' memory differs unless
+    the second segment is scored again from the first one's tracker)."""
     path = REPO / "videos/country.mp4"
-    pipe = LanePipeline(calibration=evaluate.calibration_from_truth(path))
+    pipe = LanePipeline(preset("hard-roads"), calibration=evaluate.calibration_from_truth(path))
     one = evaluate.evaluate_video(path, pipe, max_frames=110)
     two = evaluate.evaluate_video(path, pipe, max_frames=110, scheduler=scheduler, progress=False)
     assert two.frames == 110 and same_reports(one, two)
