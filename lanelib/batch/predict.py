@@ -15,7 +15,7 @@ from tqdm import tqdm
 
 from .. import cluster, io
 from ..autogeometry import GeometryOptions, RoadGeometry, low_confidence
-from ..benchmarks import culane, tusimple
+from ..benchmarks import culane, tusimple, written
 from ..camera import Calibration
 from ..config import PipelineConfig, benchmark_config, to_dict
 from ..errors import ConfigError, GeometryError, InputError, LaneLibError, naming_the_file
@@ -177,18 +177,14 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
 
 
 def seen_lines(found: LinesResult, rows_px: Sequence[float], w: int,
-               per_side: int | None = None) -> list[np.ndarray]:
+               benchmark: str | None = None) -> list[np.ndarray]:
     """Return the x (px) at ``rows_px`` of every line ``detect_lines`` saw, left to right.
 
     x is NaN on rows where the line is not seen or outside the image (``w`` px wide); a line
-    with fewer than 2 points is left out. ``per_side``: at most that many lines on each side
-    of the car (the nearest ones; CULane labels two a side), else all.
+    with fewer than 2 points is left out. ``benchmark``: only the lines it labels
+    (``benchmarks.written``), else all.
     """
-    kept = list(found.lines)
-    if per_side is not None:
-        left = [line for line in kept if line.offset_m < 0][-per_side:] if per_side else []
-        right = [line for line in kept if line.offset_m >= 0][:per_side]
-        kept = left + right
+    kept = written(benchmark, list(found.lines))
     out = []
     for line in kept:
         xs = line.x_at_rows(rows_px)
@@ -216,7 +212,7 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
 
     The frame is read, ``LanePipeline.detect_lines`` runs on it (no prior: each labelled frame
     stands alone), every line seen is sampled at ``work.rows_px`` where it is seen (``seen_lines``;
-    CULane: ``culane.LINES_PER_SIDE`` a side) and written to
+    the lines the benchmark labels, ``benchmarks.written``) and written to
     ``work.target`` atomically (a frame with no line found gets an empty prediction); stale
     temporaries of that target from a killed run are removed first. ``run_time_ms`` is the
     detection and sampling time. ``cache`` keeps one pipeline per (sequence, frame size) across
@@ -236,7 +232,7 @@ def predict_frame(work: FrameWork, config: PipelineConfig, calibration: Calibrat
         pipe = cache[key]
         t0 = time.perf_counter()
         lines = seen_lines(pipe.detect_lines(rgb, ego=False), work.rows_px, w=rgb.shape[1],
-                           per_side=culane.LINES_PER_SIDE if work.benchmark == "culane" else None)
+                           benchmark=work.benchmark)
         ms = (time.perf_counter() - t0) * 1000.0
         io.remove_stale_temp_files(work.target)
         io.write_text(work.target, _prediction_text(work, lines, ms), inputs=[work.image])

@@ -30,6 +30,10 @@ from .metrics import TuSimpleImage, TuSimpleScore, tusimple_image, tusimple_scor
 NO_POINT = -2  # the x TuSimple writes where a lane has no point
 H_SAMPLES_PX = tuple(range(160, 720, 10))  # the rows of most TuSimple labels (1280x720; some from 240)
 IMAGE_SIZE = (1280, 720)  # (width, height) px of TuSimple's frames, the size its official rows are at
+# TuSimple expects at most 4 lines around the centre of sight: the current lane's and the left
+# and right lanes' (its readme; a third on one side where the other side has no lane), so
+# predict keeps the 4 nearest the car
+MAX_LINES = 4
 
 
 def full_size(rgb: np.ndarray) -> np.ndarray:

@@ -2,8 +2,8 @@
 reported where none is labelled.
 
 ``explain_frame`` runs ``LanePipeline.detect_lines`` on one labelled frame as ``predict`` does
-(the frame on its own, every line seen sampled at the label rows by ``batch.seen_lines``; CULane:
-``culane.LINES_PER_SIDE`` a side; TuSimple: at the official 1280x720, ``tusimple.full_size``),
+(the frame on its own, every line seen sampled at the label rows by ``batch.seen_lines``, the lines the
+benchmark labels, ``benchmarks.written``; TuSimple at the official 1280x720, ``tusimple.full_size``),
 matches the predicted lines to the labels by the benchmark's official rule
 (``metrics.iou_matrix`` and ``metrics.matched_pair_indices`` for CULane, ``metrics.line_accuracy``
 for TuSimple) and gives each label line one class (``classify``):
@@ -13,8 +13,8 @@ for TuSimple) and gives each label line one class (``classify``):
   the label's rows below ``NEAR_PX``, scaled to the frame's width) but fails the match: it stops
   short of the label's extent, or runs beside it;
 - **refused**: no reported line lies on it, but a line the vote weighed and refused does
-  (``lines.vote.vote_candidates``; or a line seen but not written, beyond the lines a side that
-  CULane labels): the refusal's reason;
+  (``lines.vote.vote_candidates``; or a line seen but not written, beyond the lines the
+  benchmark labels, ``benchmarks.written``): the refusal's reason;
 - **missed**: nothing near it. The label mapped into the lines view says where it was lost
   (``paint_share``): no paint in the mask along it (the mask lost it), a mask as busy beside it as
   along it (texture, no line stands out), or paint along it and no candidate (the vote lost it).
@@ -40,7 +40,7 @@ from .. import batch, data, io
 from ..config import PipelineConfig, benchmark_config
 from ..errors import InputError
 from ..pipeline import LanePipeline
-from . import culane, metrics, tusimple
+from . import WRITTEN, culane, metrics, tusimple
 
 FOUND, OFF, REFUSED, MISSED, FALSE = "found", "reported but off", "refused", "missed", "false line"
 CLASSES = (FOUND, OFF, REFUSED, MISSED, FALSE)
@@ -52,7 +52,7 @@ NO_PAINT = 0.1           # paint along less than this share of a label's rows in
 BUSIER_BY = 0.15         # a label's line stands out where its share of rows with paint is this much
 BESIDE_M = 1.5           # above the share this far beside it, on either side (between two lines)
 PAINT_TOLERANCE_M = 0.3  # paint within this distance across the road of the label lies on it
-NOT_WRITTEN = "seen but not written: more than {n} lines on its side (CULane labels {n} a side)"
+NOT_WRITTEN = "seen but not written: the benchmark labels {which}"
 
 
 # --------------------------------------------------------------------------- records
@@ -349,14 +349,14 @@ def label_lines(benchmark: str, labels) -> tuple[list[np.ndarray], np.ndarray]:
     return [np.asarray(p, np.float64).reshape(-1, 2) for p in labels], np.asarray(culane.SAMPLE_ROWS_PX, float)
 
 
-def _written(found, rows: np.ndarray, w: int, per_side: int | None) -> tuple[list, list]:
+def _written(found, rows: np.ndarray, w: int, benchmark: str) -> tuple[list, list]:
     """Return the lines ``predict`` writes (x at rows) and the lines seen but not written, with why."""
-    written = batch.seen_lines(found, rows, w, per_side)
+    written = batch.seen_lines(found, rows, w, benchmark)
     dropped = []
     for line in found.lines:
         xs = batch.seen_lines(dataclasses.replace(found, lines=(line,)), rows, w)
         if xs and not any(np.array_equal(xs[0], p, equal_nan=True) for p in written):
-            dropped.append((xs[0], NOT_WRITTEN.format(n=per_side)))
+            dropped.append((xs[0], NOT_WRITTEN.format(which=WRITTEN.get(benchmark, ""))))
     return written, dropped
 
 
@@ -394,8 +394,7 @@ def explain_frame(benchmark: str, image, labels, config: PipelineConfig | None =
     points, rows = label_lines(benchmark, labels)
     pipe = pipeline if pipeline is not None else LanePipeline(config, None, size=size)
     found = pipe.detect_lines(rgb, ego=False, keep_images=True)
-    per_side = culane.LINES_PER_SIDE if benchmark == "culane" else None
-    written, dropped = _written(found, rows, size[0], per_side)
+    written, dropped = _written(found, rows, size[0], benchmark)
     refused = [(xs, why) for xs, why in dropped]
     for line, why in found.refused:
         xs = line.x_at_rows(rows)
