@@ -108,6 +108,8 @@ PARTS: tuple[Part, ...] = (
          "far rows of the lines view count less in the vote"),
     Part("vote: vehicle edges refused", ("lines.min_offset_m=0",), True,
          "a line under the car whose paint starts ahead is refused"),
+    Part("vote: crossing lines kept", ("lines.refused_clear_crossings=true",), True,
+         "a refused line (a vehicle's edge, scattered paint) hides no line that crosses it (culane preset)"),
     Part("CLAHE", ("thresholds.clahe=true",), False,
          "the bird's-eye view's lightness is equalised before the masks"),
     Part("window histogram", ("search.window_histogram=true",), False,

@@ -181,3 +181,25 @@ def test_the_presets_count_far_rows_of_the_lines_view_less(name, size):
     weights = LanePipeline(preset(name), None, size=size).lines_row_weights()
     assert weights[-1] == 1.0 and weights[0] < 0.5                  # the car's end counts fully
     assert np.all(np.diff(weights[weights > 0]) >= -1e-9)          # and nothing counts more further out
+
+
+@pytest.mark.parametrize("clear", [True, False])
+def test_a_refused_vehicle_edge_hides_the_line_it_crosses_only_when_it_clears_crossings(clear):
+    """A vehicle's edge under the car (paint from 5 m ahead, at the car's centre line) outvotes a
+    dashed lane line and crosses it 30 m ahead. It is refused either way; the lane line is
+    weighed and reported only when a refused line clears no crossing cells."""
+    m = np.zeros((400, 600), np.uint8)
+    for y0 in range(0, 400, 80):  # a dashed line at x = 150: 4 m dashes every 8 m
+        m[400 - y0 - 40:400 - y0, 150:158] = 255
+    for t in range(50, 400):  # the edge: x = 300 at the car, 0.5 px across per px ahead
+        x = int(round(300 - 0.5 * t))
+        m[399 - t, x:x + 6] = 255
+    config = LinesConfig(min_offset_m=1.0, near_paint_m=1.0, heading_spread=1.0, min_span_m=5.0,
+                         refused_clear_crossings=clear)
+    found = vote_candidates(m, config, 0.02, 0.1, car_x_px=303.0)
+    assert "a vehicle's edge" in found[0].refused and found[0].paint_m > 30
+    lane = [c for c in found if abs(c.x0_px - 154) < 8 and abs(c.slope) < 0.05]
+    if clear:
+        assert not lane  # cleared as crossing the refused edge: never weighed
+    else:
+        assert len(lane) == 1 and lane[0].refused == "" and 15 < lane[0].paint_m < 25

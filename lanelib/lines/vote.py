@@ -101,11 +101,14 @@ def _headings(table: np.ndarray, slopes: np.ndarray, least: float, spread: float
 
 
 def _same_cells(x0s: np.ndarray, slopes: np.ndarray, x0: float, s: float, t_max: float,
-                gap_px: float) -> np.ndarray:
+                gap_px: float, crossing: bool = True) -> np.ndarray:
     """Return which cells of the vote table (slope, x0) are the same line as (x0, s): nearer than
-    ``gap_px`` to it, or crossing it, anywhere between the bottom of the view (t=0) and ``t_max``."""
+    ``gap_px`` to it, or (``crossing``) crossing it, anywhere between the bottom of the view (t=0)
+    and ``t_max``; without ``crossing``, only those nearer than ``gap_px`` all along."""
     d0 = x0s[None, :] - x0
     d1 = d0 + (slopes[:, None] - s) * t_max
+    if not crossing:
+        return np.maximum(np.abs(d0), np.abs(d1)) < gap_px
     return (np.minimum(np.abs(d0), np.abs(d1)) < gap_px) | (d0 * d1 < 0)
 
 
@@ -200,7 +203,6 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
         if paint < least / 2:
             break
         x0, s = float(v.x0s[b]), float(v.slopes[k])
-        table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap)] = 0.0  # weighed once
         near = np.abs(v.xc - (x0 + s * v.t)) <= v.tol
         fitted = _fit(v.t, v.xc, near, v.height, curved)
         if config.follow_bends and fitted is not None:
@@ -210,6 +212,10 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
             y_near = v.rows[near]
             line = ViewLine(fitted[0], float(y_near.min()), float(y_near.max()), int(near.sum()), fitted[1])
         why = _refusal(paint * ym_per_px, line, reported, config, xm_per_px, ym_per_px, v)
+        # weighed once (``refused_clear_crossings``: a refused line is no line, and the lines
+        # that only cross it may stay)
+        crossing = not why or config.refused_clear_crossings
+        table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap, crossing=crossing)] = 0.0
         reported += not why
         found.append(Candidate(x0, s, paint * ym_per_px, line, why))
     return found

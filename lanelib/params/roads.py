@@ -139,6 +139,11 @@ class LinesConfig:
     headings : how many common headings the vote tries (the slopes with the most strong votes,
         ``heading_spread`` apart); it keeps the one whose reported lines hold the most paint
         (junk beside the road can outvote the paint for a heading, but not pass as lines).
+    refused_clear_crossings : a weighed line clears the vote cells of the lines that cross it
+        in the view (they would be the same paint counted twice); False: a refused line (too
+        scattered, a vehicle's edge) clears only its own cells, so a lane line it crosses is
+        still weighed. The ``culane`` preset turns it off: in stop-and-go traffic a vehicle's
+        edge refused under the car crosses the ego lines ahead.
     """
 
     lane_width_m: float = 3.7
@@ -175,6 +180,7 @@ class LinesConfig:
     follow_bends: bool = False
     min_offset_m: float = 0.0
     near_paint_m: float = 3.0
+    refused_clear_crossings: bool = True
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
