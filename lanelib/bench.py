@@ -260,7 +260,8 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
                     frames.append(frame.copy())
         pipe = LanePipeline(config, calibration, size=size)
         stages = stage_times(pipe, frames, repeats)
-        robust = robust_times(override(config, ROBUST), repeats)
+        hard = override(config, ROBUST)  # the robust path's and the fallbacks' config
+        robust = robust_times(hard, repeats)
         plain = robust_times(config, repeats)
         options = GeometryOptions()
         sampled = sample_frames(video, options.seconds, options.max_frames)
@@ -273,7 +274,6 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
         geometry_s = {"cpu_s": round(time.process_time() - c0, 2),
                       "wall_s": round(time.perf_counter() - w0, 2), "frames": len(sampled),
                       "result": geometry_note}
-        hard = override(config, ROBUST)
         fallbacks = {video.name: fallback_figures(video, calibration, hard, fallback_frames)}
         for name in fallback_clips:
             synth = data.bundled("videos") / f"{name}.mp4"

@@ -15,7 +15,7 @@ import numpy as np
 from ..fit import parallel_fits
 from ..proposers import Frame
 from ..records import LaneSearch, LineFit, Window
-from ..search import lane_pixels, search_around
+from ..search import search_around
 
 
 class WindowsFromTrack:
@@ -74,14 +74,15 @@ class Reacquire:
         return None
 
     def propose(self, frame: Frame, where):
-        return [(reacquired(frame.tracker, frame.best.search, frame.mask(), frame.track, where,
-                            frame.top), "")]
+        return [(reacquired(frame.tracker, frame.best.search, frame.mask(), frame.pixels(),
+                            frame.track, where, frame.top), "")]
 
 
-def reacquired(tracker: "LaneTracker", search: LaneSearch, binary: np.ndarray, track, side: int,
-               top_px: int) -> LaneSearch | None:
+def reacquired(tracker: "LaneTracker", search: LaneSearch, binary: np.ndarray,
+               pixels: tuple[np.ndarray, np.ndarray], track, side: int, top_px: int) -> LaneSearch | None:
     """Return ``search`` with line ``side`` looked for again in ``binary``, the whole view, or
-    None when no line could lie within ``reacquire_half_px`` of its inference.
+    None when no line could lie within ``reacquire_half_px`` of its inference. ``pixels``: the
+    mask's ``search.lane_pixels`` (``Frame.pixels``, extracted once for the frame's searches).
 
     The inference is moved across to the median distance of the lane pixels in the bin nearest
     it (bins ``prior_margin_px`` wide, every half margin, out to the band's half width) that
@@ -93,7 +94,7 @@ def reacquired(tracker: "LaneTracker", search: LaneSearch, binary: np.ndarray, t
     cfg = tracker.pipeline.config.search
     half = tracker.reacquire_half_px(side)
     margin = cfg.prior_margin_px
-    ys, xs = lane_pixels(binary)
+    ys, xs = pixels
     keep = ys >= top_px
     dx = xs[keep] - np.polyval(track[side], ys[keep])
     dx = dx[np.abs(dx) <= half]
