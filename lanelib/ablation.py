@@ -110,6 +110,8 @@ PARTS: tuple[Part, ...] = (
          "a line under the car whose paint starts ahead is refused"),
     Part("vote: crossing lines kept", ("lines.refused_clear_crossings=true",), True,
          "a refused line (a vehicle's edge, scattered paint) hides no line that crosses it (culane preset)"),
+    Part("vote: lines followed ahead", ("lines.follow_ahead_m=0",), True,
+         "each line is followed along its paint 40 m beyond the lines view (tusimple preset)"),
     Part("CLAHE", ("thresholds.clahe=true",), False,
          "the bird's-eye view's lightness is equalised before the masks"),
     Part("window histogram", ("search.window_histogram=true",), False,

@@ -212,8 +212,8 @@ class LanePipeline:
         edge (``lines.detect.LinesSetup``)."""
         if self._lines is None:
             lc = self.config.lines
-            view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px, lc.view_ahead_m,
-                             lc.view_ym_per_px)
+            view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px,
+                             lc.view_ahead_m + lc.follow_ahead_m, lc.view_ym_per_px)
             raw_to_view = self.lens.inverse + view
             tconf = thresholds.scaled(self.config.thresholds, view.scale_from_ego)
             maps = raw_to_view.remap_maps(view.size)

@@ -8,7 +8,7 @@ line, why a lane is missing, and a detection that failed the plausibility checks
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -145,6 +145,13 @@ class ImageLine:
         if len(p) < 2:
             return np.full(len(rows), np.nan)
         return np.interp(rows, p[:, 1], p[:, 0], left=np.nan, right=np.nan)
+
+    def joined(self, ahead: "ImageLine") -> "ImageLine":
+        """Return this line going on as ``ahead`` where ``ahead`` is seen further from the car (its
+        rows above this line's first row), with this line's view fit and offset."""
+        p = self.points_px
+        beyond = ahead.points_px[ahead.points_px[:, 1] < (p[0, 1] if len(p) else np.inf)]
+        return replace(self, points_px=np.concatenate([beyond, p]))
 
 
 def image_line(line: ViewLine, view_to_raw, car_x_px: float, bottom_px: float,

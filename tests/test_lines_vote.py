@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 
+import cv2
 import numpy as np
 import pytest
 
 from lanelib import data
 from lanelib.config import preset
-from lanelib.lines.vote import reported, run_centres, vote_candidates, vote_lines
+from lanelib.lines.trace import ViewLine
+from lanelib.lines.vote import follow_ahead, reported, run_centres, vote_candidates, vote_lines
 from lanelib.params import LinesConfig
 from lanelib.perspective import Perspective
 
@@ -203,3 +205,46 @@ def test_a_refused_vehicle_edge_hides_the_line_it_crosses_only_when_it_clears_cr
         assert not lane  # cleared as crossing the refused edge: never weighed
     else:
         assert len(lane) == 1 and lane[0].refused == "" and 15 < lane[0].paint_m < 25
+
+
+def test_a_line_is_followed_along_its_paint_beyond_the_view():
+    """A line straight over the searched rows (from row 200) bends away beyond them and its paint
+    ends at row 60: the part followed beyond meets the line at the first searched row, stays on
+    the bend and ends where the paint does; paint elsewhere is not followed, and a line whose
+    paint ends within the searched rows goes on no further."""
+    first = 200
+    truth = lambda y: 300.5 + (0.001 * (first - y) ** 2 if y < first else 0.0)   # a 250 m bend
+    m = np.zeros((H, W), np.uint8)
+    for y in range(60, H):
+        x = int(np.floor(truth(y)))
+        m[y, x - 3:x + 5] = 255
+    m[0:150, 600:608] = 255                                           # another line, beyond only
+    paint(m, 100.5, rows=range(250, H))                               # paint ending 15 m ahead
+    cfg = LinesConfig(vote_tolerance_m=0.25, max_scatter_m=0.13)
+    voted = [ViewLine((0.0, 0.0, 300.5), first, H - 1.0, 200, 0.5), ViewLine((0.0, 0.0, 100.5), first, H - 1.0, 150, 0.5)]
+    ahead, short = follow_ahead(voted, m, first, cfg, XM, YM)
+    assert short is None
+    assert ahead.y_top_px == 60 and ahead.y_bottom_px == first
+    assert abs(ahead.x_at(first) - 300.5) < 1.0
+    assert all(abs(ahead.x_at(y) - truth(y)) < 2.0 for y in range(60, first, 10))
+
+
+@pytest.mark.parametrize("settings, reach_m", [((), 75.0), (("lines.follow_ahead_m=0",), 40.0)])
+def test_predict_reports_lines_as_far_as_their_paint_goes(settings, reach_m):
+    """Two lane lines painted on the road from the car to 75 m ahead, seen by the TuSimple
+    camera: with its preset (the vote on the view's first 40 m, the lines followed 40 m beyond)
+    each line reaches the raw row of its paint's far end; without following, the row of the
+    view's end."""
+    from lanelib.config import override
+    from lanelib.pipeline import LanePipeline
+    pipe = LanePipeline(override(preset("tusimple"), settings), None, size=(1280, 720))
+    view = pipe.lines_view()[0]
+    raw = np.full((720, 1280, 3), 90, np.uint8)
+    rows = view.bottom_px - np.arange(0.0, 75.0, 0.05) / view.ym_per_px
+    for edges in ((-1.925, -1.775), (1.775, 1.925)):
+        strip = [view.inverse(np.column_stack([view.car_x_px + x / view.xm_per_px + 0 * rows, rows])) for x in edges]
+        cv2.fillPoly(raw, [np.round(np.vstack([strip[0], strip[1][::-1]])).astype(np.int32)], (230, 230, 230))
+    found = pipe.detect_lines(raw, ego=False)
+    assert [line.offset_m for line in found.lines] == pytest.approx([-1.85, 1.85], abs=0.05)
+    reach = view.inverse(np.array([[view.car_x_px, view.bottom_px - reach_m / view.ym_per_px]]))[0, 1]
+    assert [line.points_px[0, 1] for line in found.lines] == pytest.approx([reach, reach], abs=2.0)

@@ -46,6 +46,15 @@ def row_weights(setup: LinesSetup, config: LinesConfig) -> np.ndarray:
     return np.clip(seen / config.row_weight_full, 0.0, 1.0) ** config.row_weight_power
 
 
+def search_first_row(view, config: LinesConfig) -> int:
+    """Return the first row of the lines view that the search looks at: the row ``view_ahead_m``
+    ahead of the ego view's bottom row when the view goes on beyond it (``follow_ahead_m``),
+    else 0 (every row)."""
+    if config.follow_ahead_m <= 0:
+        return 0
+    return max(0, int(round(view.bottom_px - config.view_ahead_m / view.ym_per_px)))
+
+
 def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
                     weights: np.ndarray | None = None) -> tuple[tuple, dict, tuple]:
     """Return every lane line seen in a RAW frame (``result.ImageLine``s, left to right), the
@@ -55,7 +64,8 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     The view is masked by the rescaled thresholds' rule (with ``tophat_low``, far paint, blurred
     and dimmer, by a lower top-hat floor beyond ``near_m``), narrowed to paint (a verge or a
     field beside the road is wider) and to the pixels that see the frame; the lines are found by
-    ``vote.vote_lines`` or ``trace.find_lines`` (``LinesConfig.method``) and mapped back to the
+    ``vote.vote_lines`` or ``trace.find_lines`` (``LinesConfig.method``) within ``view_ahead_m``,
+    followed beyond it with ``follow_ahead_m`` (``vote.follow_ahead``), and mapped back to the
     raw frame over the span where each is seen (``result.image_line``). ``weights``: the vote's
     row weights (``row_weights``), None for every row alike.
     """
@@ -75,11 +85,21 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     mask = cv2.bitwise_and(mask, setup.seen)
     to_raw = functools.partial(image_line, view_to_raw=setup.to_raw, car_x_px=view.car_x_px,
                                bottom_px=view.bottom_px, xm_per_px=view.xm_per_px)
+    first = search_first_row(view, config)
     refused: tuple = ()
     if config.method == "vote":
-        weighed = vote.vote_candidates(mask, config, view.xm_per_px, view.ym_per_px, view.car_x_px, weights)
-        found = vote.reported(weighed, config, mask.shape[0], view.ym_per_px)
-        refused = tuple((to_raw(c.line), c.refused) for c in weighed if c.refused and c.line is not None)
+        weighed = vote.vote_candidates(mask[first:], config, view.xm_per_px, view.ym_per_px, view.car_x_px,
+                                       None if weights is None else weights[first:])
+        found = vote.reported(weighed, config, mask.shape[0] - first, view.ym_per_px)
+        refused = tuple((c.line, c.refused) for c in weighed if c.refused and c.line is not None)
     else:
-        found = find_lines(mask, config, view.xm_per_px, view.ym_per_px)
-    return tuple(to_raw(line) for line in found), {"lines_birdseye": bird, "lines_binary": mask}, refused
+        found = find_lines(mask[first:], config, view.xm_per_px, view.ym_per_px)
+    ahead: list = [None] * len(found)
+    if first:
+        found = [line.shifted(first) for line in found]
+        refused = tuple((line.shifted(first), why) for line, why in refused)
+        ahead = vote.follow_ahead(found, mask, first, config, view.xm_per_px, view.ym_per_px)
+    refused = tuple((to_raw(line), why) for line, why in refused)
+    lines = tuple(to_raw(line) if far is None else to_raw(line).joined(to_raw(far))
+                  for line, far in zip(found, ahead))
+    return lines, {"lines_birdseye": bird, "lines_binary": mask}, refused

@@ -35,6 +35,21 @@ class ViewLine:
         """Return x (px) of the line at rows ``y`` (px)."""
         return np.polyval(self.coeffs_px, y)
 
+    def shifted(self, rows: float) -> "ViewLine":
+        """Return the same line in a view whose rows are numbered ``rows`` further on (a crop of
+        the view that starts ``rows`` rows down holds it at its rows minus ``rows``).
+
+        Examples
+        --------
+        >>> line = ViewLine((0.01, 0.5, 20.0), 0.0, 50.0, 10, 1.0)
+        >>> moved = line.shifted(30)
+        >>> float(moved.x_at(40.0)) == float(line.x_at(10.0)), moved.y_top_px, moved.y_bottom_px
+        (True, 30.0, 80.0)
+        """
+        a, b, c = self.coeffs_px
+        return replace(self, coeffs_px=(a, b - 2 * a * rows, a * rows * rows - b * rows + c),
+                       y_top_px=self.y_top_px + rows, y_bottom_px=self.y_bottom_px + rows)
+
 
 def _peaks(hist: np.ndarray, min_gap_px: float, least: float) -> np.ndarray:
     """Return the columns of the histogram's peaks (at least ``least``), strongest first, each

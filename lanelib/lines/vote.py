@@ -24,6 +24,9 @@ across the road, set by the car's heading). The search, in the order it runs:
    ``min_peak_m`` of paint, paint spanning less than ``min_span_m``, runs scattering more than
    ``max_scatter_m`` about the fit, or when it runs under the car (``min_offset_m``) while its
    paint starts more than ``near_paint_m`` ahead (a vehicle's edge).
+
+With ``follow_ahead_m`` the view goes on beyond ``view_ahead_m``: the vote weighs only the rows
+within it, and ``follow_ahead`` follows each line found along its paint beyond.
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..fit import least_squares_poly
+from ..fit import joined_fit, least_squares_poly
 from ..params import LinesConfig
 from .trace import ViewLine, trace_line
 
@@ -276,6 +279,57 @@ def _refusal(paint_m: float, line: ViewLine | None, reported: int, config: Lines
         return (f"it runs {abs(off_m):.1f} m from the car's centre line (min_offset_m "
                 f"{config.min_offset_m:.1f} m) but its paint starts {start_m:.1f} m ahead: a vehicle's edge")
     return ""
+
+
+def follow_ahead(lines: list[ViewLine], binary: np.ndarray, first_row: int, config: LinesConfig,
+                 xm_per_px: float, ym_per_px: float) -> list[ViewLine | None]:
+    """Return, for each line found within ``view_ahead_m``, its paint followed beyond the search's
+    first row ``first_row`` (``LinesConfig.follow_ahead_m``) towards the top of the view, as a
+    line of its own over those rows (None where no paint goes on).
+
+    Each line is traced by windows (``lines.trace.trace_line``: ``window_m`` high,
+    ``vote_tolerance_m`` either side, ``max_empty_windows``) from its first window in the search's
+    rows, at the slope of its fit there. At least ``min_window_pixels // 3`` runs traced beyond
+    are fitted joined to the line over the search's first ``window_m`` (``fit.joined_fit``):
+    the far part continues the line without moving it where it was found. It is kept when the
+    traced runs scatter about it by at most ``max_scatter_m``; it is seen from the furthest
+    traced run down to ``first_row``.
+
+    Examples
+    --------
+    A straight line with paint from the bottom of a 300-row view to row 40, searched from row 150
+    on:
+
+    >>> m = np.zeros((300, 400), np.uint8); m[40:, 198:203] = 255
+    >>> voted = ViewLine((0.0, 0.0, 200.0), 150.0, 299.0, 150, 0.0)
+    >>> far, = follow_ahead([voted], m, 150, LinesConfig(), 0.02, 0.1)
+    >>> far.y_top_px, far.y_bottom_px, round(float(far.x_at(60.0)), 6)
+    (40.0, 150.0, 200.0)
+    """
+    rows, xc = run_centres(binary, config.max_paint_width_m / xm_per_px)
+    if len(rows) < 3:
+        return [None] * len(lines)
+    h = binary.shape[0]
+    ys = rows.astype(np.float64)
+    tol = config.vote_tolerance_m / xm_per_px
+    win = max(2, int(round(config.window_m / ym_per_px)))
+    least = max(3, config.min_window_pixels // 3)
+    reference_rows = np.arange(first_row, min(h, first_row + win), dtype=np.float64)
+    out: list[ViewLine | None] = []
+    for line in lines:
+        y0 = first_row + win / 2.0
+        a, b, _ = line.coeffs_px
+        idx = trace_line(ys, xc, float(line.x_at(y0)), y0, h, win, tol, 0.0, config.max_empty_windows, least,
+                         config.max_slope * ym_per_px / xm_per_px + 0.5, slope=float(2 * a * y0 + b))
+        far = idx[ys[idx] < first_row]
+        if len(far) < least:
+            out.append(None)
+            continue
+        coeffs = joined_fit(ys[far], xc[far], line.coeffs_px, reference_rows, h)
+        scatter = 1.4826 * float(np.median(np.abs(xc[far] - np.polyval(coeffs, ys[far]))))
+        out.append(None if scatter * xm_per_px > config.max_scatter_m else
+                   ViewLine(coeffs, float(ys[far].min()), float(first_row), len(far), scatter))
+    return out
 
 
 def vote_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,

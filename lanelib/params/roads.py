@@ -132,6 +132,11 @@ class LinesConfig:
     follow_bends : a voted line is also traced by windows (``window_m``, ``max_empty_windows``)
         from its paint near the car, and the traced paint is kept where it fits tighter
         (``lines.vote``): a bend of the road or the lens bends a line away from a straight one.
+    follow_ahead_m : the lines view goes on this far beyond ``view_ahead_m`` (0: off); the lines
+        found within ``view_ahead_m`` are followed by windows (``window_m``, ``max_empty_windows``)
+        along their paint into it, and each is reported as far as its paint goes
+        (``lines.vote.follow_ahead``). A line is labelled as far as it is seen, beyond the road
+        where vehicles and their shadows crowd the search.
     row_weight_power, row_weight_full : how much a row of the lines view counts in the vote
         (``LanePipeline.lines_row_weights``; power 0: every row alike): the raw frame's rows it
         sees over ``row_weight_full``, at most 1, to this power. Far rows are stretched from a
@@ -181,6 +186,7 @@ class LinesConfig:
     min_offset_m: float = 0.0
     near_paint_m: float = 3.0
     refused_clear_crossings: bool = True
+    follow_ahead_m: float = 0.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -192,6 +198,8 @@ class LinesConfig:
                               "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
+        if self.follow_ahead_m < 0:
+            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m} must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
