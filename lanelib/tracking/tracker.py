@@ -11,18 +11,19 @@ from ..params.roads import TrackerConfig
 from ..pipeline import LanePipeline
 from ..records import LaneSearch, LineFit
 from ..result import FrameResult, Rejected
-from ..proposers import FallbackMasks, Frame, OtherPeaks, Proposer, ShorterViews, choose
-from ..roads.proposers import AsphaltEdge, RoadView, Shoulder, measure_shoulders
+from ..proposers import Frame, Proposer, choose
+from ..roads.proposers import TRACKER_FIRST, TRACKER_LATER, measure_shoulders, reacquire_half_px
 from ..search import lookahead_top_px
 from ..thresholds import Made
 from .judge import TrackChecks
-from .proposers import Reacquire, RememberedBases, WindowsFromTrack
+from .proposers import RememberedBases, WindowsFromTrack
 from .state import LostTrack, TrackState
 from .update import accept, hold_or_lose
 
-PROPOSERS: tuple[Proposer, ...] = (RoadView(), WindowsFromTrack(), RememberedBases(), Reacquire(),
-                                   FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(),
-                                   Shoulder())
+# the tracker's own proposers between the hard-road ones (``roads.proposers``), each of which
+# asks only when its switch is on
+PROPOSERS: tuple[Proposer, ...] = (*TRACKER_FIRST, WindowsFromTrack(), RememberedBases(),
+                                   *TRACKER_LATER)
 
 
 class LaneTracker:
@@ -220,21 +221,11 @@ class LaneTracker:
         ``max_gap_m`` of the bottom row (not one seen only far ahead and joined nearer the car)."""
         return fit is not None and fit.gap_px * self.ym <= self.config.max_gap_m
 
-    def reacquire_half_px(self, side: int) -> float:
-        """Return the half width (px) of the band a line inferred for ``reacquire_after_frames``
-        frames or more is looked for in, 0 when it is not re-acquired: it widens by a search
-        margin each frame, up to ``reacquire_band_m``."""
-        cfg = self.config
-        run = self.state.inferred_run[side]
-        if not cfg.reacquire_after_frames or run < cfg.reacquire_after_frames:
-            return 0.0
-        margin = self.pipeline.config.search.prior_margin_px
-        return min(margin * (2 + run - cfg.reacquire_after_frames), cfg.reacquire_band_m / self.xm)
-
     def jump_limit_m(self, side: int) -> float:
         """Return how far (m) line ``side`` may lie from its tracked line at the car: ``max_jump_m``,
-        or the re-acquisition band's half width when that line is being re-acquired."""
-        return max(self.config.max_jump_m, self.reacquire_half_px(side) * self.xm)
+        or the re-acquisition band's half width when that line is being re-acquired
+        (``roads.proposers.reacquire_half_px``)."""
+        return max(self.config.max_jump_m, reacquire_half_px(self, side) * self.xm)
 
     def inferred_line(self, seen: np.ndarray, track, side: int, top_px: int,
                       spread: np.ndarray | None = None) -> np.ndarray:
