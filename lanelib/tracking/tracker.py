@@ -12,6 +12,7 @@ from ..pipeline import LanePipeline
 from ..records import LaneSearch, LineFit
 from ..result import FrameResult, Rejected
 from ..proposers import Frame, Proposer, choose
+from ..roads.checks import inferred_spread
 from ..roads.proposers import TRACKER_FIRST, TRACKER_LATER, measure_shoulders, reacquire_half_px
 from ..search import lookahead_top_px
 from ..thresholds import Made
@@ -169,10 +170,7 @@ class LaneTracker:
             images["binary"] = images["fallback binary"]  # the views show the mask the lane came from
         images.pop("fallback binary", None)
         blind = not any(s.left.found or s.right.found for s in f.looked)
-        spread = None  # one line to infer: the view's scale ahead from the other's double stripes
-        if cfg.stripe_spread and (best.left is None) != (best.right is None):
-            seen = best.left if best.left is not None else best.right
-            spread = self.checks_of_track.spread(f.mask(), seen.coeffs_px, search.top_px)
+        spread = inferred_spread(self, best, f.mask)  # one line to infer: its double stripes' grade
         if best.left is not None or best.right is not None:
             result = accept(self, best, f.track, images, spread)
         else:
@@ -226,6 +224,16 @@ class LaneTracker:
         or the re-acquisition band's half width when that line is being re-acquired
         (``roads.proposers.reacquire_half_px``)."""
         return max(self.config.max_jump_m, reacquire_half_px(self, side) * self.xm)
+
+    def agree(self, now, before) -> str:
+        """Return how a line lies within ``max_jump_m`` at the car and ``max_bend_m`` in shape of
+        another (pixel coefficients of both), "" when it does not: a pitched start's pairs and a
+        restart's line (``start.pitched_start``, ``roads.checks.restart``) agree so with the
+        previous frame's."""
+        dx = (np.polyval(now, self.rows) - np.polyval(before, self.rows)) * self.xm
+        if abs(dx[-1]) > self.config.max_jump_m or dx.max() - dx.min() > self.config.max_bend_m:
+            return ""
+        return f"{abs(dx[-1]):.2f} m at the car and {dx.max() - dx.min():.2f} m in shape"
 
     def inferred_line(self, seen: np.ndarray, track, side: int, top_px: int,
                       spread: np.ndarray | None = None) -> np.ndarray:
