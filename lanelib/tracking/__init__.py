@@ -4,8 +4,9 @@
 ``FrameResult`` whose fits are the tracked (smoothed) lane, so ``LanePipeline.annotate`` and the
 debug composite work on it unchanged. Per frame:
 
-1. **Predict.** The smoothed lane moved along the trend of its centre line
-   (``TrackState.predicted_lane``): the smoothed lane lags the road by about a frame.
+1. **Predict.** The smoothed lane, moved along the trend of its centre line with
+   ``trend_frames`` on (``roads.trend.predicted_lane``): the smoothed lane lags the road by
+   about a frame.
 2. **Search.** Around the predicted lane when the previous frame was accepted, with sliding
    windows otherwise, in a look-ahead that keeps the tracked lines in view
    (``LaneTracker.lookahead_top_px``).

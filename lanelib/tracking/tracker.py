@@ -14,6 +14,7 @@ from ..result import FrameResult, Rejected
 from ..proposers import Frame, Proposer, choose
 from ..roads.checks import inferred_spread
 from ..roads.proposers import TRACKER_FIRST, TRACKER_LATER, measure_shoulders, reacquire_half_px
+from ..roads.trend import predicted_lane
 from ..search import lookahead_top_px
 from ..thresholds import Made
 from .judge import TrackChecks
@@ -97,8 +98,9 @@ class LaneTracker:
 
     def predicted_lane(self, frame: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """Return the tracked lane moved along the trend of its centre line to ``frame`` (default:
-        the frame being tracked; ``TrackState.predicted_lane``)."""
-        return self.state.predicted_lane(self.config, frame)
+        the frame being tracked; ``roads.trend.predicted_lane``, the tracked lane itself while
+        ``trend_frames`` is off)."""
+        return predicted_lane(self.state, self.config, frame)
 
     @property
     def remembered_bases(self) -> tuple[float, float] | None:
