@@ -27,15 +27,16 @@ from .fit import measure
 from .lines.detect import LinesSetup, find_every_line, row_weights
 from .params import LinesConfig
 from .perspective import LinesView, Perspective, scaled
-from .proposers import Candidate, FallbackMasks, Frame, OtherPeaks, ShorterViews, choose, passes
+from .proposers import Candidate, Frame, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
 from .result import FrameResult, LinesResult, Rejected, line_confidence
-from .roads.proposers import AsphaltEdge
+from .roads.proposers import DETECT
 from .search import search_around, sliding_windows
 
 
-# where a single image's lane is looked for again when its first search fails (``detect``)
-DETECT_PROPOSERS = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())
+# where a single image's lane is looked for again when its first search fails (``detect``): the
+# hard-road proposers that need no track, each asking only when its switch is on
+DETECT_PROPOSERS = DETECT
 
 
 class LanePipeline:

@@ -12,19 +12,21 @@ image's checks for ``LanePipeline.detect``, the track's for ``LaneTracker``) and
 proposer's ``rule``: "more lines" takes it when more of its lines pass than of the best so far;
 "a pair" takes it only when both pass. The first candidate taken ends the proposer's turn.
 
-The proposers here need no track: the fallback masks, shorter views and other histogram peaks
-(and, in ``roads.proposers``, the asphalt edge). The tracker adds its own
-(``tracking.proposers``) and the hard-road ones that read the track (``roads.proposers``).
+This module holds the protocol, the frame a proposer reads (``Frame``), the chain (``choose``)
+and a single image's check of a candidate (``passes``); the proposers themselves live with the
+parts they serve: the tracker's own in ``tracking.proposers``, the hard-road ones in
+``roads.fallbacks`` (no track needed: fallback masks, shorter views, other peaks) and
+``roads.proposers`` (the asphalt edge, and those that read the track).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol
 
 import numpy as np
 
 from .records import LaneSearch, LineFit
-from .search import candidate_bases, histogram, lane_pixels, sliding_windows
+from .search import lane_pixels
 from .thresholds import Made
 
 SIDES = ("left", "right")
@@ -147,88 +149,6 @@ def choose(frame: Frame, proposers) -> Candidate:
     return frame.best
 
 
-class FallbackMasks:
-    """Without a track and no pair: the whole view on the fallback masks
-    (``ThresholdConfig.fallback_rule``)."""
-
-    name, rule, moves_lookahead = "fallback masks", "more lines", False
-
-    def where(self, frame: Frame):
-        return True if frame.track is None and not frame.best.pair and frame.pipeline.has_fallback_masks else None
-
-    def propose(self, frame: Frame, where):
-        return [(frame.search(), "")]
-
-
-class ShorterViews:
-    """Without a track and no pair: shorter look-aheads (``SearchConfig.short_views``), where a
-    tight bend's lane stays in view (``short_view_search``)."""
-
-    name, rule, moves_lookahead = "shorter views", "more lines", False
-
-    def where(self, frame: Frame):
-        ok = frame.track is None and not frame.best.pair and frame.pipeline.config.search.short_views
-        return True if ok else None
-
-    def propose(self, frame: Frame, where):
-        return [(short_view_search(frame.pipeline, frame.mask(), frame.pixels()), "")]
-
-
-class OtherPeaks:
-    """Without a track and no pair: windows from other histogram peaks (``robust_search``,
-    ``SearchConfig.candidates`` > 1)."""
-
-    name, rule, moves_lookahead = "other peaks", "more lines", False
-
-    def where(self, frame: Frame):
-        ok = frame.track is None and not frame.best.pair and frame.pipeline.config.search.candidates > 1
-        return True if ok else None
-
-    def propose(self, frame: Frame, where):
-        return [(robust_search(frame.pipeline, frame.mask(), frame.best.search, frame.pixels()), "")]
-
-
 def passes(pipeline, search: LaneSearch) -> bool:
     """Return whether a search found both lines and they pass a single image's checks."""
     return search.left.found and search.right.found and pipeline.check(search).ok
-
-
-def short_view_search(pipeline, binary: np.ndarray,
-                      pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch | None:
-    """Return the first search in a shorter look-ahead whose lane passes the checks, or None.
-
-    Sliding windows over the lower ``SearchConfig.short_views`` shares of the view in turn (a
-    tight bend's lane stays in a shorter view; ``search.lookahead_top_px``). Its search's
-    ``top_px`` says which. ``pixels``: the mask's ``search.lane_pixels`` when made already.
-    """
-    h = pipeline.size[1]
-    pixels = lane_pixels(binary) if pixels is None else pixels
-    for share in pipeline.config.search.short_views:
-        search = pipeline.search(binary, top_px=int(round(h * (1.0 - share))), pixels=pixels)
-        if passes(pipeline, search):
-            return search
-    return None
-
-
-def robust_search(pipeline, binary: np.ndarray, first: LaneSearch,
-                  pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch | None:
-    """Return the first search from other histogram peaks whose lane passes the checks, or None.
-
-    For a frame whose search from the strongest peaks failed its checks (a seam, a kerb or a
-    shadow edge took a line): sliding windows from each pair of the ``candidates`` strongest
-    peaks on each side (``search.candidate_bases``), the pairs with the stronger peaks first,
-    skipping the pair already tried. Its search's ``method`` is "robust". ``pixels``: the mask's
-    ``search.lane_pixels`` when made already.
-    """
-    sc = pipeline.config.search
-    hist = histogram(binary, sc.histogram_fraction)
-    lefts, rights = candidate_bases(hist, pipeline.car_x_px, sc.candidates, sc.margin_px)
-    pairs = sorted(((l, r) for l in lefts for r in rights),
-                   key=lambda p: -(int(hist[int(p[0])]) + int(hist[int(p[1])])))
-    for bases in pairs:
-        if first.bases_px == bases:
-            continue
-        search = sliding_windows(binary, sc, bases=bases, car_x=pipeline.car_x_px, pixels=pixels)
-        if passes(pipeline, search):
-            return replace(search, method="robust")
-    return None

@@ -8,15 +8,14 @@ by ``SearchConfig.double_line_px``). Each returns a ``records.LaneSearch``.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import cv2
 import numpy as np
 
-from .fit import fit_line, fit_line_with_first, parallel_fits
+from .fit import fit_line_with_first, parallel_fits
 from .params import SearchConfig
 from .records import LaneSearch, LineFit, Window
-from .roads.stripes import inner_stripe_mask, two_stripes
+from .roads.stripes import double_line_fit
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -238,32 +237,12 @@ def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = Sea
 
 def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
               missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
-    """Return ``fit_line`` of one line's pixels and the pixels it rests on: those of its inner
-    stripe (``inner_stripe``) when they scatter from the fit like a double line (RMS above a
-    quarter of ``double_line_px``), so a single line costs no second fit. Every search fits its
-    lines here (``side``: "left" or "right", the side of the lane they bound). A line resolved
-    as a double line as a whole is its inner stripe's fit, found or not: a fit through both
-    stripes runs between them, never on the line (a patch of double line too short to fit, with
-    a stray pixel further on lending the whole its span, is not found rather than fitted through
-    both stripes and bent by that pixel). An inner stripe resolved only on the rows nearest the
-    car is taken when its fit is found and as well founded as the fit of the whole line (second
-    order where that one is: spanning ``min_span_fraction`` of the view); a short stub of it is
-    not worth the line, which was not shown to be two stripes beyond it. A line that
-    scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
-    (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
-    at least a fifth of them. ``top_px``: the search's look-ahead (``fit_line``)."""
+    """Return ``fit_line`` of one line's pixels and the pixels it rests on. Every search fits its
+    lines here (``side``: "left" or "right", the side of the lane they bound; ``top_px``: the
+    search's look-ahead, ``fit_line``). With ``double_line_px`` on, pixels that scatter from the
+    fit like a double line (RMS above a quarter of ``double_line_px``) are read at the inner
+    stripe (``roads.stripes.double_line_fit``), so a single line costs no second fit."""
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        stripes = two_stripes(*pixels, 2, height_px, first=first)
-        keep, whole = inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
-        if keep is not None:
-            inner = (pixels[0][keep], pixels[1][keep])
-            narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
-            curved = config.min_span_fraction * height_px
-            if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
-                return narrowed, inner
-        n = len(pixels[0])
-        right = int(np.count_nonzero(stripes[2]))
-        if min(right, n - right) >= 0.2 * n:
-            fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
+        return double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
     return fit, pixels

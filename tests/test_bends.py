@@ -23,7 +23,7 @@ from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
 from lanelib.records import LineFit
 from lanelib.search import lookahead_top_px
-from lanelib.proposers import short_view_search
+from lanelib.roads.fallbacks import short_view_search
 from lanelib.tracking import LaneTracker
 
 H, W = 720, 1280

@@ -224,14 +224,18 @@ CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.records",
         "lanelib.tracking.start",
         "lanelib.tracking.tracker"}
 EXTENSIONS = ("lanelib.autogeometry", "lanelib.roads", "lanelib.lines")
-# the core modules that still call a hard-road or every-line part by name, and which: the search
+# the core modules that still call a hard-road or every-line part, and which: the search
 # narrows a double line to its inner stripe (``SearchConfig.double_line_px``), a lines result
-# holds ``ViewLine``s, the pipeline runs the asphalt edge and the every-line search, the tracker
-# its hard-road proposers (``roads.proposers``) and its checks the stripes' spread. Nothing else
-# of the core may reach them.
+# holds ``ViewLine``s, the pipeline takes its proposers from ``roads.proposers`` (``DETECT``) and
+# runs the every-line search, the tracker takes its hard-road proposers from ``roads.proposers``
+# (``TRACKER_FIRST``, ``TRACKER_LATER``) and measures the shoulder and the stripes' spread, its
+# checks ask ``roads.checks`` (near gap, grade pair, restart from one line) and its update keeps
+# the width seen at the car off a line joined over a bend's gap (``roads.checks``). Each hard-road
+# part changes nothing while its switch is off. Nothing else of the core may reach them.
 CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.result": {"lanelib.lines"},
               "lanelib.pipeline": {"lanelib.roads", "lanelib.lines"},
-              "lanelib.tracking.tracker": {"lanelib.roads"}, "lanelib.tracking.judge": {"lanelib.roads"}}
+              "lanelib.tracking.tracker": {"lanelib.roads"}, "lanelib.tracking.judge": {"lanelib.roads"},
+              "lanelib.tracking.update": {"lanelib.roads"}}
 
 
 @pytest.mark.parametrize("module", sorted(CORE))

@@ -15,6 +15,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import fit_line, least_squares_poly, normal_width_m, offset_line
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
+from lanelib.roads.proposers import reacquire_half_px
 from lanelib.roads.stripes import stripe_spread
 from lanelib.tracking import LaneTracker, TrackerConfig
 
@@ -817,14 +818,14 @@ def test_the_reacquisition_band_widens_with_the_inferred_run(pipe):
     halves = []
     for _ in range(6):
         tracker.update(_paint_returns_frame(pipe, None))
-        halves.append(tracker.reacquire_half_px(1))
+        halves.append(reacquire_half_px(tracker, 1))
     cap = TrackerConfig().reacquire_band_m / XM
     assert halves == pytest.approx([0, 0, 2 * margin, 3 * margin, cap, cap])
-    assert tracker.reacquire_half_px(0) == 0
+    assert reacquire_half_px(tracker, 0) == 0
     assert tracker.jump_limit_m(1) == pytest.approx(TrackerConfig().reacquire_band_m)
     assert tracker.jump_limit_m(0) == TrackerConfig().max_jump_m
     tracker.update(frame(pipe))
-    assert tracker.reacquire_half_px(1) == 0
+    assert reacquire_half_px(tracker, 1) == 0
 
 
 @pytest.mark.parametrize("kwargs", [dict(reacquire_after_frames=-1), dict(reacquire_band_m=0.0)])

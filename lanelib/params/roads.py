@@ -208,7 +208,7 @@ class LinesConfig:
 @dataclass(frozen=True)
 class TrackerConfig:
     """Parameters of ``LaneTracker`` (the checks every lane passes are ``params.LaneChecks``); the parts
-    named are in ``lanelib.tracking`` and ``lanelib.roads.proposers``.
+    named are in ``lanelib.tracking`` and ``lanelib.roads``.
 
     Parameters
     ----------
@@ -228,7 +228,7 @@ class TrackerConfig:
         lane. A second-order fit extrapolated 3 m errs by about 3**2 * dk / 2, a few cm for the
         curvature changes of a clothoid between frames; the view opens fully in 5 frames.
     trend_frames : accepted frames whose lane centre line gives the trend that the predicted lane
-        follows (``TrackState.predicted_lane``), from the third accepted frame on; below 3 (0, the
+        follows (``roads.trend.predicted_lane``), from the third accepted frame on; below 3 (0, the
         default) turns the prediction off, the presets ``hard-roads`` and ``country`` use 5.
     blind_hold_frames : frames in which nothing at all is seen (no line found by any search) that
         the lane is held for, beside ``hold_frames`` (``tracking.update.hold_or_lose``); they do not
@@ -260,7 +260,7 @@ class TrackerConfig:
         far beyond its width at the car.
     reacquire_after_frames : 0 (off, the default), or the accepted frames in a row a line must have
         been inferred (or seen only short of the car, ``max_gap_m``) before it is looked for in a
-        wider band around its inference (``tracking.proposers.Reacquire``; 3 in the ``hard-roads``
+        wider band around its inference (``roads.proposers.Reacquire``; 3 in the ``hard-roads``
         and ``country`` presets): twice ``prior_margin_px`` either side, one ``prior_margin_px``
         more for each further frame, up to ``reacquire_band_m``; the jump limit against it
         (``max_jump_m``) is as wide. Three frames: a line missing for one or two frames (a gap in a
@@ -271,7 +271,7 @@ class TrackerConfig:
         outside the width checks' range with the seen line anyway.
     restart_frames : 0 (off, the default; 25 in the ``hard-roads`` and ``country`` presets), or the
         frames after a reset in which one line alone may restart the lane where the lost track's
-        line on its side was (``tracking.start.restart``). 25 frames (a second at 25 fps): within it
+        line on its side was (``roads.checks.restart``). 25 frames (a second at 25 fps): within it
         the car has moved across the lane by little (at 0.5 m/s of lateral speed, half a metre);
         later the lost track tells nothing about where the lines are.
     restart_distance_m : how far (m, at the car) a line may lie from the lost track's line on
@@ -306,7 +306,7 @@ class TrackerConfig:
         returning beyond a crest, into a sag, is seen metres ahead, and its fit extrapolated to
         the car lies inside the lane there (the flat view widens the lane ahead in a sag).
     near_gap_m : 0 (off, the default; 1 in the ``hard-roads`` and ``country`` presets), or
-        ``max_gap_m`` on a bend (``TrackChecks.gap_limits_m``) for a line whose paint reached the
+        ``max_gap_m`` on a bend (``roads.checks.gap_limits_m``) for a line whose paint reached the
         car in the newest accepted frames, when the other line of the frame reaches the car within
         it and the tracked line bends by more than ``near_gap_bend_m`` over the gap: seen now only
         from farther ahead (its paint near the car in a tree's shade) it is kept where seen and

@@ -1,4 +1,4 @@
-"""The hard-road proposers: the road seen from the car, the asphalt edge, a faded line.
+"""The hard-road proposers: the road seen from the car, re-acquisition, the asphalt edge, a faded line.
 
 Each is a proposer (the protocol in ``lanelib.proposers``): it says ``where`` it has something
 to look for in a frame and ``propose``s candidate searches there. ``AsphaltEdge`` serves a single
@@ -6,6 +6,8 @@ image (``LanePipeline.detect``) and the tracker; the others read the track.
 
 - ``RoadView``: when a line is refused, the look-ahead is also cut where the lane's interior
   stops looking like the road near the car (beyond a crest, a vehicle on the road).
+- ``Reacquire``: a line the track has inferred for several frames is looked for in a band
+  around its inference that widens with those frames (``reacquired``).
 - ``AsphaltEdge``: a lane with one line and no paint at all on the other side takes the
   unpainted asphalt edge there as its line (``edge_search``).
 - ``Shoulder``: while both lines are seen, each painted line's distance out to the asphalt edge
@@ -14,7 +16,8 @@ image (``LanePipeline.detect``) and the tracker; the others read the track.
   edge is seen, joined beyond to the inference or nearer the car to returning paint.
 
 The pipeline and the tracker are passed in (duck-typed): this package sits below both in the
-layers.
+layers. ``TRACKER_FIRST``, ``TRACKER_LATER`` and ``DETECT`` are where these and those of
+``roads.fallbacks`` go in the tracker's chain and in a single image's, in their order.
 """
 from __future__ import annotations
 
@@ -22,10 +25,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..fit import joined_fit, offset_line, row_medians
-from ..records import NEAR_SHARE, LaneSearch, LineFit
-from ..search import fit_side
+from ..fit import joined_fit, offset_line, parallel_fits, row_medians
+from ..records import NEAR_SHARE, LaneSearch, LineFit, Window
+from ..search import fit_side, search_around
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
+from .fallbacks import FallbackMasks, OtherPeaks, ShorterViews
 
 SIDES = ("left", "right")
 
@@ -65,6 +69,85 @@ def road_view_top(tracker, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]
         return 0
     return road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, tracker.ym,
                             pipe.config.edge.min_saturation_step, tracker.config.road_view_run_m, w, c0)
+
+
+class Reacquire:
+    """A line the track has inferred for ``reacquire_after_frames`` frames, looked for in a band
+    around its inference that widens with the frames it has been inferred (up to
+    ``reacquire_band_m``): an inference drifts while nothing shows the line."""
+
+    name, rule, moves_lookahead = "re-acquire", "more lines", False
+
+    def where(self, frame):
+        if frame.track is None:
+            return None
+        best = frame.best
+        for i, (mine, other) in enumerate(((best.left, best.right), (best.right, best.left))):
+            if mine is None and other is not None and reacquire_half_px(frame.tracker, i) > 0:
+                return i
+        return None
+
+    def propose(self, frame, where):
+        return [(reacquired(frame.tracker, frame.best.search, frame.mask(), frame.pixels(),
+                            frame.track, where, frame.top), "")]
+
+
+def reacquired(tracker, search: LaneSearch, binary: np.ndarray,
+               pixels: tuple[np.ndarray, np.ndarray], track, side: int, top_px: int) -> LaneSearch | None:
+    """Return ``search`` with line ``side`` looked for again in ``binary``, the whole view, or
+    None when no line could lie within ``reacquire_half_px`` of its inference. ``pixels``: the
+    mask's ``search.lane_pixels`` (``Frame.pixels``, extracted once for the frame's searches).
+
+    The inference is moved across to the median distance of the lane pixels in the bin nearest
+    it (bins ``prior_margin_px`` wide, every half margin, out to the band's half width) that
+    holds ``min_line_pixels``, and the line is searched within ``prior_margin_px`` of it
+    (``search.search_around``), its curvature shared with the other line when it is short
+    (``fit.parallel_fits``). The band goes into the search's windows, so the line's band checks
+    compare it with the band it was searched in.
+    """
+    cfg = tracker.pipeline.config.search
+    half = reacquire_half_px(tracker, side)
+    margin = cfg.prior_margin_px
+    ys, xs = pixels
+    keep = ys >= top_px
+    dx = xs[keep] - np.polyval(track[side], ys[keep])
+    dx = dx[np.abs(dx) <= half]
+    if len(dx) < cfg.min_line_pixels:
+        return None
+    steps = np.arange(margin / 2, half - margin / 2 + 1.0, margin / 2)
+    for centre in [0.0] + [c for step in steps for c in (-step, step)]:  # nearest first
+        near = dx[np.abs(dx - centre) <= margin / 2]
+        if len(near) >= cfg.min_line_pixels:
+            break
+    else:
+        return None
+    moved = np.array(track[side], float)
+    moved[2] += float(np.median(near))
+    name = ("left", "right")[side]
+    priors = [LineFit(None), LineFit(None)]
+    priors[side] = LineFit(tuple(moved))
+    found = search_around(binary, priors[0], priors[1], cfg, top_px)
+    h = tracker.pipeline.size[1]
+    slabs = np.linspace(float(h), float(top_px), cfg.n_windows + 1).round().astype(int)
+    band = tuple(Window(name, int(x - margin), int(x + margin), int(lo), int(hi))
+                 for hi, lo in zip(slabs[:-1], slabs[1:])
+                 for x in [float(np.polyval(moved, (lo + hi) / 2))])
+    merged = replace(search, **{name: getattr(found, name), f"{name}_pixels": getattr(found, f"{name}_pixels")},
+                     windows=tuple(w for w in search.windows if w.side != name) + band)
+    left, right = parallel_fits(merged.left, merged.right, merged.left_pixels, merged.right_pixels, h, cfg)
+    return replace(merged, left=left, right=right)
+
+
+def reacquire_half_px(tracker, side: int) -> float:
+    """Return the half width (px) of the band a line inferred for ``reacquire_after_frames``
+    frames or more is looked for in, 0 when it is not re-acquired: it widens by a search
+    margin each frame, up to ``reacquire_band_m`` (``LaneTracker.jump_limit_m`` allows as far)."""
+    cfg = tracker.config
+    run = tracker.state.inferred_run[side]
+    if not cfg.reacquire_after_frames or run < cfg.reacquire_after_frames:
+        return 0.0
+    margin = tracker.pipeline.config.search.prior_margin_px
+    return min(margin * (2 + run - cfg.reacquire_after_frames), cfg.reacquire_band_m / tracker.xm)
 
 
 class AsphaltEdge:
@@ -346,3 +429,12 @@ def joined_paint(tracker, pixels, placed: LineFit, top_px: int) -> LineFit | Non
     top = min(float(rows[0]), bottom - placed.gap_px - placed.span_px)
     return replace(placed, coeffs_px=coeffs, n_pixels=placed.n_pixels + int(keep.sum()),
                    span_px=float(bottom - placed.gap_px - top))
+
+
+# the hard-road proposers in the tracker's chain (``tracking.PROPOSERS``), each asking only when
+# its switch is on: the road view before the tracker's own proposers (it cuts the look-ahead of
+# the windows from the track), the others after them
+TRACKER_FIRST = (RoadView(),)
+TRACKER_LATER = (Reacquire(), FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(), Shoulder())
+# a single image's chain (``pipeline.DETECT_PROPOSERS``): those that need no track
+DETECT = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())

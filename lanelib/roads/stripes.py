@@ -4,14 +4,52 @@
 keeps the stripe nearer the lane where the pixels form a resolved double line (as a whole, or on
 its rows nearest the car); ``stripe_spacing_px`` measures the stripes' spacing band by band, whose
 change along the rows is the change of the flat view's scale across the road. The search
-(``search.fit_side``) calls these when ``SearchConfig.double_line_px`` is set.
+(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 import numpy as np
 
-from ..fit import least_squares_rss, normal_sums
-from ..records import polyval2
+from ..fit import fit_line, least_squares_rss, normal_sums
+from ..params import SearchConfig
+from ..records import LineFit, polyval2
+
+
+def double_line_fit(fit: LineFit, first: tuple, pixels: tuple[np.ndarray, np.ndarray], side: str,
+                    height_px: int, config: SearchConfig, missing: str, top_px: int = 0
+                    ) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+    """Return the fit of a line whose pixels scatter from their fit ``fit`` like a double line,
+    and the pixels it rests on (``search.fit_side`` asks; ``first``: ``fit_line``'s first fit of
+    the same pixels, ``fit.fit_line_with_first``): those of its inner stripe (``inner_stripe``)
+    where the stripes are resolved, else all of them.
+
+    A line resolved as a double line as a whole is its inner stripe's fit, found or not: a fit
+    through both stripes runs between them, never on the line (a patch of double line too short
+    to fit, with a stray pixel further on lending the whole its span, is not found rather than
+    fitted through both stripes and bent by that pixel). An inner stripe resolved only on the rows
+    nearest the car is taken when its fit is found and as well founded as the fit of the whole
+    line (second order where that one is: spanning ``min_span_fraction`` of the view); a short
+    stub of it is not worth the line, which was not shown to be two stripes beyond it. A line
+    that scatters so but is not narrowed to a stripe keeps its pixels' spread about two stripes
+    (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
+    at least a fifth of them.
+    """
+    stripes = two_stripes(*pixels, 2, height_px, first=first)
+    keep, whole = inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
+    if keep is not None:
+        inner = (pixels[0][keep], pixels[1][keep])
+        narrowed = fit_line(*inner, height_px, config, missing=missing, top_px=top_px)
+        curved = config.min_span_fraction * height_px
+        if whole or narrowed.found and (narrowed.span_px >= curved or fit.span_px < curved):
+            return narrowed, inner
+    n = len(pixels[0])
+    right = int(np.count_nonzero(stripes[2]))
+    if min(right, n - right) >= 0.2 * n:
+        fit = replace(fit, stripe_scatter_px=math.sqrt(stripes[3] / n))
+    return fit, pixels
 
 
 def inner_stripe(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: float,
@@ -63,7 +101,8 @@ def inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: flo
                        stripes: tuple | None, first: tuple | None = None) -> tuple[np.ndarray | None, bool]:
     """Return which pixels ``inner_stripe`` keeps (None: all, not a double line) and whether the
     line was resolved as a double line as a whole (False: on its near rows only). ``first``:
-    ``fit_line``'s first fit of the same pixels (``fit_line_with_first``) when already made (``fit_side``)."""
+    ``fit_line``'s first fit of the same pixels (``fit_line_with_first``) when already made
+    (``double_line_fit``)."""
     n = len(ys)
     if spacing_px <= 0 or n < 20:
         return None, False
@@ -266,7 +305,7 @@ def two_stripes(ys: np.ndarray, xs: np.ndarray, degree: int, height_px: int, ite
     leave little of it (their width / sqrt(12)), where one curve through both runs in the gap;
     pixels spread evenly over a band keep half their RMS spread (each half of the band).
     ``first``: ``fit_line``'s first fit (a, b, c, rss and its ``normal_sums``) of the same
-    pixels when already made (``fit_side``; used for degree 2 only).
+    pixels when already made (``double_line_fit``; used for degree 2 only).
     """
     scale = float(height_px)
     k = degree + 1  # terms of the centre curve: 1, t (, t**2)

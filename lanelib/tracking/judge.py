@@ -6,9 +6,11 @@ where it lies along its track and joined near the car to a reference (``fit.join
 line that jumped at the car or bent away from its track is refused, unless both lines bent
 alike and are a lane on their own (the road changed, the track lags). The pair is then checked
 for width, parallelism and curvature against the tracked width, with two exceptions that read
-the view's pitch: a pitched flat view's lane and a grade read from a double line's stripes.
-Without a track, a pair refused as not parallel may start the track as a pitched lane, and one
-line alone may restart a track lost moments ago (``restart``).
+the view's pitch: a pitched flat view's lane and a grade read from a double line's stripes
+(``roads.checks.graded_pair``). Without a track, a pair refused as not parallel may start the
+track as a pitched lane (``start.pitched_start``), and one line alone may restart a track lost
+moments ago (``roads.checks.restart``). The hard-road checks (``roads.checks``) change nothing
+unless switched on.
 """
 from __future__ import annotations
 
@@ -19,9 +21,9 @@ import numpy as np
 from ..checks import gap_problem, line_problem, pair_problem, pitched_pair_problem
 from ..fit import joined_fit
 from ..records import LaneSearch, LineFit
-from ..roads.stripes import stripe_spread
 from ..proposers import SIDES, Candidate
-from .start import pitched_start, restart
+from ..roads.checks import gap_limits_m, graded_pair, restart
+from .start import pitched_start
 
 
 class TrackChecks:
@@ -48,7 +50,7 @@ class TrackChecks:
         kept: dict[str, LineFit | None] = {"left": None, "right": None}
         bent: dict[str, LineFit] = {}  # lines refused only for bending away from the track
         distant: dict[str, LineFit] = {}  # lines seen only far ahead that lie along their track
-        limits = self.gap_limits_m(search.left, search.right, bands, track)
+        limits = gap_limits_m(t, search.left, search.right, bands, track)
         for i, (side, fit) in enumerate((("left", search.left), ("right", search.right))):
             if not fit.found:
                 why.append(f"{side} line not found ({fit.reason})")
@@ -154,45 +156,6 @@ class TrackChecks:
         return joined_fit(seen, np.polyval(fit.coeffs_px, seen), reference,
                           np.arange(near, t.bottom + 1.0), t.pipeline.size[1])
 
-    def gap_limits_m(self, left: LineFit, right: LineFit, bands: tuple[float, float], track
-                     ) -> tuple[float, float]:
-        """Return the largest gap (m) each line may stop short of the car by and count as seen
-        there: ``near_gap_m`` (``gap_limit_m``) for a line seen short of the car by more than
-        that where its tracked line bends over the gap (``bent_gap``) while the other line
-        reaches within ``near_gap_m`` and passes its line checks, so that it is joined to the
-        line inferred from the other; else ``max_gap_m``, where an extrapolation on a straight
-        road does not rest on the curvature."""
-        t, cfg = self.t, self.t.config
-        if not cfg.near_gap_m or track is None:
-            return cfg.max_gap_m, cfg.max_gap_m
-        fits = (left, right)
-        bent = [fit.found and self.bent_gap(fit, track, i) for i, fit in enumerate(fits)]
-        if not any(bent):  # the usual frame: both lines reach the car, or the road is straight
-            return cfg.max_gap_m, cfg.max_gap_m
-        near = [fit.found and fit.gap_px * t.ym <= cfg.near_gap_m
-                and not line_problem(fit, bands[i], t.checks, t.xm, SIDES[i])
-                for i, fit in enumerate(fits)]
-        return tuple(self.gap_limit_m(i) if bent[i] and near[1 - i] else cfg.max_gap_m
-                     for i in range(2))
-
-    def bent_gap(self, fit: LineFit | None, track, side: int) -> bool:
-        """Return whether a line reaches the car only by an extrapolation that rests on the
-        curvature: its pixels stop more than ``near_gap_m`` short of the bottom row where its
-        tracked line bends by more than ``near_gap_bend_m`` over the gap."""
-        t, cfg = self.t, self.t.config
-        return bool(cfg.near_gap_m and track is not None and fit.gap_px * t.ym > cfg.near_gap_m
-                    and abs(track[side][0]) * fit.gap_px ** 2 * t.xm > cfg.near_gap_bend_m)
-
-    def gap_limit_m(self, side: int) -> float:
-        """Return ``near_gap_m`` when line ``side``'s paint reached the car in the newest accepted
-        frames (not inferred, not faded: the track there is a measurement), else ``max_gap_m``."""
-        t, cfg = self.t, self.t.config
-        s = t.state
-        if (cfg.near_gap_m and s.history and not s.history[-1].inferred[side]
-                and not s.inferred_run[side] and not s.faded_run[side]):
-            return min(cfg.near_gap_m, cfg.max_gap_m)
-        return cfg.max_gap_m
-
     # ---- the pair -------------------------------------------------------------------------
 
     def pair_problem(self, kept: dict, track, rows: np.ndarray, top_px: int, mask, distant: bool,
@@ -212,13 +175,9 @@ class TrackChecks:
             # checked on its own (a line inferred), both lines seen at the car
             why.append(f"{problem}, but a lane in a pitched flat view (its width changes linearly)")
             return ""
-        if t.config.grade_pair_check and track is not None and problem.startswith("lines not parallel"):
-            graded = self.graded_reference(left, right, rows, top_px, mask)
-            if graded is not None and not pair_problem(left, right, h, t.xm, t.ym, t.checks, top_px,
-                                                       width_reference_px=graded):
-                why.append(f"{problem} against the track, but parallel on the road ahead's grade "
-                           "(the double stripes' spread)")
-                return ""
+        if track is not None and (graded := graded_pair(t, left, right, rows, top_px, mask, problem)):
+            why.append(graded)
+            return ""
         return problem
 
     def pair_alone(self, left: LineFit, right: LineFit, top_px: int) -> str:
@@ -250,25 +209,3 @@ class TrackChecks:
         if track is None or s.newest_inferred(0) or s.newest_inferred(1):
             return None
         return np.polyval(track[1], rows) - np.polyval(track[0], rows)
-
-    def graded_reference(self, left: LineFit, right: LineFit, rows: np.ndarray, top_px: int,
-                         mask) -> np.ndarray | None:
-        """Return the lane's width (px) on ``rows`` as the road ahead's grade makes it in the flat
-        view: the pair's width at the car times the scale across the road read from a double
-        line's stripes along either line (``spread``), or None when no stripes tell it."""
-        if mask is None:
-            return None
-        t = self.t
-        for fit in (left, right):
-            spread = self.spread(mask(), fit.coeffs_px, top_px)
-            if spread is not None:
-                at_car = float(np.polyval(right.coeffs_px, t.bottom) - np.polyval(left.coeffs_px, t.bottom))
-                return at_car * np.polyval(spread, t.bottom - rows)
-        return None
-
-    def spread(self, binary: np.ndarray, coeffs_px, top_px: int) -> np.ndarray | None:
-        """Return the view's scale across the road ahead from a double line's stripes along
-        ``coeffs_px`` (``roads.stripes.stripe_spread``), or None."""
-        t = self.t
-        return stripe_spread(binary, coeffs_px, t.pipeline.config.search.double_line_px, top_px,
-                             t.pipeline.size)

@@ -47,7 +47,7 @@ class TrackState:
     """Everything ``LaneTracker`` carries from one frame to the next.
 
     ``history`` and ``trend`` hold the accepted frames the lane is smoothed over and its trend
-    read from; ``lost`` counts frames since the last accepted one, ``blind`` those of them in
+    read from (``roads.trend``); ``lost`` counts frames since the last accepted one, ``blind`` those of them in
     which nothing was seen. The rest serves single parts: ``seen_widths`` (the width a missing
     line is inferred at), ``edge`` and ``shoulders`` (the asphalt edge and the shoulder beyond
     paint), ``inferred_run`` and ``faded_run`` (re-acquisition, a faded line), ``lost_track``,
@@ -147,32 +147,6 @@ class TrackState:
         left = np.array([a.left for a in self.history])
         right = np.array([a.right for a in self.history])
         return (w[:, 0] @ left / w[:, 0].sum(), w[:, 1] @ right / w[:, 1].sum())
-
-    def predicted_lane(self, config: TrackerConfig, frame: int | None = None
-                       ) -> tuple[np.ndarray, np.ndarray] | None:
-        """Return the smoothed lane moved along the trend of its centre line to ``frame``.
-
-        The smoothed lane averages past frames, so it shows the lane as it was a frame or so ago
-        (the weighted mean of its frames' numbers). From the third accepted frame on, each pixel
-        coefficient of the centre line over the last ``trend_frames`` accepted frames is fitted
-        by a straight line in the frame number, and both lines are moved by that rate times the
-        frames from the average's time to ``frame`` (the width is kept). While the lane is not
-        seen the trend is followed no further than the frame after the last accepted one: a held
-        lane that followed it through a whole hold would drift from the lines that come back.
-        """
-        lane = self.lane(config.recency_decay)
-        if lane is None or config.trend_frames < 3 or len(self.trend) < 3:
-            return lane
-        frames = np.array([acc.frame for acc in self.trend], float)
-        centres = np.array([(acc.left + acc.right) / 2.0 for acc in self.trend])
-        rate = np.polyfit(frames - frames[-1], centres, 1)[0]  # per frame, for a, b and c
-        # frame numbers counted from the last accepted frame: the same floats wherever the
-        # tracker started (a Dask segment warms up from a later frame than one process)
-        last = frames[-1]
-        w = self.smoothing_weights(config.recency_decay)
-        times = w.T @ (np.array([acc.frame for acc in self.history], float) - last) / w.sum(axis=0)
-        target = min(float(self.frame if frame is None else frame) - last, 1.0)
-        return lane[0] + rate * (target - times[0]), lane[1] + rate * (target - times[1])
 
     @property
     def seen_width_m(self) -> float:

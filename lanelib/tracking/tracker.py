@@ -11,18 +11,21 @@ from ..params.roads import TrackerConfig
 from ..pipeline import LanePipeline
 from ..records import LaneSearch, LineFit
 from ..result import FrameResult, Rejected
-from ..proposers import FallbackMasks, Frame, OtherPeaks, Proposer, ShorterViews, choose
-from ..roads.proposers import AsphaltEdge, RoadView, Shoulder, measure_shoulders
+from ..proposers import Frame, Proposer, choose
+from ..roads.checks import inferred_spread
+from ..roads.proposers import TRACKER_FIRST, TRACKER_LATER, measure_shoulders, reacquire_half_px
+from ..roads.trend import predicted_lane
 from ..search import lookahead_top_px
 from ..thresholds import Made
 from .judge import TrackChecks
-from .proposers import Reacquire, RememberedBases, WindowsFromTrack
+from .proposers import RememberedBases, WindowsFromTrack
 from .state import LostTrack, TrackState
 from .update import accept, hold_or_lose
 
-PROPOSERS: tuple[Proposer, ...] = (RoadView(), WindowsFromTrack(), RememberedBases(), Reacquire(),
-                                   FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(),
-                                   Shoulder())
+# the tracker's own proposers between the hard-road ones (``roads.proposers``), each of which
+# asks only when its switch is on
+PROPOSERS: tuple[Proposer, ...] = (*TRACKER_FIRST, WindowsFromTrack(), RememberedBases(),
+                                   *TRACKER_LATER)
 
 
 class LaneTracker:
@@ -95,8 +98,9 @@ class LaneTracker:
 
     def predicted_lane(self, frame: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """Return the tracked lane moved along the trend of its centre line to ``frame`` (default:
-        the frame being tracked; ``TrackState.predicted_lane``)."""
-        return self.state.predicted_lane(self.config, frame)
+        the frame being tracked; ``roads.trend.predicted_lane``, the tracked lane itself while
+        ``trend_frames`` is off)."""
+        return predicted_lane(self.state, self.config, frame)
 
     @property
     def remembered_bases(self) -> tuple[float, float] | None:
@@ -168,10 +172,7 @@ class LaneTracker:
             images["binary"] = images["fallback binary"]  # the views show the mask the lane came from
         images.pop("fallback binary", None)
         blind = not any(s.left.found or s.right.found for s in f.looked)
-        spread = None  # one line to infer: the view's scale ahead from the other's double stripes
-        if cfg.stripe_spread and (best.left is None) != (best.right is None):
-            seen = best.left if best.left is not None else best.right
-            spread = self.checks_of_track.spread(f.mask(), seen.coeffs_px, search.top_px)
+        spread = inferred_spread(self, best, f.mask)  # one line to infer: its double stripes' grade
         if best.left is not None or best.right is not None:
             result = accept(self, best, f.track, images, spread)
         else:
@@ -220,21 +221,21 @@ class LaneTracker:
         ``max_gap_m`` of the bottom row (not one seen only far ahead and joined nearer the car)."""
         return fit is not None and fit.gap_px * self.ym <= self.config.max_gap_m
 
-    def reacquire_half_px(self, side: int) -> float:
-        """Return the half width (px) of the band a line inferred for ``reacquire_after_frames``
-        frames or more is looked for in, 0 when it is not re-acquired: it widens by a search
-        margin each frame, up to ``reacquire_band_m``."""
-        cfg = self.config
-        run = self.state.inferred_run[side]
-        if not cfg.reacquire_after_frames or run < cfg.reacquire_after_frames:
-            return 0.0
-        margin = self.pipeline.config.search.prior_margin_px
-        return min(margin * (2 + run - cfg.reacquire_after_frames), cfg.reacquire_band_m / self.xm)
-
     def jump_limit_m(self, side: int) -> float:
         """Return how far (m) line ``side`` may lie from its tracked line at the car: ``max_jump_m``,
-        or the re-acquisition band's half width when that line is being re-acquired."""
-        return max(self.config.max_jump_m, self.reacquire_half_px(side) * self.xm)
+        or the re-acquisition band's half width when that line is being re-acquired
+        (``roads.proposers.reacquire_half_px``)."""
+        return max(self.config.max_jump_m, reacquire_half_px(self, side) * self.xm)
+
+    def agree(self, now, before) -> str:
+        """Return how a line lies within ``max_jump_m`` at the car and ``max_bend_m`` in shape of
+        another (pixel coefficients of both), "" when it does not: a pitched start's pairs and a
+        restart's line (``start.pitched_start``, ``roads.checks.restart``) agree so with the
+        previous frame's."""
+        dx = (np.polyval(now, self.rows) - np.polyval(before, self.rows)) * self.xm
+        if abs(dx[-1]) > self.config.max_jump_m or dx.max() - dx.min() > self.config.max_bend_m:
+            return ""
+        return f"{abs(dx[-1]):.2f} m at the car and {dx.max() - dx.min():.2f} m in shape"
 
     def inferred_line(self, seen: np.ndarray, track, side: int, top_px: int,
                       spread: np.ndarray | None = None) -> np.ndarray:

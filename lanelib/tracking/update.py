@@ -16,6 +16,7 @@ from ..fit import normal_width_m
 from ..records import LineFit, line_source
 from ..result import FrameResult
 from ..proposers import SIDES, Candidate
+from ..roads.checks import bent_gap, paint_at_car
 from .state import Accepted
 
 
@@ -50,11 +51,10 @@ def accept(t: "LaneTracker", best: Candidate, track, images: dict,
     # a line placed the shoulder inside the asphalt edge is no paint seen: its paint is still
     # missing, and the width at the car is not measured on it
     seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
-    at_car = [_paint_at_car(t, fit, run) for fit, run in zip(seen, s.faded_run)]
+    at_car = [paint_at_car(t, fit, run) for fit, run in zip(seen, s.faded_run)]
     s.faded_run = [0 if near else run + 1 for run, near in zip(s.faded_run, at_car)]
-    bent = t.checks_of_track.bent_gap
     if (t.reach_car(seen[0]) and t.reach_car(seen[1])  # both seen at the car: measured there
-            and not any(bent(fit, track, i) for i, fit in enumerate(seen))):
+            and not any(bent_gap(t, fit, track, i) for i, fit in enumerate(seen))):
         s.seen_widths.append(normal_width_m(coeffs["left"], coeffs["right"], t.bottom, t.xm, t.ym))
     if s.base_history.maxlen:
         s.base_history.append(t.bases((coeffs["left"], coeffs["right"])))
@@ -104,16 +104,6 @@ def _hold(t: "LaneTracker", blind: bool) -> str:
         return ""
     s.lost += 1
     return f"holding the last good lane ({counted + 1} of {cfg.hold_frames} frames)"
-
-
-def _paint_at_car(t: "LaneTracker", fit: LineFit | None, faded_run: int) -> bool:
-    """Return whether ``fit`` is paint seen at the car; on a side whose paint has been missing
-    at the car for ``faded_run`` accepted frames, only when its pixels reach within
-    ``return_gap_m`` of the bottom row (returning paint seen farther ahead is joined nearer the
-    car to the line placed inside the asphalt edge)."""
-    if not t.reach_car(fit):
-        return False
-    return not faded_run or fit.gap_px * t.ym <= t.config.return_gap_m
 
 
 def _result(t: "LaneTracker", coeffs, confs, method: str, sources: dict, best: Candidate,
