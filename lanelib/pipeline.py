@@ -25,11 +25,13 @@ from .errors import InputError
 from .thresholds import Made
 from .fit import measure
 from .lines.detect import LinesSetup, find_every_line, row_weights
+from .lines.result import LinesResult
+from .lines.view import LinesView
 from .params import LinesConfig
-from .perspective import LinesView, Perspective, scaled
+from .perspective import Perspective, scaled
 from .proposers import Candidate, Frame, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
-from .result import FrameResult, LinesResult, Rejected, line_confidence
+from .result import FrameResult, Rejected, line_confidence
 from .roads.proposers import DETECT
 from .search import search_around, sliding_windows
 
@@ -207,7 +209,7 @@ class LanePipeline:
         return result if best is search else self.result(best, images if keep_images else {})
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
-        """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
+        """Return the lines view (``lines.view.LinesView`` of the ego view), its raw-frame remap
         maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked,
         with its transform back to the raw frame and its pixels that see the frame away from its
         edge (``lines.detect.LinesSetup``)."""

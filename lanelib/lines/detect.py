@@ -1,7 +1,7 @@
 """Every lane line in one frame: the lines view's mask, the search, and the lines in the frame.
 
 ``LanePipeline.detect_lines`` calls ``find_every_line`` with the lines view it made once
-(``LanePipeline.lines_view``: a ``perspective.LinesView``, its remap maps, the thresholds
+(``LanePipeline.lines_view``: a ``lines.view.LinesView``, its remap maps, the thresholds
 rescaled to it, its transform back to the raw frame and the pixels that see the frame).
 """
 from __future__ import annotations
@@ -15,14 +15,14 @@ import numpy as np
 
 from .. import thresholds
 from ..params import LinesConfig
-from ..result import image_line
 from . import vote
+from .result import image_line
 from .trace import find_lines
 
 
 @dataclass(frozen=True)
 class LinesSetup:
-    """What the lines search needs of one camera, made once: the view (``perspective.LinesView``),
+    """What the lines search needs of one camera, made once: the view (``lines.view.LinesView``),
     its remap maps from the raw frame, the thresholds rescaled to it, its transform back to the
     raw frame, and its pixels that see the frame away from its edge (255, else 0)."""
 
@@ -57,7 +57,7 @@ def search_first_row(view, config: LinesConfig) -> int:
 
 def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
                     weights: np.ndarray | None = None) -> tuple[tuple, dict, tuple]:
-    """Return every lane line seen in a RAW frame (``result.ImageLine``s, left to right), the
+    """Return every lane line seen in a RAW frame (``lines.result.ImageLine``s, left to right), the
     view and its mask ("lines_birdseye", "lines_binary"), and the vote's refused lines with
     their reasons.
 
@@ -66,7 +66,7 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     field beside the road is wider) and to the pixels that see the frame; the lines are found by
     ``vote.vote_lines`` or ``trace.find_lines`` (``LinesConfig.method``) within ``view_ahead_m``,
     followed beyond it with ``follow_ahead_m`` (``vote.follow_ahead``), and mapped back to the
-    raw frame over the span where each is seen (``result.image_line``). ``weights``: the vote's
+    raw frame over the span where each is seen (``lines.result.image_line``). ``weights``: the vote's
     row weights (``row_weights``), None for every row alike.
     """
     view, maps, tconf = setup.view, setup.maps, setup.tconf
