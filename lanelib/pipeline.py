@@ -24,12 +24,14 @@ from .config import PipelineConfig
 from .errors import InputError
 from .thresholds import Made
 from .fit import measure
-from .lines.detect import LinesSetup, find_every_line, row_weights
+from .lines.detect import LinesSetup, find_every_line, make_setup, row_weights
+from .lines.result import LinesResult
+from .lines.view import LinesView
 from .params import LinesConfig
-from .perspective import LinesView, Perspective, scaled
+from .perspective import Perspective, scaled
 from .proposers import Candidate, Frame, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
-from .result import FrameResult, LinesResult, Rejected, line_confidence
+from .result import FrameResult, Rejected, line_confidence
 from .roads.proposers import DETECT
 from .search import search_around, sliding_windows
 
@@ -207,23 +209,13 @@ class LanePipeline:
         return result if best is search else self.result(best, images if keep_images else {})
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
-        """Return the lines view (``perspective.LinesView`` of the ego view), its raw-frame remap
+        """Return the lines view (``lines.view.LinesView`` of the ego view), its raw-frame remap
         maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked,
         with its transform back to the raw frame and its pixels that see the frame away from its
-        edge (``lines.detect.LinesSetup``)."""
+        edge (``lines.detect.make_setup``, a ``lines.detect.LinesSetup``)."""
         if self._lines is None:
-            lc = self.config.lines
-            view = LinesView(self.perspective, lc.view_half_width_m, lc.view_xm_per_px,
-                             lc.view_ahead_m + lc.follow_ahead_m, lc.view_ym_per_px)
-            raw_to_view = self.lens.inverse + view
-            tconf = thresholds.scaled(self.config.thresholds, view.scale_from_ego)
-            maps = raw_to_view.remap_maps(view.size)
-            # where the view sees the frame, away from its edge: the edge of the frame is no paint
-            seen = cv2.remap(np.full(self.size[::-1], 255, np.uint8), maps[0], maps[1], cv2.INTER_NEAREST,
-                             borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-            edge = 2 * tconf.line_tophat.width_px + 1
-            self._lines = LinesSetup(view, maps, tconf, raw_to_view.inverse,
-                                     cv2.erode(seen, np.ones((3, edge), np.uint8)))
+            self._lines = make_setup(self.perspective, self.lens, self.size, self.config.lines,
+                                     self.config.thresholds)
         return self._lines.view, self._lines.maps, self._lines.tconf
 
     def lines_row_weights(self) -> np.ndarray:

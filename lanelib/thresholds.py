@@ -382,7 +382,7 @@ def _scale_px(v: int, factor: float, least: int = 1) -> int:
 def scaled(config: ThresholdConfig, factor: float) -> ThresholdConfig:
     """Return ``config`` for a view whose pixels are ``1 / factor`` times as wide across the road.
 
-    For the same masks in a view of another scale (``perspective.LinesView``: ``factor`` is the
+    For the same masks in a view of another scale (``lines.view.LinesView``: ``factor`` is the
     view's px per metre over the ego view's). Widths in px across the road scale by ``factor``:
     each top-hat's ``width_px`` (at least 3) and ``min_width_px`` (1 stays off; below the width),
     the masks' ``open_px`` and the combined mask's ``open_px``/``close_px`` (0 stays off), and

@@ -2,10 +2,10 @@
 
 The layers, bottom to top (``docs/architecture.md``, ``LAYERS`` below): errors; params (every
 parameter record); io; the stages on arrays (thresholds, records, fit, search, checks, result, draw,
-and the hard-road and every-line parts they call: roads, lines); geometry
-(camera, perspective, autogeometry); data; config; the one-frame engines (pipeline, the basic hough
-pipeline); the tracker; batch (folders, videos, predict), cluster, evaluate, bench, synth, benchmarks;
-the scoreboard; widgets; cli.
+and the hard-road parts they call: roads); geometry (camera, perspective, autogeometry, and every
+line in the lines view, a view made from the ego perspective: lines); data; config; the one-frame
+engines (pipeline, the basic hough pipeline); the tracker; batch (folders, videos, predict),
+cluster, evaluate, bench, synth, benchmarks; the scoreboard; widgets; cli.
 A module imports only from its own layer or below, never from above, and every import is at
 module level (a function-level import hides a cycle instead of removing it). An import under
 ``if TYPE_CHECKING:`` is an edge like any other: a cycle that only type checkers follow is still
@@ -184,8 +184,9 @@ LAYERS = [
     {"lanelib.io"},
     {"lanelib.thresholds", "lanelib.records", "lanelib.fit", "lanelib.search", "lanelib.checks",
      "lanelib.result", "lanelib.draw", "lanelib.proposers", "lanelib.bands",  # stages
-     "lanelib.roads", "lanelib.lines"},                     # hard-road parts; every line in view
-    {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry"},
+     "lanelib.roads"},                      # hard-road parts
+    {"lanelib.camera", "lanelib.perspective", "lanelib.autogeometry",
+     "lanelib.lines"},                      # every line in view: its view is made from the perspective
     {"lanelib.data"},
     {"lanelib.config"},                     # nests the records of params; JSON and presets
     {"lanelib.pipeline", "lanelib.hough"},  # the one-frame engines: advanced, basic
@@ -215,25 +216,27 @@ def test_imports_go_down_the_layers(module):
     assert not up, f"{module} (layer {layer_of(module)}) imports from a layer above it: {up}"
 
 
-# the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it
+# the core (docs/architecture.md): what the notebooks 01-07 teach; extensions plug into it.
+# ``lanelib.hough`` is not in it: the basic pipeline people learn first (notebook 00: Canny,
+# region of interest, Hough), its own engine beside the core; no core module imports it.
 CORE = {"lanelib.errors", "lanelib.io", "lanelib.thresholds", "lanelib.records", "lanelib.fit",
         "lanelib.search", "lanelib.checks", "lanelib.proposers", "lanelib.bands",
         "lanelib.result", "lanelib.draw", "lanelib.camera", "lanelib.perspective", "lanelib.data",
-        "lanelib.hough", "lanelib.config", "lanelib.pipeline", "lanelib.tracking", "lanelib.tracking.state",
+        "lanelib.config", "lanelib.pipeline", "lanelib.tracking", "lanelib.tracking.state",
         "lanelib.tracking.judge", "lanelib.tracking.proposers", "lanelib.tracking.update",
         "lanelib.tracking.start",
         "lanelib.tracking.tracker"}
 EXTENSIONS = ("lanelib.autogeometry", "lanelib.roads", "lanelib.lines")
 # the core modules that still call a hard-road or every-line part, and which: the search
-# narrows a double line to its inner stripe (``SearchConfig.double_line_px``), a lines result
-# holds ``ViewLine``s, the pipeline takes its proposers from ``roads.proposers`` (``DETECT``) and
-# runs the every-line search, the tracker takes its hard-road proposers from ``roads.proposers``
-# (``TRACKER_FIRST``, ``TRACKER_LATER``) and measures the shoulder and the stripes' spread, its
-# checks ask ``roads.checks`` (near gap, grade pair, restart from one line) and its update keeps
-# the width seen at the car off a line joined over a bend's gap (``roads.checks``). Each hard-road
-# part changes nothing while its switch is off. Nothing else of the core may reach them.
-CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.result": {"lanelib.lines"},
-              "lanelib.pipeline": {"lanelib.roads", "lanelib.lines"},
+# narrows a double line to its inner stripe (``SearchConfig.double_line_px``), the pipeline takes
+# its proposers from ``roads.proposers`` (``DETECT``) and hands ``detect_lines`` to ``lines``
+# (the lines view, its setup, the search and the ``LinesResult``), the tracker takes its
+# hard-road proposers from ``roads.proposers`` (``TRACKER_FIRST``, ``TRACKER_LATER``) and
+# measures the shoulder and the stripes' spread, its checks ask ``roads.checks`` (near gap, grade
+# pair, restart from one line) and its update keeps the width seen at the car off a line joined
+# over a bend's gap (``roads.checks``). Each hard-road part changes nothing while its switch is
+# off. Nothing else of the core may reach them.
+CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.pipeline": {"lanelib.roads", "lanelib.lines"},
               "lanelib.tracking.tracker": {"lanelib.roads"}, "lanelib.tracking.judge": {"lanelib.roads"},
               "lanelib.tracking.update": {"lanelib.roads"}}
 

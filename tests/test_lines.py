@@ -1,5 +1,6 @@
 """Tests of the multi-line search ``lines.trace.find_lines`` (issue 17, every line in view): known
-answers on synthetic lines-view masks (perspective.LinesView's default size)."""
+answers on synthetic lines-view masks (lines.view.LinesView's default size); and of the lines view
+itself (``lines.view.LinesView``)."""
 from __future__ import annotations
 
 import cv2
@@ -8,12 +9,14 @@ import pytest
 
 from lanelib.errors import ConfigError
 from lanelib.lines.trace import find_lines
+from lanelib.lines.view import LinesView
 from lanelib.params import LinesConfig
+from lanelib.perspective import Perspective
 
 
 # --------------------------------------------------------------------------- every line (find_lines)
 
-LINES_SIZE = (1750, 755)  # perspective.LinesView's default: 28 m x 151 m at 0.016 x 0.2 m/px
+LINES_SIZE = (1750, 755)  # lines.view.LinesView's default: 28 m x 151 m at 0.016 x 0.2 m/px
 
 
 def _lines_mask(lines, dashed, size=LINES_SIZE, width_px=9):
@@ -70,3 +73,39 @@ def test_find_lines_empty_and_config():
     assert find_lines(np.zeros(LINES_SIZE[::-1], np.uint8)) == []
     with pytest.raises(ConfigError):
         LinesConfig(bands=0)
+
+
+# --------------------------------------------------------------------------- the lines view
+
+def test_lines_view_round_trip_and_scale():
+    ego = Perspective()
+    view = LinesView(ego)
+    assert view.size == (1750, 755) and view.xm_per_px == 0.016 and view.ym_per_px == 0.2
+    pts = np.array([[640.0, 700.0], [300.0, 719.0], [900.0, 500.0], [640.0, 440.0], [100.0, 600.0]])
+    back = view.inverse(view(pts))
+    assert np.abs(back - pts).max() < 1e-6
+    # the same road as the ego view: ego points go to the view by the affine ego_to_view
+    assert np.abs(view.ego_to_view(ego(pts)) - view(pts)).max() < 1e-6
+    # the car's centre line is the view's centre column; the ego bottom row is 1 m above the bottom
+    car = ego.inverse([[ego.car_x_px, 720.0]])
+    assert view(car)[0] == pytest.approx([875.0, 750.0])
+    # metres: the ego lines 3.7 m apart are 231 px apart; 23.5 m of ego view is 117.5 rows
+    left, right = view.ego_to_view([[320.0, 720.0], [960.0, 0.0]])
+    assert right[0] - left[0] == pytest.approx(3.7 / 0.016)
+    assert left[1] - right[1] == pytest.approx(23.5 / 0.2)
+    assert view.scale_from_ego == pytest.approx(ego.xm_per_px / 0.016)
+    with pytest.raises(ConfigError):
+        LinesView(ego, xm_per_px=0.0)
+
+
+def test_lines_view_remap_keeps_a_road_point():
+    # a white dot on the undistorted image lands where the view maps it
+    ego = Perspective()
+    view = LinesView(ego)
+    img = np.zeros((720, 1280, 3), np.uint8)
+    cv2.circle(img, (700, 560), 6, (255, 255, 255), -1)
+    maps = view.remap_maps(view.size)
+    out = cv2.remap(img, maps[0], maps[1], cv2.INTER_LINEAR)
+    ys, xs = np.nonzero(out[:, :, 0] > 128)
+    x, y = view([[700.0, 560.0]])[0]
+    assert abs(xs.mean() - x) < 3 and abs(ys.mean() - y) < 3

@@ -12,7 +12,7 @@ from lanelib import io
 from lanelib.camera import Calibration, Lens, distort_points, undistort_points
 from lanelib.errors import ConfigError, InputError
 from lanelib.params import SearchConfig
-from lanelib.perspective import (Chain, Homography, LinesView, Perspective, PerspectiveConfig, StraightLineCheck,
+from lanelib.perspective import (Chain, Homography, Perspective, PerspectiveConfig, StraightLineCheck,
                                  scaled, straight_line_check, trapezoid_src)
 from lanelib.pipeline import LanePipeline
 
@@ -142,39 +142,3 @@ def test_straight_line_check_prints_rounded_figures():
     nan = float("nan")
     assert str(StraightLineCheck(nan, nan, nan, None, None)) == (
         "left not found, right not found, lane width not found")
-
-
-# --------------------------------------------------------------------------- the lines view
-
-def test_lines_view_round_trip_and_scale():
-    ego = Perspective()
-    view = LinesView(ego)
-    assert view.size == (1750, 755) and view.xm_per_px == 0.016 and view.ym_per_px == 0.2
-    pts = np.array([[640.0, 700.0], [300.0, 719.0], [900.0, 500.0], [640.0, 440.0], [100.0, 600.0]])
-    back = view.inverse(view(pts))
-    assert np.abs(back - pts).max() < 1e-6
-    # the same road as the ego view: ego points go to the view by the affine ego_to_view
-    assert np.abs(view.ego_to_view(ego(pts)) - view(pts)).max() < 1e-6
-    # the car's centre line is the view's centre column; the ego bottom row is 1 m above the bottom
-    car = ego.inverse([[ego.car_x_px, 720.0]])
-    assert view(car)[0] == pytest.approx([875.0, 750.0])
-    # metres: the ego lines 3.7 m apart are 231 px apart; 23.5 m of ego view is 117.5 rows
-    left, right = view.ego_to_view([[320.0, 720.0], [960.0, 0.0]])
-    assert right[0] - left[0] == pytest.approx(3.7 / 0.016)
-    assert left[1] - right[1] == pytest.approx(23.5 / 0.2)
-    assert view.scale_from_ego == pytest.approx(ego.xm_per_px / 0.016)
-    with pytest.raises(ConfigError):
-        LinesView(ego, xm_per_px=0.0)
-
-
-def test_lines_view_remap_keeps_a_road_point():
-    # a white dot on the undistorted image lands where the view maps it
-    ego = Perspective()
-    view = LinesView(ego)
-    img = np.zeros((720, 1280, 3), np.uint8)
-    cv2.circle(img, (700, 560), 6, (255, 255, 255), -1)
-    maps = view.remap_maps(view.size)
-    out = cv2.remap(img, maps[0], maps[1], cv2.INTER_LINEAR)
-    ys, xs = np.nonzero(out[:, :, 0] > 128)
-    x, y = view([[700.0, 560.0]])[0]
-    assert abs(xs.mean() - x) < 3 and abs(ys.mean() - y) < 3

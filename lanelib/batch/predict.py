@@ -19,8 +19,8 @@ from ..benchmarks import culane, tusimple, written
 from ..camera import Calibration
 from ..config import PipelineConfig, benchmark_config, to_dict
 from ..errors import ConfigError, GeometryError, InputError, LaneLibError, naming_the_file
+from ..lines.result import LinesResult
 from ..pipeline import LanePipeline
-from ..result import LinesResult
 from .geometry import with_geometry
 
 

@@ -1,36 +1,59 @@
 """Every lane line in one frame: the lines view's mask, the search, and the lines in the frame.
 
-``LanePipeline.detect_lines`` calls ``find_every_line`` with the lines view it made once
-(``LanePipeline.lines_view``: a ``perspective.LinesView``, its remap maps, the thresholds
-rescaled to it, its transform back to the raw frame and the pixels that see the frame).
+``LanePipeline.detect_lines`` calls ``find_every_line`` with the lines view's setup it made once
+(``LanePipeline.lines_view`` by ``make_setup``: a ``lines.view.LinesView``, its remap maps, the
+thresholds rescaled to it, its transform back to the raw frame and the pixels that see the frame).
 """
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, replace
-from typing import Any
 
 import cv2
 import numpy as np
 
 from .. import thresholds
 from ..params import LinesConfig
-from ..result import image_line
+from ..perspective import Perspective, Transform
 from . import vote
+from .result import image_line
 from .trace import find_lines
+from .view import LinesView
 
 
 @dataclass(frozen=True)
 class LinesSetup:
-    """What the lines search needs of one camera, made once: the view (``perspective.LinesView``),
+    """What the lines search needs of one camera, made once: the view (``lines.view.LinesView``),
     its remap maps from the raw frame, the thresholds rescaled to it, its transform back to the
     raw frame, and its pixels that see the frame away from its edge (255, else 0)."""
 
-    view: Any
+    view: LinesView
     maps: tuple[np.ndarray, np.ndarray]
     tconf: thresholds.ThresholdConfig
-    to_raw: Any
+    to_raw: Transform
     seen: np.ndarray
+
+
+def make_setup(ego: Perspective, lens: Transform, size_px: tuple[int, int], config: LinesConfig,
+               tconf: thresholds.ThresholdConfig) -> LinesSetup:
+    """Return the lines search's setup for frames of ``size_px`` (w, h) of one camera.
+
+    The view is a ``LinesView`` of the ego view ``ego`` (``LinesConfig.view_*``, ``follow_ahead_m``
+    further when lines are followed beyond ``view_ahead_m``), reached from the raw frame through
+    ``lens.inverse`` (``camera.Lens``); the thresholds ``tconf`` are rescaled to it
+    (``thresholds.scaled``); its pixels that see the frame are eroded away from the frame's edge,
+    which is no paint.
+    """
+    view = LinesView(ego, config.view_half_width_m, config.view_xm_per_px,
+                     config.view_ahead_m + config.follow_ahead_m, config.view_ym_per_px)
+    raw_to_view = lens.inverse + view
+    view_tconf = thresholds.scaled(tconf, view.scale_from_ego)
+    maps = raw_to_view.remap_maps(view.size)
+    seen = cv2.remap(np.full(tuple(size_px)[::-1], 255, np.uint8), maps[0], maps[1], cv2.INTER_NEAREST,
+                     borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    edge = 2 * view_tconf.line_tophat.width_px + 1
+    return LinesSetup(view, maps, view_tconf, raw_to_view.inverse,
+                      cv2.erode(seen, np.ones((3, edge), np.uint8)))
 
 
 def row_weights(setup: LinesSetup, config: LinesConfig) -> np.ndarray:
@@ -57,7 +80,7 @@ def search_first_row(view, config: LinesConfig) -> int:
 
 def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
                     weights: np.ndarray | None = None) -> tuple[tuple, dict, tuple]:
-    """Return every lane line seen in a RAW frame (``result.ImageLine``s, left to right), the
+    """Return every lane line seen in a RAW frame (``lines.result.ImageLine``s, left to right), the
     view and its mask ("lines_birdseye", "lines_binary"), and the vote's refused lines with
     their reasons.
 
@@ -66,7 +89,7 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     field beside the road is wider) and to the pixels that see the frame; the lines are found by
     ``vote.vote_lines`` or ``trace.find_lines`` (``LinesConfig.method``) within ``view_ahead_m``,
     followed beyond it with ``follow_ahead_m`` (``vote.follow_ahead``), and mapped back to the
-    raw frame over the span where each is seen (``result.image_line``). ``weights``: the vote's
+    raw frame over the span where each is seen (``lines.result.image_line``). ``weights``: the vote's
     row weights (``row_weights``), None for every row alike.
     """
     view, maps, tconf = setup.view, setup.maps, setup.tconf

@@ -167,7 +167,7 @@ def find_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
 
     Parameters
     ----------
-    binary : the 0/255 lane mask of the view (``perspective.LinesView``).
+    binary : the 0/255 lane mask of the view (``lines.view.LinesView``).
     config : the search in metres.
     xm_per_px, ym_per_px : metres per view pixel across and along the road.
     """

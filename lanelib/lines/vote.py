@@ -341,7 +341,7 @@ def vote_lines(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_p
 
     Parameters
     ----------
-    binary : the 0/255 lane mask of the lines view (``perspective.LinesView``).
+    binary : the 0/255 lane mask of the lines view (``lines.view.LinesView``).
     config : the search in metres (``LinesConfig``: ``max_paint_width_m``, ``vote_tolerance_m``,
         ``max_slope``, ``heading_spread``, ``min_gap_fraction``, ``min_peak_m``, ``min_span_m``,
         ``max_scatter_m``, ``curved_span_m``, ``max_lines``, ``extend_m``).

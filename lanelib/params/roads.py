@@ -112,7 +112,7 @@ class LinesConfig:
     extend_m : how far (m along the road) a line is taken to go on beyond its last pixels at
         either end, within the view: a dashed line is seen through a gap (9 m on a highway).
     view_half_width_m, view_ahead_m, view_xm_per_px, view_ym_per_px : the lines view
-        (``perspective.LinesView``): the road seen either side of the car's centre line and
+        (``lines.view.LinesView``): the road seen either side of the car's centre line and
         ahead of the ego view's bottom row, and its metres per pixel across and along the road.
         A camera that sees the road only some tens of metres ahead (a low camera in traffic)
         needs a shorter, finer view than a highway camera.
