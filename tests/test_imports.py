@@ -241,6 +241,30 @@ CORE_CALLS = {"lanelib.search": {"lanelib.roads"}, "lanelib.pipeline": {"lanelib
               "lanelib.tracking.update": {"lanelib.roads"}}
 
 
+# the core stays small enough for a student to read (the issue "a thin core": about 5,000 lines)
+CORE_MAX_LINES = 5600
+
+
+def core_files(core=CORE, package: Path = PACKAGE) -> set[Path]:
+    """Return the files of the core's modules (every file of a package module)."""
+    files: set[Path] = set()
+    for m in core:
+        p = package.parent.joinpath(*m.split("."))
+        files.update(p.rglob("*.py") if p.is_dir() else {p.with_suffix(".py")})
+    return files
+
+
+def test_the_core_stays_small():
+    files = core_files()
+    sizes = {f.relative_to(PACKAGE.parent): len(f.read_text(encoding="utf-8").splitlines()) for f in files}
+    total = sum(sizes.values())
+    largest = max(sizes, key=sizes.get)
+    print(f"core: {total} lines in {len(files)} files (limit {CORE_MAX_LINES}); largest {largest} ({sizes[largest]})")
+    assert all(f.is_file() for f in files), "a CORE module names no file"
+    assert total <= CORE_MAX_LINES, (f"the core has {total} lines, over {CORE_MAX_LINES}: move a part into an "
+                                     "extension (roads/, lines/, autogeometry/) or make it shorter")
+
+
 @pytest.mark.parametrize("module", sorted(CORE))
 def test_the_core_reaches_no_extension(module):
     """No core module imports an extension, directly or through another module, but for the
