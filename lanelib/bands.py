@@ -1,9 +1,9 @@
 """The lane-pixel mask of a tracked frame, only in the bands around the prior fits.
 
 A tracked frame is searched only within ``prior_margin_px`` of the previous lines
-(``search.search_around``), so only those bands of the bird's-eye view need warping and
-thresholding: on a video frame about 40 % of the view. ``Bands.mask`` gives, inside the bands,
-exactly the pixels ``LanePipeline.binary(LanePipeline.birdseye(raw))`` would.
+(``search.search_around``), so only those bands of the view need warping and thresholding.
+``Bands.mask`` gives, inside them, exactly the pixels of
+``LanePipeline.binary(LanePipeline.birdseye(raw))``.
 """
 from __future__ import annotations
 
@@ -30,13 +30,10 @@ class Bands:
 
     def mask(self, raw: np.ndarray, prior: tuple[LineFit, LineFit], whole: np.ndarray | None = None
              ) -> np.ndarray:
-        """Return the mask of a RAW frame within ``margin_px`` of each found ``prior`` line, 0
-        elsewhere; with ``whole`` (the whole view's mask) the bands are cut from it.
-
-        The view is cut into ``BAND_STRIPS`` horizontal strips; in each, the pieces of band, grown
-        by the border the masks look beyond a pixel (``thresholds.context_px``), are laid side by
-        side (in x order, so a piece cut by the image's edge keeps that edge) and remapped and
-        thresholded in one call each.
+        """Return the mask of a RAW frame within ``margin_px`` of each found ``prior`` line, 0 elsewhere
+        (with ``whole``, the whole view's mask, cut from it). In each of ``BAND_STRIPS`` horizontal
+        strips the band pieces, grown by ``thresholds.context_px``, are laid side by side in x order (a
+        piece cut by the image's edge keeps it) and remapped and thresholded in one call each.
         """
         w, h = self.size
         margin = self.margin_px
@@ -87,11 +84,9 @@ class Bands:
         return out
 
     def threshold(self, grown: np.ndarray, cuts: list[tuple[slice, slice]]) -> np.ndarray:
-        """Return the combined mask of the band pieces ``cuts`` of a grown canvas, side by side.
-
-        Masks that look beyond a pixel (Sobel, top-hat) are computed on the grown canvas and cut;
-        colour masks only on the pieces themselves. With a closing or opening of the combined
-        mask everything is computed on the grown canvas.
+        """Return the combined mask of the band pieces ``cuts`` of a grown canvas, side by side: masks that
+        look beyond a pixel (Sobel, top-hat) are computed on the grown canvas and cut, colour masks on
+        the pieces; with a closing or opening of the combined mask, all on the grown canvas.
         """
         tconf = self.tconf
         join = (lambda parts: parts[0]) if len(cuts) == 1 else np.hstack

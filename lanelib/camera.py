@@ -1,22 +1,18 @@
 """Chessboard camera calibration, the ``Calibration`` record, and undistortion by precomputed maps.
 
-Mixed image sizes: a calibration belongs to one image size, the most common one among the
-images in which a board is found. A photo up to 2 px larger or smaller in each direction is
-taken as the same sensor with a row or column more or less at the right/bottom edge (the
-Udacity set holds two 1281x721 photos among 1280x720 ones): its corner coordinates are used as
-they are, since cropping or padding at the right/bottom edge does not move a pixel. A photo of
-any other size is skipped. Every skipped photo is named, with why, in the record
-(``Calibration.skipped`` and ``skip_reasons``); nothing is only warned about.
+A calibration belongs to one image size, the most common among the images with a board. A
+photo up to 2 px larger or smaller each way is the same sensor with a row or column more or
+less at the right/bottom edge, which moves no pixel: its corners are used as they are. Any
+other size is skipped; every skipped photo is named, with why, in ``Calibration.skipped`` and
+``skip_reasons`` (nothing is only warned about).
 
-Frames of another size than the calibration: when the aspect ratio matches within 0.5 %, the
-camera matrix is rescaled to the frame (focal lengths and principal point scale with the image;
-the distortion coefficients act on normalised coordinates and stay as they are). Otherwise
-``Calibration.for_size`` raises ``CalibrationError`` naming both sizes.
+A frame of another size with the same aspect ratio (within 0.5 %) gets the camera matrix
+rescaled (focal lengths and principal point scale; the distortion coefficients act on
+normalised coordinates and stay); otherwise ``Calibration.for_size`` raises
+``CalibrationError`` naming both sizes.
 
-``Lens`` is the lens distortion as a transform of points (``perspective.Transform``, in the style
-of scikit-image): ``lens(points)`` distorts, ``lens.inverse(points)`` undistorts, ``lens.inverse +
-perspective`` maps raw points to the bird's-eye view; ``Lens.valid`` is the one rule for where
-the distortion model can be trusted; ``Lens.undistort_maps`` are its remap grids.
+``Lens`` is the distortion as a transform of points (``perspective.Transform``, in the style of
+scikit-image); ``Lens.valid`` is the one rule for where the model is trusted.
 """
 from __future__ import annotations
 
@@ -48,9 +44,8 @@ class Calibration:
     image_size : (width, height) in pixels the matrix belongs to.
     rms_px : RMS reprojection error of the calibration (pixels).
     used, skipped : image file names used and skipped; ``skip_reasons`` says why each was skipped.
-    estimated : '' for a calibration measured on boards; else how it was estimated without
-        them (``geometry.estimate_geometry``'s lens from the road's lines: its focal length is
-        then not measured, only the distortion).
+    estimated : '' when measured on boards; else how it was estimated (``estimate_geometry``'s lens
+        from the road's lines: the distortion only, the focal length not measured).
     """
 
     camera_matrix: np.ndarray
@@ -168,15 +163,14 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
               detections: list[BoardDetection] | None = None) -> Calibration:
     """Return the camera calibrated from the chessboard images in ``folder``.
 
+    Images with no board (or of another size) are skipped and listed with the reason in
+    ``skipped`` and ``skip_reasons``; fewer than 3 usable boards raise ``CalibrationError``.
+
     Parameters
     ----------
     folder : folder of chessboard photos from one camera.
     pattern : inner corners per row and per column, e.g. (9, 6).
     detections : corners found earlier by ``detect_boards`` (to avoid finding them twice).
-
-    Images with no board (or of another size) are skipped and listed with the reason in the
-    record's ``skipped`` and ``skip_reasons``; fewer than 3 usable boards raise
-    ``CalibrationError``.
 
     Examples
     --------
@@ -246,9 +240,9 @@ EXACT_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50,
 def undistort_points(calibration: Calibration, pts: np.ndarray, exact: bool = False) -> np.ndarray:
     """Map (N, 2) raw-image pixel positions to their undistorted positions.
 
-    OpenCV inverts the distortion by a fixed-point iteration; its default of 5 steps leaves up to
-    0.6 px near the corners of a 1280x720 frame of the synthetic camera. ``exact`` iterates until
-    the result distorts back to within 1e-10 px (at most 50 steps), as ``Lens.inverse`` does.
+    OpenCV's fixed-point iteration stops after 5 steps, which leaves errors of a fraction of a
+    pixel near a frame's corners; ``exact`` iterates until the result distorts back to within
+    1e-10 px (at most 50 steps), as ``Lens.inverse`` does.
     """
     K = calibration.camera_matrix
     p = np.asarray(pts, np.float64).reshape(-1, 1, 2)
@@ -265,12 +259,10 @@ MODEL_MARGIN = 0.25
 class Lens(Transform):
     """The lens distortion as a transform: undistorted-image points -> raw-frame points.
 
-    ``lens(points)`` is ``distort_points`` and ``lens.inverse(points)`` ``undistort_points`` run
-    to convergence (a ``LensInverse``). It composes with a ``perspective.Perspective``: ``lens.inverse +
-    perspective`` maps raw-frame points to the bird's-eye view, its ``inverse`` maps bird's-eye
-    points to the raw frame, and its ``remap_maps(size)`` take a raw frame to the bird's-eye view
-    in one ``cv2.remap``. ``undistort_maps`` are the lens's own remap grids. ``valid`` is the rule
-    for where the model can be trusted.
+    ``lens(points)`` is ``distort_points``, ``lens.inverse(points)`` ``undistort_points`` run to
+    convergence (a ``LensInverse``). ``lens.inverse + perspective`` maps raw-frame points to the
+    bird's-eye view, its ``inverse`` back, and its ``remap_maps(size)`` take a raw frame to the view
+    in one ``cv2.remap``. ``undistort_maps`` are the lens's own remap grids.
 
     Parameters
     ----------
@@ -306,12 +298,10 @@ class Lens(Transform):
     def valid(self, points) -> np.ndarray:
         """Return where undistorted ``points`` lie in the region the lens model is trusted in.
 
-        The one rule for every use (the pipeline's remap, the evaluation's fits in the raw frame):
-        within ``MODEL_MARGIN`` (a quarter) of the frame's width and height beyond its edges,
-        edges included. Farther out the distortion polynomial, fitted to points inside the frame,
-        is not monotonic: it folds back, and a point far outside lands back inside the raw frame.
-        The identity lens keeps the same region, so a pipeline samples the same area with or
-        without a calibration.
+        The one rule for every use (the pipeline's remap, the evaluation's fits): within
+        ``MODEL_MARGIN`` of the frame's size beyond its edges. Farther out the distortion polynomial,
+        fitted inside the frame, folds back and lands far points inside the raw frame. The identity
+        lens keeps the same region, so a pipeline samples the same area with or without a calibration.
         """
         p = as_points(points)
         w, h = self.size
@@ -319,11 +309,9 @@ class Lens(Transform):
         return (p[:, 0] >= -m * w) & (p[:, 0] <= (1 + m) * w) & (p[:, 1] >= -m * h) & (p[:, 1] <= (1 + m) * h)
 
     def undistort_maps(self, pad: tuple[int, int] = (0, 0), m1type: int = cv2.CV_16SC2):
-        """Return the ``cv2.remap`` maps (map1, map2) that undistort a raw frame onto a canvas.
-
-        The canvas is ``pad`` (px in x, px in y) larger than the frame on each side: (0, 0) is the
-        frame's own undistortion (``Undistorter``); a padded canvas also holds what the
-        undistortion moves beyond the frame (``FastBirdseye``). ``m1type`` is OpenCV's map type
+        """Return the ``cv2.remap`` maps (map1, map2) that undistort a raw frame onto a canvas ``pad``
+        (px in x, y) larger on each side: (0, 0) for the frame's undistortion (``Undistorter``), more
+        to hold what moves beyond the frame (``FastBirdseye``). ``m1type``: OpenCV's map type
         (``cv2.CV_32FC2`` gives map2 None). The identity lens gives the plain pixel grid.
         """
         w, h = self.size
@@ -344,9 +332,8 @@ class Lens(Transform):
 
 
 class LensInverse(Transform):
-    """A ``Lens``'s inverse: raw-frame points -> undistorted-image points (``undistort_points``).
-
-    A point is valid where its undistorted position is (``Lens.valid``).
+    """A ``Lens``'s inverse: raw-frame points -> undistorted-image points (``undistort_points``),
+    valid where their undistorted position is (``Lens.valid``).
     """
 
     def __init__(self, lens: Lens):
@@ -375,10 +362,8 @@ class LensInverse(Transform):
 
 
 class Undistorter:
-    """Undistort frames of one size with remap maps computed once.
-
-    ``calibration`` None means an ideal camera (no distortion): frames pass through unchanged.
-    ``lens`` is the ``Lens`` of the calibration at this size.
+    """Undistort frames of one size with remap maps computed once (``lens``: the calibration's
+    ``Lens`` at this size; ``calibration`` None: an ideal camera, frames pass unchanged).
     """
 
     def __init__(self, calibration: Calibration | None, size: tuple[int, int]):
@@ -399,11 +384,9 @@ class Undistorter:
         return cv2.remap(image, self._maps[0], self._maps[1], cv2.INTER_LINEAR)
 
     def maps_through(self, Minv: np.ndarray, out_size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-        """Return remap maps that take a RAW frame straight to the view ``Minv`` maps back from.
-
-        ``Minv`` maps output pixels to undistorted-image pixels (a perspective's ``Minv``); the
-        maps compose it with the lens distortion, so one ``cv2.remap`` does both steps. The same
-        as ``(self.lens.inverse + perspective).remap_maps(out_size)``, the form the pipeline uses.
+        """Return remap maps that take a RAW frame straight to the view ``Minv`` (a perspective's,
+        output pixels -> undistorted pixels) maps back from, undistortion included: the same as
+        ``(self.lens.inverse + perspective).remap_maps(out_size)``.
         """
         to_raw = Homography(Minv) + self.lens
         return to_raw.inverse.remap_maps(out_size)
@@ -412,13 +395,11 @@ class Undistorter:
 class FastBirdseye:
     """Bird's-eye views of raw frames for any perspective, as the pipeline's remap makes them, quickly.
 
-    ``(lens.inverse + perspective).remap_maps`` composes undistortion and warp into one remap
-    exactly, which takes too long for a slider (the perspective tuner asks for a new one at each
-    change). Here the lens's undistortion map of a canvas ``MODEL_MARGIN`` of the frame larger on
-    each side (as far as ``Lens.valid`` lets the pipeline sample) is made once, and a
-    perspective's remap maps are that map warped by its inverse. The view is within 2 grey levels
-    of the pipeline's (warping the undistorted frame instead, two interpolations, differs by up
-    to 80 and moves marginal line pixels).
+    The exact composed remap (``(lens.inverse + perspective).remap_maps``) is too slow for a
+    slider. Here the undistortion map of a canvas ``MODEL_MARGIN`` larger on each side (as far as
+    ``Lens.valid`` lets the pipeline sample) is made once, and a perspective's maps are that map
+    warped by its inverse: within 2 grey levels of the pipeline's view (warping the undistorted
+    frame instead interpolates twice and moves marginal line pixels).
     """
 
     def __init__(self, lens: Lens):

@@ -1,10 +1,9 @@
 """Plausibility checks: whether fitted lines are a lane (``LaneChecks`` holds the limits).
 
-A lane is found only when both lines pass ``check_lane`` (``line_problem`` of each line,
-``pair_problem`` of the two), in a single image (``LanePipeline.detect``) as in a video
-(``LaneTracker``); a ``result.FrameResult`` that failed them says why in ``reason`` and keeps the
-fits and what they measured apart in ``rejected``, with NaN measurements: no lane rather than a
-confident wrong one. Each check returns "" when it passes, else the reason in words.
+A lane is found only when both lines pass ``check_lane``, in an image (``LanePipeline.detect``)
+as in a video (``LaneTracker``); a ``result.FrameResult`` that failed says why in ``reason`` and
+keeps the fits apart in ``rejected``, with NaN measurements: no lane rather than a confident
+wrong one. Each check returns "" when it passes, else the reason in words.
 """
 from __future__ import annotations
 
@@ -22,22 +21,18 @@ def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks()
                  xm_per_px: float | None = None, side: str = "left") -> str:
     """Return why one fitted line is not a plausible lane line ("" when it is, or is not found).
 
+    Measured against its search band, so the rules hold for any view scale and margin: a line
+    filling the band is a bright patch (``max_band_fill``), one spreading evenly across it is
+    texture (``max_band_scatter``), unless it is two narrow stripes (a double line) whose spread
+    about them (``LineFit.stripe_scatter_px``) is within that limit for half the band.
+
     Parameters
     ----------
     fit : the line's fit, with the pixel count, rows spanned and scatter of its pixels.
-    band_px : width (px) of the band its pixels were searched in, inside the view
-        (``search_bands_px``; 0: the band checks are skipped).
+    band_px : width (px) of its search band inside the view (``search_bands_px``; 0: not checked).
     checks : the limits.
     xm_per_px : metres per bird's-eye pixel across, to state the scatter in metres (optional).
     side : "left" or "right", for the message.
-
-    A line filling its band is a bright patch (``max_band_fill``); a line whose pixels spread
-    evenly across the band is texture (``max_band_scatter``): both rules compare the pixels with
-    the band they were searched in, so they hold for any view scale and search margin. A line
-    that scatters over the limit from its one fit is still a line when its pixels form two
-    narrow stripes (a double line the search did not narrow to its inner stripe): their spread
-    about the two stripes (``LineFit.stripe_scatter_px``) within the limit of an even spread
-    over half the band.
     """
     if not fit.found or band_px <= 0:
         return ""
@@ -64,15 +59,13 @@ def turn_back_m(fit: LineFit, height_px: int, xm_per_px: float, top_px: int = 0,
                 width_px: int | None = None) -> float:
     """Return how far (m, across) a line's fit comes back, above its pixels, from the row where
     its x turns around within the look-ahead (rows ``top_px`` to the bottom); 0 when it does not
-    turn there, or turns only where its pixels are (``LineFit.gap_px`` and ``span_px`` give their
-    rows; a fit without pixels, span 0, rests on none). With ``width_px`` (the view's width) only
-    the part inside the view's columns counts: a tight bend's line leaves the view sideways, and
-    its fit's turn out there is not drawn.
+    turn there, or only where its pixels are (``LineFit.gap_px``, ``span_px``; a fit without
+    pixels rests on none). With ``width_px`` (the view's width) only the part inside the view
+    counts: a tight bend's line leaves the view sideways, where its fit is not drawn.
 
     Examples
     --------
-    A parabola turning on row 300, fitted to pixels on rows 400-719 only, comes back 300**2 * a
-    px between row 300 and the view's top:
+    A parabola turning on row 300, fitted to rows 400-719, comes back 300**2 * a px above row 300:
 
     >>> from dataclasses import replace
     >>> a = 0.5 / 0.00578 / 300**2
@@ -99,9 +92,9 @@ def turn_back_m(fit: LineFit, height_px: int, xm_per_px: float, top_px: int = 0,
 
 def turn_back_problem(fit: LineFit, height_px: int, xm_per_px: float, checks: LaneChecks = LaneChecks(),
                       top_px: int = 0, side: str = "left", width_px: int | None = None) -> str:
-    """Return why a found line's fit hooks sideways within the look-ahead ("" when it does not,
-    or is not found): it comes back more than ``max_turn_back_m`` beyond its pixels from where
-    its x turns around (``turn_back_m``; with ``width_px``, inside the view's columns)."""
+    """Return why a found line's fit hooks back more than ``max_turn_back_m`` beyond its pixels
+    (``turn_back_m``) within the look-ahead ("" when it does not, or is not found).
+    """
     if not fit.found:
         return ""
     back = turn_back_m(fit, height_px, xm_per_px, top_px, width_px)
@@ -113,16 +106,16 @@ def turn_back_problem(fit: LineFit, height_px: int, xm_per_px: float, checks: La
 
 def holds_from_px(left: LineFit, right: LineFit, height_px: int, width_px: int, xm_per_px: float,
                   checks: LaneChecks = LaneChecks(), top_px: int = 0) -> int:
-    """Return the first row (from the view's top) from which a lane's found lines hold down to
-    the car: above it a line leaves the view's columns (where the road is not imaged), hooks
-    back beyond its pixels (``turn_back_m`` over ``max_turn_back_m``: from its turning row), or
-    the two lines touch or cross. A lane is drawn, and an inferred line reported, only below it:
-    a second-order fit extrapolated beyond its paint may otherwise swing across the road.
+    """Return the first row from which a lane's found lines hold down to the car: above it a line
+    leaves the view's columns, hooks back beyond its pixels (from its turning row, ``turn_back_m``
+    over ``max_turn_back_m``) or the lines touch or cross. A lane is drawn, and an inferred line
+    reported, only below it: a second-order fit extrapolated beyond its paint may swing across
+    the road.
 
     Examples
     --------
-    A straight pair holds over the whole view; a line that leaves a 1280 px view on row 200 is
-    drawn from row 201; a fit on rows 400-719 that turns on row 300 is drawn from its turn:
+    A straight pair holds over the whole view; a line leaving a 1280 px view on row 200 holds
+    from row 201; a fit on rows 400-719 turning on row 300 holds from its turn:
 
     >>> left, right = LineFit((0.0, 0.0, 400.0)), LineFit((0.0, 0.0, 880.0))
     >>> holds_from_px(left, right, 720, 1280, 0.00578)
@@ -155,10 +148,10 @@ def holds_from_px(left: LineFit, right: LineFit, height_px: int, width_px: int, 
 
 
 def gap_problem(fit: LineFit, ym_per_px: float, max_gap_m: float, side: str = "left") -> str:
-    """Return why a line is not seen at the car: its pixels stop more than ``max_gap_m`` (m of
-    road) short of the view's bottom row (``LineFit.gap_px``), so its position there is an
-    extrapolation ("" when they reach nearer, or the line is not found). ``ym_per_px``: metres
-    per bird's-eye pixel along the road."""
+    """Return why a line is not seen at the car: its pixels stop more than ``max_gap_m`` short of
+    the view's bottom row (``LineFit.gap_px`` times ``ym_per_px``, m per pixel along the road), so
+    its position there is an extrapolation ("" when nearer, or the line is not found).
+    """
     gap_m = fit.gap_px * ym_per_px
     if not fit.found or gap_m <= max_gap_m:
         return ""
@@ -171,27 +164,18 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
                  width_reference_px: np.ndarray | None = None) -> str:
     """Return why two found lines are not a plausible lane ("" when they are).
 
-    The lane width on the bottom row must lie within ``min_width_m``-``max_width_m``; the lines
-    may not cross (or touch) on any of ``4 * check_rows`` rows of the look-ahead; over
-    ``check_rows`` rows from the look-ahead's top row (``top_px``, 0: the view's) to the bottom
-    it may vary by at most ``max_width_spread_m`` times the share of the view's height those rows
-    cover (parallel lines: the same divergence per metre); the two curvatures on the
-    bottom row may differ by at most ``max_curvature_diff_per_m`` divided by that share. Only a
-    few rows are evaluated (cheap enough for every frame).
+    On a few rows from the look-ahead's top (``top_px``) to the bottom: the width at the car lies
+    within ``min_width_m``-``max_width_m``; the lines never touch or cross; the width varies by at
+    most ``max_width_spread_m`` times the look-ahead's share of the view's height, and the
+    curvatures at the car differ by at most ``max_curvature_diff_per_m`` divided by it. A curvature
+    fitted over fewer metres is measured less well (its error grows as 1 / span**2, and a
+    parabola's reading of an arc depends on the arc's length), so a fixed limit refuses the true
+    lane of a tight bend seen a short way; divided so, the parting it allows (dk * L**2 / 2 over
+    the look-ahead's L) still shrinks with L, as the width's does.
 
-    Why the curvature allowance grows as the look-ahead shortens: a curvature read from a fit
-    over fewer metres of line is measured less well (for the same pixel noise its error grows as
-    1 / span**2, and a parabola fitted to a circle's arc reads a curvature that depends on how
-    much of the arc it spans, so the outer line of a bend, seen longer, reads another curvature
-    than the inner one). Divided by the share, the two lines may still part by a
-    curvature difference's dk * L**2 / 2 over the look-ahead's L that shrinks with L, as the
-    width spread's limit does: a fixed limit refuses the true lane of a tight bend seen only
-    in a short look-ahead.
-
-    With ``width_reference_px`` (the tracked lane's width, px, on those rows) the spread is
-    that of the width's difference from the reference: a grade makes the flat bird's-eye view
-    widen or narrow the lane ahead, and the track already follows that change, so only a
-    change of it from one frame to the next is refused.
+    With ``width_reference_px`` (the tracked lane's width, px, on those rows) the width's spread
+    is taken about it: a grade widens or narrows the lane ahead in the flat view and the track
+    follows that, so only a change from one frame to the next is refused.
     """
     rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
     width = (np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)) * xm_per_px
@@ -226,15 +210,12 @@ def pitched_pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_p
                          max_change: float = 0.5) -> str:
     """Return why two found lines are not a lane even in a pitched flat view ("" when they are).
 
-    The bird's-eye view is flat at the pitch its points were chosen for. Where the camera looks
-    at the road ahead at another pitch (a grade, the car's load, another mount), the flat view
-    scales the road across by a factor that changes linearly with the distance ahead: the
-    lines of a lane then converge or diverge at a constant rate, which ``pair_problem`` refuses
-    as not parallel. Here the width's straight-line trend over the check rows (a least-squares
-    line in the row) is taken as the view's pitch when it changes the width by at most
-    ``max_change`` of its width at the car over the whole view (its share of that over a
-    shorter look-ahead, ``top_px``); the pair then passes ``pair_problem`` with that trend as
-    its width reference: width at the car, parallel about the trend, equal curvatures.
+    At a pitch other than the one its points were chosen for (a grade, the load, another mount)
+    the flat view scales the road across linearly with the distance ahead, so a lane's lines
+    converge or diverge steadily and ``pair_problem`` refuses them. Here the width's least-squares
+    line over the check rows is taken as the view's pitch when it changes the width by at most
+    ``max_change`` of its width at the car over the view (pro rata over a shorter look-ahead); the
+    pair must then pass ``pair_problem`` with that trend as its width reference.
 
     Examples
     --------
@@ -263,10 +244,10 @@ def pitched_pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_p
 
 @dataclass(frozen=True)
 class LaneCheck:
-    """Why the fits of one search are not a plausible lane: per line and for the pair ("" = passes).
+    """Why the fits of one search are not a plausible lane, per line and for the pair ("" = passes).
 
-    A line that was not found is not checked (its own ``reason`` says why it is missing); the pair
-    is checked only when both lines were found and passed their own checks.
+    A line not found is not checked (its own ``reason`` says why); the pair is checked only when
+    both lines were found and passed.
     """
 
     left: str = ""
@@ -287,19 +268,19 @@ class LaneCheck:
 def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], height_px: int,
                xm_per_px: float, ym_per_px: float, checks: LaneChecks = LaneChecks(),
                top_px: int = 0, width_px: int | None = None) -> LaneCheck:
-    """Return the plausibility checks of two fits: ``line_problem`` (and, given ``width_px``,
+    """Return the plausibility checks of two fits: ``line_problem`` (with ``width_px``, also
     ``turn_back_problem``) of each, then ``pair_problem``.
 
     Parameters
     ----------
     left, right : the fits of one search (bird's-eye pixels).
-    bands_px : width (px) of the band each line's pixels were searched in (``search_bands_px``).
+    bands_px : width (px) of each line's search band (``search_bands_px``).
     height_px : height of the bird's-eye view.
     xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
     checks : the limits.
-    top_px : the first row of the look-ahead the fits were made in (``LaneSearch.top_px``).
-    width_px : width of the bird's-eye view, to check each line's turn back inside it (None:
-        not checked; the tracker's searches leave it to their checks against the track).
+    top_px : the look-ahead's first row (``LaneSearch.top_px``).
+    width_px : the view's width, for the turn-back check (None: not checked; the tracker checks
+        its searches against the track instead).
     """
     lp = line_problem(left, bands_px[0], checks, xm_per_px, "left")
     rp = line_problem(right, bands_px[1], checks, xm_per_px, "right")
@@ -314,12 +295,11 @@ def check_lane(left: LineFit, right: LineFit, bands_px: tuple[float, float], hei
 
 def search_bands_px(search: LaneSearch, size_px: tuple[int, int],
                     config: SearchConfig = SearchConfig()) -> tuple[float, float]:
-    """Return the mean width (px) inside the view of the band each line was searched in.
+    """Return the mean width (px), cut to the view, of the band each line was searched in.
 
-    Sliding windows: the mean of the line's windows cut to the view. A search around prior
-    fits: ``2 * prior_margin_px`` around the new fit on eight rows, cut to the view. Cut to the
-    view, so that texture along the view's edge, in half a window, is compared with the half it
-    could fill.
+    Sliding windows: the mean of the line's windows. Around prior fits: ``2 * prior_margin_px``
+    around the new fit on eight rows. Cut to the view, so that texture along its edge, in half a
+    window, is compared with the half it could fill.
 
     Parameters
     ----------

@@ -1,10 +1,9 @@
 """``PipelineConfig``: every tunable parameter of the pipelines, nested, saved and loaded as JSON.
 
-Every stage's parameter record lives in ``params`` (``PerspectiveConfig``, ``ThresholdConfig``,
-...; each stage module imports its own and names it too); this module nests them, converts the
-nest to and from JSON and reads the bundled presets. Loading is strict: an unknown key or a value
-of the wrong type raises ``ConfigError`` naming the key by its dotted path (e.g.
-``thresholds.white.low``). A JSON file may hold only some keys; the others keep their defaults.
+Each stage's parameter record lives in ``params`` (``PerspectiveConfig``, ``ThresholdConfig``,
+...); this module nests them, converts the nest to and from JSON and reads the bundled presets.
+Loading is strict: an unknown key or a wrong type raises ``ConfigError`` naming the key's dotted
+path (e.g. ``thresholds.white.low``). Keys a JSON file leaves out keep their defaults.
 """
 from __future__ import annotations
 
@@ -94,10 +93,8 @@ def _convert(value, tp, key: str):
     return value
 
 
-# Keys that moved: (old section, key) -> the (section, key)s that take its value. The plausibility
-# checks of a lane moved from ``tracking`` to ``checks`` when single images got them too; the old
-# ``tracking.max_width_spread_m`` also limited a line's bend against its track, now
-# ``tracking.max_bend_m``. Curvatures are named ``_per_m`` everywhere (once also ``_1pm``).
+# Keys of older files: (old section, key) -> the (section, key)s that take its value. The lane's
+# checks are in ``checks`` (single images have them too); the old spread also bounded a bend.
 MOVED_KEYS = {
     ("tracking", "min_width_m"): (("checks", "min_width_m"),),
     ("tracking", "max_width_m"): (("checks", "max_width_m"),),
@@ -110,10 +107,8 @@ MOVED_KEYS = {
 
 
 def migrate(data: dict) -> dict:
-    """Return a PipelineConfig dict with the keys of older files moved to where they live now.
-
-    Each old key in ``MOVED_KEYS`` gives its value to its new keys, unless the file sets a new key
-    itself; a file that sets both an old key and its new key to different values raises
+    """Return a PipelineConfig dict with the keys of older files moved to their place (``MOVED_KEYS``),
+    unless the file sets the new key itself; setting both to different values raises
     ``ConfigError`` naming both.
     """
     moved = {k: dict(v) if isinstance(v, dict) else v for k, v in data.items()}
@@ -138,9 +133,8 @@ def migrate(data: dict) -> dict:
 
 
 def from_dict(cls, data: dict, prefix: str = ""):
-    """Return an instance of dataclass ``cls`` from a (partial) dict; strict about keys and types.
-
-    For a ``PipelineConfig`` the keys of older files are moved first (``migrate``).
+    """Return an instance of dataclass ``cls`` from a (partial) dict, strict about keys and types (a
+    ``PipelineConfig``'s older keys moved first, ``migrate``).
     """
     if cls is PipelineConfig and not prefix and isinstance(data, dict):
         data = migrate(data)
@@ -172,11 +166,9 @@ def save_config(config: PipelineConfig, path: str | os.PathLike) -> Path:
 
 
 def save_parts(config: PipelineConfig, path: str | os.PathLike, parts: "typing.Iterable[str]") -> Path:
-    """Write ``parts`` of ``config`` (e.g. ``("perspective",)``) into the config file at ``path``.
-
-    A file that exists keeps every other part it holds (what another tuner or command wrote
-    there) and is checked first: one that is not a valid config raises ``ConfigError`` and is left
-    as it is. A new file gets the whole config. The file is replaced atomically.
+    """Write ``parts`` of ``config`` (e.g. ``("perspective",)``) into the config file at ``path``,
+    atomically. An existing file keeps its other parts (another tuner's) and is checked first: an
+    invalid one raises ``ConfigError`` and is left as it is. A new file gets the whole config.
     """
     p = Path(path)
     if not p.exists():
@@ -209,19 +201,17 @@ def preset_names() -> tuple[str, ...]:
 def preset(name: str) -> PipelineConfig:
     """Return the bundled PipelineConfig preset ``name``, e.g. ``"p1"`` for the 960x540 Udacity P1 camera.
 
-    Presets are partial JSON files in ``lanelib/presets/``; the keys they leave out keep their
-    defaults. An unknown name raises ``ConfigError`` listing the presets. The road presets set
-    the plausibility checks (``params.LaneChecks``) for a kind of road, with the default camera,
-    and ``hard-roads`` and ``country`` switch on the fourteen opt-in hard-road parts
-    (``docs/hard-roads.md``: off by default, as no real row of the scoreboard needs them):
+    Presets are partial JSON files in ``lanelib/presets/`` (an unknown name raises ``ConfigError``
+    listing them). The road presets set the checks (``params.LaneChecks``) for a kind of road with
+    the default camera; ``hard-roads`` and ``country`` switch on the opt-in hard-road parts
+    (``docs/hard-roads.md``; off by default, as no real row of the scoreboard needs them):
 
-    - ``highway``: the defaults spelled out, lanes of 3.0-4.5 m whose lines' curvatures differ
-      by at most 0.004 1/m (a measurement allowance: on a highway's 250 m+ curves a 3.7 m lane's
-      lines differ by w / R**2 < 0.0001 1/m);
+    - ``highway``: the defaults, lanes of 3.0-4.5 m whose curvatures differ by at most 0.004 1/m (a
+      measurement allowance: on 250 m+ curves a lane's lines differ by w / R**2 < 0.0001 1/m);
     - ``hard-roads``: the highway's checks and the hard-road parts;
-    - ``country``: the hard-road parts, and lanes of 2.5-5.0 m (narrow rural lanes of 2.5-2.75 m, wide ones up to 4.8 m
-      with 0.2 m of measurement spread) and curvatures that may differ by 0.009 1/m: the
-      highway's allowance plus w / R**2 of a 4.8 m lane on a 30 m hairpin (0.0053 1/m).
+    - ``country``: the hard-road parts, lanes of 2.5-5.0 m (rural lanes of 2.5-4.8 m, with 0.2 m of
+      spread) and curvatures differing by up to 0.009 1/m: the highway's allowance plus w / R**2
+      of a 4.8 m lane on a 30 m hairpin.
     """
     if name not in preset_names():
         raise ConfigError(f"no config preset {name!r}; bundled presets: {', '.join(preset_names())}")
@@ -250,11 +240,9 @@ def preset_settings(name: str) -> tuple[str, ...]:
 
 
 def benchmark_config(benchmark: str) -> PipelineConfig:
-    """Return the config a benchmark's frames are predicted with by default: the bundled preset
-    named like it (``tusimple``, ``culane``: the benchmark's fixed camera), else the built-in one.
-
-    Frames of another size than the preset's ``perspective.size_px`` get its points scaled to
-    their size (``pipeline.LanePipeline``).
+    """Return the config a benchmark's frames are predicted with by default: the bundled preset named
+    like it (``tusimple``, ``culane``: its fixed camera), else the built-in one; frames of another
+    size get its points scaled (``pipeline.LanePipeline``).
 
     Examples
     --------
@@ -265,9 +253,8 @@ def benchmark_config(benchmark: str) -> PipelineConfig:
 
 
 def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
-    """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec``.
-
-    A file that exists wins over a preset of the same name.
+    """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec`` (a
+    file that exists wins).
     """
     path = Path(spec)
     if path.is_file():
@@ -281,10 +268,10 @@ def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
 def override(config: PipelineConfig, settings: "typing.Iterable[str]") -> PipelineConfig:
     """Return ``config`` with each ``"part.key=value"`` of ``settings`` set (the CLI's ``--set``).
 
-    The key is dotted as in the JSON file (``search.trim_outliers_pct``,
-    ``thresholds.yellow.open_px``); the value is read as JSON (``95``, ``true``, ``[3, 5]``),
-    else taken as text (``thresholds.rule=yellow | white``). Types are checked as for a file; a
-    malformed setting or an unknown key raises ``ConfigError`` naming it and the keys known there.
+    The key is dotted as in the JSON (``thresholds.yellow.open_px``); the value is read as JSON
+    (``95``, ``true``, ``[3, 5]``), else as text (``thresholds.rule=yellow | white``). Types are
+    checked as for a file; a malformed setting or unknown key raises ``ConfigError`` naming it and
+    the keys known there.
     """
     data = to_dict(config)
     for setting in settings:

@@ -1,21 +1,20 @@
 """Where data lives: the repository's bundled data and the real data beside it.
 
-The only module that reads ``LANELIB_DATA``. The notebooks, the tuners, the benchmarks, the
-scoreboard and the tests ask here instead of building paths of their own.
+The only module that reads ``LANELIB_DATA``; notebooks, tuners, benchmarks, scoreboard and tests
+ask here instead of building paths of their own.
 
 - The **repository** holds the bundled synthetic data: ``camera_cal/``, ``test_images/`` and
   ``videos/`` (``repo_root``, ``bundled``).
 - The **real data** is read in place from the folder ``LANELIB_DATA`` names, by default
-  ``../shared/data`` beside the repository (``data_root``). It holds the Udacity data
-  (MIT-licensed lane-finding images, chessboards and clips): ``udacity-advanced/``
-  (``camera_cal/``, ``test_images/``, ``videos/project_video.mp4`` and
+  ``../shared/data`` beside the repository (``data_root``): the MIT-licensed Udacity data,
+  ``udacity-advanced/`` (``camera_cal/``, ``test_images/``, ``videos/project_video.mp4``,
   ``videos/challenge_video.mp4``) and ``udacity-lanelines-p1/`` (``test_images/``,
-  ``test_videos/``); and real labelled frames in the benchmarks' formats: ``culane-dev/``
-  (``driver_161_90frame/...`` and ``list.txt``) and ``tusimple-dev/`` (``clips/...``,
+  ``test_videos/``); labelled frames in the benchmarks' formats, ``culane-dev/``
+  (``driver_161_90frame/...``, ``list.txt``) and ``tusimple-dev/`` (``clips/...``,
   ``label_data.json`` at 512x288, ``label_data_fullres.json`` at 1280x720). ``dataset`` and
-  ``require`` find a path in any of them (``udacity``, ``require_udacity``, ``culane_dev``,
-  ``tusimple_dev``, ``challenge_video`` name the usual ones); where it is absent, they return
-  None or raise ``InputError``, and ``missing_reason`` says how to point at it.
+  ``require`` find a path in them (``udacity``, ``require_udacity``, ``culane_dev``,
+  ``tusimple_dev``, ``challenge_video`` name the usual ones), returning None or raising
+  ``InputError`` when it is absent; ``missing_reason`` says how to point at it.
 """
 from __future__ import annotations
 
@@ -50,9 +49,8 @@ def repo_root(start: str | os.PathLike | None = None) -> Path:
 
     Parameters
     ----------
-    start : folder to start from (default: the current folder, e.g. ``notebooks/``); when
-        neither it nor a folder above holds ``test_images/``, the folder of this package's
-        checkout is used if it holds them.
+    start : folder to start from (default: the current folder, e.g. ``notebooks/``); failing it
+        and its parents, this package's checkout if it holds ``test_images/``.
 
     Raises
     ------
@@ -117,10 +115,8 @@ def require(name: str, sub: str = "") -> Path:
 
 
 def missing_reason(sub: str = "", name: str = UDACITY_ADVANCED) -> str:
-    """Return why ``dataset(name, sub)`` is None and how to fix it (for skip messages).
-
-    The path named is the one looked for: ``sub``, or the file a set listed in ``NEEDS`` is
-    used by when that file is missing.
+    """Return why ``dataset(name, sub)`` is None and how to fix it (for skip messages), naming the
+    path looked for: ``sub``, or the file a set in ``NEEDS`` needs when that is missing.
 
     Examples
     --------
@@ -164,8 +160,7 @@ def _calibration_of(folder: Path) -> Calibration:
 
 
 def udacity_calibration() -> Calibration:
-    """Return the Udacity highway camera's calibration from its chessboards (computed once).
-
-    Raises ``InputError`` saying how to point at the data when it is absent.
+    """Return the Udacity highway camera's calibration from its chessboards (computed once); raises
+    ``InputError`` saying how to point at the data when it is absent.
     """
     return _calibration_of(require_udacity("camera_cal").resolve())

@@ -1,12 +1,9 @@
 """Drawing: the lane mapped back onto the road, the measurements as text, grids of labelled views.
 
-The lane overlay is drawn by mapping the polygon's points from the bird's-eye view into the
-frame drawn on (a transform object: the perspective's ``inverse`` for the undistorted frame, the
-bird's-eye -> raw chain for the raw frame) and filling it there, which is cheaper than drawing in
-the bird's-eye view and warping a whole image back.
-
-``sheet`` lays named views (RGB images or masks) out as one labelled grid: the tuners' previews
-and, as ``composite``, the pipeline's 2x2 debug view.
+The lane polygon's points are mapped from the bird's-eye view into the frame drawn on (by the
+perspective's ``inverse``, or the bird's-eye -> raw chain) and filled there, cheaper than
+warping a whole drawn image back. ``sheet`` lays named views out as one labelled grid: the
+tuners' previews and, as ``composite``, the pipeline's 2x2 debug view.
 """
 from __future__ import annotations
 
@@ -43,12 +40,11 @@ def lane_overlay(image: np.ndarray, left_coeffs, right_coeffs,
         area only when both exist).
     to_image : the transform of bird's-eye points into ``image`` (``perspective.Transform``):
         ``perspective.inverse`` for the undistorted frame, ``(lens.inverse + perspective).inverse``
-        for the raw frame (``LanePipeline.annotate`` passes the right one); None draws in the
-        bird's-eye view itself. Only the polygon's points are mapped.
+        for the raw one; None draws in the bird's-eye view itself.
     config : colours, opacity, line width, samples per line.
     height_px : height of the bird's-eye view (default: the image's).
     held : the lane is held from earlier frames: area and lines in ``config.held_color``.
-    top_px : the bird's-eye row the lane is drawn from (``checks.holds_from_px``: where it holds).
+    top_px : the bird's-eye row the lane is drawn from (``checks.holds_from_px``).
     """
     if isinstance(to_image, np.ndarray):
         raise InputError("lane_overlay: to_image is a transform of points, not a matrix; pass "
@@ -99,9 +95,10 @@ STRAIGHT_M = 10_000.0  # a radius at least this long is reported as "straight"
 
 def measurement_lines(radius_m: float, offset_m: float, lane_width_m: float, found: bool,
                       reason: str = "", held: bool = False, edges: tuple[str, ...] = ()) -> list[str]:
-    """Return the text lines that report a lane's measurements ("no lane found" when not found;
-    a last line "Held: ..." for a lane held from earlier frames, not seen in this one; a line
-    "Asphalt edge, no paint: ..." naming the sides in ``edges`` whose line is the road's edge)."""
+    """Return the text lines reporting a lane's measurements ("no lane found" when not found), with
+    "Held: ..." for a lane held from earlier frames and "Asphalt edge, no paint: ..." naming the
+    sides in ``edges`` whose line is the road's edge.
+    """
     if not found or any(math.isnan(v) for v in (radius_m, offset_m, lane_width_m)):
         return ["No lane found" + (f": {reason}" if reason else "")]
     side = "right" if offset_m > 0 else "left"
@@ -122,10 +119,8 @@ def mask_to_rgb(mask: np.ndarray) -> np.ndarray:
 
 
 def stacked_masks(masks: Mapping[str, "np.ndarray | None"], names: Sequence[str]) -> np.ndarray:
-    """Return up to three masks stacked as one RGB view: ``names[0]`` red, ``[1]`` green, ``[2]`` blue.
-
-    Where masks overlap the colours mix (red + green = yellow ...); a name whose mask is None
-    (a disabled mask) leaves its channel black. All masks are 0/255 uint8 of one size.
+    """Return up to three 0/255 masks of one size as one RGB view, ``names[0]`` red, ``[1]`` green,
+    ``[2]`` blue: overlaps mix (red + green = yellow), a None mask (disabled) leaves its channel black.
     """
     if not 1 <= len(names) <= 3:
         raise InputError(f"stacked_masks: give one to three mask names, got {len(names)}")
@@ -172,10 +167,8 @@ LABEL_COLOR: Color = (255, 255, 0)
 
 
 def shrink(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """Return ``image`` resized down to ``size`` (w, h): halved by area averaging, then linear.
-
-    OpenCV's area averaging is fast for an exact factor of 2 and slow for others, so the image is
-    halved while it is at least twice the target, and the rest is done by linear interpolation.
+    """Return ``image`` resized down to ``size`` (w, h): halved by area averaging (fast only for an
+    exact factor of 2) while at least twice the target, the rest by linear interpolation.
     """
     w, h = size
     while image.shape[1] >= 2 * w and image.shape[0] >= 2 * h:
@@ -189,7 +182,8 @@ def shrink(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
 def sheet(views: Views, tile_width_px: int = 320, columns: int = 3,
           tile_height_px: int | None = None, interpolation: int | None = None,
           label_at: str = "top", font_scale: float | None = None) -> np.ndarray:
-    """Return the named views (RGB images or masks, None for "off") as one labelled RGB grid.
+    """Return the named views (RGB images or masks) as one labelled RGB grid; a None view is a grey
+    tile labelled "(off)". The views themselves are never drawn on.
 
     Parameters
     ----------
@@ -198,11 +192,9 @@ def sheet(views: Views, tile_width_px: int = 320, columns: int = 3,
         first view that is not None.
     columns : tiles per row (fewer when there are fewer views); an unfilled slot stays black.
     interpolation : OpenCV interpolation of the resize to the tile; None: ``shrink`` (fast).
-    label_at : ``"top"``: the label on a black box at the top left; ``"bottom"``: outlined text
-        at the bottom left (for views that carry their own text at the top).
+    label_at : ``"top"``: on a black box at the top left; ``"bottom"``: outlined text at the bottom
+        left (for views with their own text at the top).
     font_scale : scale of the label's font (default: ``tile_width_px / 640``).
-
-    A None view is a grey tile labelled "(off)". The views themselves are never drawn on.
     """
     items = list(views.items()) if isinstance(views, Mapping) else list(views)
     if not items:
@@ -254,10 +246,8 @@ def _label(tile: np.ndarray, text: str, at: str, scale: float, thick: int) -> No
 
 
 def composite(panels: Sequence[tuple[str, np.ndarray]], size: tuple[int, int]) -> np.ndarray:
-    """Return a 2x2 grid of labelled panels (RGB or masks) as one image of ``size`` (w, h).
-
-    The ``sheet`` of the first four panels, each ``w // 2`` by ``h // 2`` (area-averaged), labelled
-    at the bottom left (the result panel has its own text at the top); black where no panel is.
+    """Return the ``sheet`` of the first four panels (RGB or masks) as a 2x2 grid of ``size`` (w, h),
+    labelled at the bottom left (the result panel has its own text at the top); black where none.
     """
     w, h = size
     out = np.zeros((h, w, 3), np.uint8)

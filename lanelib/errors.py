@@ -21,17 +21,16 @@ class ConfigError(LaneLibError):
 
 
 class GeometryError(LaneLibError):
-    """The road geometry could not be estimated from the frames given (``geometry``): no road,
-    too few line segments, segments that meet in no one point, a road that is not straight, or
-    vanishing points that disagree from frame to frame. The message names the reason and the fix."""
+    """The road geometry could not be estimated from the frames (``geometry``): no road, too few
+    segments, no common vanishing point, a road not straight, or vanishing points that disagree
+    from frame to frame. The message names the reason and the fix.
+    """
 
 
 class DecodeStoppedError(InputError):
-    """A video stopped decoding part-way (truncated or corrupt); ``frames`` frames came before.
-
-    ``VideoReader`` raises it after yielding the frames it could decode; a run that catches it
-    may keep what it made of those frames (``batch.run_video`` does, and raises
-    ``PartialOutputError``).
+    """A video stopped decoding part-way (truncated or corrupt) after ``frames`` frames, which
+    ``VideoReader`` yielded; a run may keep what it made of them (``batch.run_video`` does, and
+    raises ``PartialOutputError``).
     """
 
     def __init__(self, message: str, frames: int, cause: str):
@@ -41,10 +40,8 @@ class DecodeStoppedError(InputError):
 
 
 class PartialOutputError(LaneLibError):
-    """A run stopped early on a broken input; its outputs are complete up to where it stopped.
-
-    The outputs named in the message were written (atomically) and hold the ``frames`` frames
-    processed before the input broke; the CLI exits with code 1.
+    """A run stopped early on a broken input: the outputs named in the message were written
+    (atomically) and hold the ``frames`` frames processed before; the CLI exits with code 1.
     """
 
     def __init__(self, message: str, frames: int):
@@ -53,10 +50,8 @@ class PartialOutputError(LaneLibError):
 
 
 def naming_the_file(message: str, path: str | os.PathLike, *related: str | os.PathLike) -> str:
-    """Return ``message`` led by ``path`` unless it already names that file or one of ``related``.
-
-    ``related`` are files that belong to ``path`` (e.g. the truth file beside an image): a message
-    about one of them names the culprit already.
+    """Return ``message`` led by ``path`` unless it already names that file or one of ``related``
+    (files belonging to ``path``, e.g. the truth file beside an image).
     """
     named = any(os.path.basename(f) in message for f in (path, *related))
     return message if named else f"{path}: {message}"

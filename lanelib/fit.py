@@ -1,24 +1,21 @@
 """Polynomial fits of lane pixels, and the lane they measure: curvature, radius, offset and width.
 
-Coordinates are bird's-eye pixels, x to the right and y down; each line is fitted as
-``x = a*y**2 + b*y + c`` (``fit_line``, by ``least_squares_poly``'s normal equations). Metric fits
-come from the pixel fits by exact scaling of the coefficients (no refit): with ``x_m = xm*x`` and
-``y_m = ym*y``, ``x_m = (xm/ym**2)*a*y_m**2 + (xm/ym)*b*y_m + xm*c`` (``fit_to_metres``).
+Coordinates are bird's-eye pixels, x to the right and y down; a line is fitted as
+``x = a*y**2 + b*y + c`` (``fit_line``). Metric fits scale the pixel coefficients exactly (no
+refit): with ``x_m = xm*x``, ``y_m = ym*y``, ``x_m = (xm/ym**2)*a*y_m**2 + (xm/ym)*b*y_m + xm*c``
+(``fit_to_metres``).
 
-Sign conventions (the synthetic ground truth uses the same):
-- curvature (1/m) is positive when the road bends to the RIGHT as the car drives ahead;
-  the radius is ``1/|curvature|``, capped at ``RADIUS_MAX_M`` (a straight road);
-- the vehicle offset (m) is positive when the car is RIGHT of the lane centre.
-  The car is where the bottom-centre pixel of the undistorted frame lands in the bird's-eye view.
-Curvature, offset and width are read on the bird's-eye view's bottom row, the nearest road the
-camera sees, as the Udacity convention has it (``measure``); the fits are not extrapolated to the
-car itself. Where the car is not parallel to the lane, the offset there differs from the offset
-below the camera by the heading times that row's distance ahead (about 5 cm per 0.01 rad at
-4.8 m); the synthetic ground truth is given at the car, so ``evaluate`` counts that term as error.
+Signs (as the synthetic ground truth's): curvature (1/m) is positive when the road bends RIGHT
+ahead, the radius is ``1/|curvature|`` capped at ``RADIUS_MAX_M`` (straight); the offset (m) is
+positive when the car is RIGHT of the lane centre, the car being where the undistorted frame's
+bottom-centre pixel lands in the view. All are read on the view's bottom row, the nearest road
+seen (the Udacity convention, ``measure``), not extrapolated to the car: a heading off the lane
+shifts the offset there by the heading times that row's distance, which ``evaluate`` counts as
+error against truth given at the car.
 
 The lines of a lane are parallel: a line too short for a curve of its own takes the other's
-(``parallel_fits``, ``shared_curvature``). ``offset_line`` places a line a given distance along
-the normal of another (an inferred line), ``normal_width_m`` reads the width along it.
+(``parallel_fits``, ``shared_curvature``); ``offset_line`` places a line a distance along
+another's normal, ``normal_width_m`` reads the width along it.
 """
 from __future__ import annotations
 
@@ -38,20 +35,18 @@ def fit_line(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfi
              missing: str = "no lane pixels", top_px: int = 0) -> LineFit:
     """Return the 2nd-order fit x = f(y) of a line's pixels, or a not-found LineFit saying why.
 
-    Pixels spanning less than ``min_span_fraction`` of the height are fitted straight, unless
-    the search read a look-ahead (``top_px`` > 0, its first row) and the 2nd-order fit bows over
-    the span by ``short_bend_resolution`` times the pixels' RMS scatter about it or more (a
-    resolved bend: a tight bend's line that leaves the view sideways).
+    Pixels spanning less than ``min_span_fraction`` of the height are fitted straight, unless in a
+    look-ahead (``top_px`` > 0) the curve bows over the span by ``short_bend_resolution`` times the
+    pixels' RMS scatter or more: a resolved bend, a tight bend's line leaving the view sideways.
     """
     return fit_line_with_first(ys, xs, height_px, config, missing, top_px)[0]
 
 
 def fit_line_with_first(ys: np.ndarray, xs: np.ndarray, height_px: int, config: SearchConfig, missing: str,
               top_px: int) -> tuple[LineFit, tuple | None]:
-    """Return ``fit_line``'s fit and its first fit: ``least_squares_rss`` of degree 2 of all the
-    pixels and the sums it read (a, b, c, rss, ``normal_sums``; None when the line was turned
-    down before it), which ``fit_side`` hands on to the stripe test rather than fit the same
-    pixels again."""
+    """Return ``fit_line``'s fit and its first fit (a, b, c, rss, ``normal_sums`` of degree 2 of all
+    the pixels; None when turned down before), which ``fit_side`` hands to the stripe test.
+    """
     n = len(ys)
     if n == 0:
         return LineFit(None, 0, 0.0, missing), None
@@ -84,9 +79,9 @@ def fit_line_with_first(ys: np.ndarray, xs: np.ndarray, height_px: int, config: 
 def least_squares_poly(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float) -> tuple[float, float, float]:
     """Return (a, b, c) of the least-squares x = a*y**2 + b*y + c (a = 0 for degree 1).
 
-    The same fit as ``np.polyfit`` (to rounding), from the normal equations in y centred on its
-    mean and divided by ``scale`` (e.g. the image height), which keeps them well conditioned; it
-    costs a few sums instead of an SVD of an n x 3 matrix (the video hot path).
+    ``np.polyfit``'s fit (to rounding) from the normal equations in y centred and divided by
+    ``scale`` (e.g. the height), which keeps them well conditioned: a few sums instead of an SVD
+    (the video hot path).
     """
     return least_squares_rss(ys, xs, degree, scale)[:3]
 
@@ -96,9 +91,9 @@ def joined_fit(seen_rows: np.ndarray, seen_xs: np.ndarray, reference_px, referen
     """Return one second-order fit to a line where it is seen and to a reference line where not.
 
     A line seen only far ahead is joined to a reference near the car (its track, or the line
-    inferred from the other line), and an asphalt edge seen near the car to a guide far ahead:
-    one sample per row of each, ``seen_xs`` on ``seen_rows`` and ``reference_px`` (pixel
-    coefficients) on ``reference_rows``, so the fit follows each where it is the evidence.
+    inferred from the other), an asphalt edge near the car to a guide far ahead: one sample per row
+    of each (``seen_xs`` on ``seen_rows``, ``reference_px`` on ``reference_rows``), so the fit
+    follows each where it is the evidence.
 
     Examples
     --------
@@ -114,11 +109,9 @@ def joined_fit(seen_rows: np.ndarray, seen_xs: np.ndarray, reference_px, referen
 
 def least_squares_rss(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
                    sums: tuple | None = None) -> tuple[float, float, float, float]:
-    """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2).
-
-    The residual comes from the same sums: for the least-squares solution p of G p = s it is
-    sum(x**2) - p . s, with x taken about its mean so that the difference keeps its digits.
-    ``sums``: ``normal_sums(ys, xs, scale)`` when already made.
+    """Return (a, b, c) of ``least_squares_poly`` and the residual sum of squares (px**2), from the
+    same sums: sum(x**2) - p . s for the solution p of G p = s, x about its mean to keep its
+    digits. ``sums``: ``normal_sums(ys, xs, scale)`` when already made.
     """
     _, m, _, _, _, st, x0, x, _, sx = normal_sums(ys, xs, scale) if sums is None else sums
     k = degree + 1
@@ -166,17 +159,13 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
                   config: SearchConfig = SearchConfig()) -> tuple[LineFit, LineFit]:
     """Return the two fits with a short line's curvature taken from the other, longer line.
 
-    A line whose pixels span less than ``min_span_fraction`` of the view (one dash, the stub
-    of a line leaving the view on a bend) is fitted straight by ``fit_line`` unless its bend is
-    resolved (``SearchConfig.short_bend_resolution``): its curvature is not measured, or measured
-    over a short span, and a straight line beside a curved one fails the pair's curvature check
-    and runs off the lane ahead. The lines of a lane are parallel, so it takes the second-order
-    coefficient of the other line when that one spans enough for a second-order fit, and only
-    its slope and position are fitted to its own pixels. Two short lines of which one kept its
-    bend share one second-order coefficient fitted to both lines' pixels (``shared_curvature``):
-    two stubs each read the bend from a few metres of line, with their own pixel noise, and two
-    curvatures read apart make lines that part ahead. Two long lines, or
-    two short straight ones, are left as they are.
+    A line spanning less than ``min_span_fraction`` of the view (one dash, a stub leaving the view
+    on a bend) is fitted straight unless its bend is resolved: beside a curved line it fails the
+    pair's curvature check and runs off the lane ahead. The lines being parallel, it takes the
+    other's second-order coefficient when that one is long enough, fitting only its slope and
+    position. Two short lines, one of which kept its bend, share one coefficient fitted to both
+    (``shared_curvature``): two bends each read from a few metres part the lines ahead. Two long
+    lines, or two short straight ones, are left as they are.
     """
     if not (left.found and right.found):
         return left, right
@@ -198,13 +187,11 @@ def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, heig
 
 def shared_curvature(left: LineFit, right: LineFit, left_pixels, right_pixels,
                      height_px: int) -> tuple[LineFit, LineFit]:
-    """Return the two lines refitted with one second-order coefficient: x = a*y**2 + b_i*y + c_i,
-    by least squares over both lines' pixels (the lines of a lane are parallel; ``parallel_fits``).
+    """Return the two lines refitted with one second-order coefficient, x = a*y**2 + b_i*y + c_i, by
+    least squares over both lines' pixels (the lines of a lane are parallel; ``parallel_fits``).
 
-    The normal equations of the five unknowns from sums over each line's pixels, with y centred
-    on the mean row of both and divided by ``height_px`` (as ``least_squares_rss``); each fit's
-    ``scatter_px`` is its own pixels' RMS distance from it. The fits are returned unchanged when
-    the equations are singular.
+    The normal equations of the five unknowns, y centred on both lines' mean row and divided by
+    ``height_px``; each ``scatter_px`` is its own pixels' RMS distance. Unchanged when singular.
     """
     scale = float(height_px)
     m = (float(left_pixels[0].astype(np.float64).sum() + right_pixels[0].astype(np.float64).sum())
@@ -264,11 +251,9 @@ def support(fit: LineFit) -> float:
 
 def measure(left: LineFit, right: LineFit, height_px: int, car_x_px: float,
             xm_per_px: float, ym_per_px: float) -> LaneMeasurement:
-    """Return curvature, radius, offset and lane width in metres on the view's bottom row.
-
-    The lane's centre line has the mean position of the two lines and their shape (a, b)
-    weighted by each line's ``support``, so a line resting on one dash does not bend the lane.
-    Anything needing a line that was not found is NaN.
+    """Return curvature, radius, offset and lane width in metres on the view's bottom row. The lane's
+    centre has the lines' mean position and their shape (a, b) weighted by ``support``, so a line on
+    one dash does not bend the lane. A value needing a line not found is NaN.
     """
     y_px = height_px - 1
     y_m = y_px * ym_per_px
@@ -294,18 +279,16 @@ def offset_line(coeffs_px, offset_m, xm_per_px: float, ym_per_px: float, height_
                 top_px: int = 0) -> tuple[float, float, float]:
     """Return the pixel fit (a, b, c) of the curve parallel to a line at ``offset_m`` along its normal.
 
-    The lines of a lane are parallel curves: the other line lies a lane width away along the
-    normal, not at the same x shift on every row (on a 35 m bend, 23 m ahead, the two differ by
-    over half a metre). The line is sampled on the rows from ``top_px`` to the bottom, each
-    point moved ``offset_m`` along the normal in metres (positive: to the right of the line as
-    the car drives, larger x) and the second-order fit x = f(y) refitted to the moved points.
+    The lines of a lane are parallel curves: the other line lies a lane width along the normal,
+    not at the same x shift on every row (on a tight bend the two differ by over half a metre).
+    The line is sampled from ``top_px`` to the bottom, each point moved along the normal in metres
+    and x = f(y) refitted.
 
     Parameters
     ----------
     coeffs_px : (a, b, c) of the line in bird's-eye pixels.
-    offset_m : signed normal distance (m); + to the right. One value, or one per sampled row
-        (``offset_rows_px``): a distance that changes along the view, as a tracked lane's width
-        does where a grade widens or narrows the flat view's lane ahead.
+    offset_m : signed normal distance (m), + to the right (larger x). One value, or one per
+        sampled row (``offset_rows_px``), as a tracked width that a grade changes along the view.
     xm_per_px, ym_per_px : metres per bird's-eye pixel across and along the road.
     height_px : height of the view; top_px : first row sampled.
     """
@@ -324,11 +307,9 @@ def offset_rows_px(height_px: int, top_px: int = 0) -> np.ndarray:
 
 
 def normal_width_m(left_px, right_px, y_px, xm_per_px: float, ym_per_px: float):
-    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float),
-    or on each of several rows (an array).
-
-    The horizontal width on a row times the cosine of the lane's heading there (the mean slope
-    of the two lines); equal to the lane width on a bend where the horizontal width is wider.
+    """Return the distance (m) between two lines along their normal on row ``y_px`` (a float), or on
+    several rows (an array): the horizontal width times the cosine of the lane's heading there (the
+    lines' mean slope), the lane width on a bend where the horizontal width is wider.
     """
     xl, xr = np.polyval(left_px, y_px), np.polyval(right_px, y_px)
     dl = np.polyval(np.polyder(np.asarray(left_px, float)), y_px)

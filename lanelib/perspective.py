@@ -1,25 +1,19 @@
 """Perspective transform between the (undistorted) road image and a bird's-eye view.
 
-The default points belong to the Udacity highway camera at 1280x720 (and to lanelib's synthetic
-camera, which is built to match it). They were chosen on the undistorted ``straight_lines1.jpg``
-and ``straight_lines2.jpg``: the straight lane lines, fitted in each undistorted image, meet at
-(640.1, 421.4) and (638.3, 417.6); the trapezoid's sides run through (640, 419), the point that
-balances the two, so a straight lane becomes two vertical lines in the bird's-eye view (within
-1.3 px per 100 px on both images, see tests/test_perspective.py). The top row is 470, 51 px below
-that vanishing point: a row nearer the horizon would magnify a one-pixel error in the vanishing
-point into a visible slant. The bottom corners lie on a 3.7 m lane centred on the camera (894 px
-wide on row 720), so the two dst lines are 3.7 m apart. The visible road length follows from the
-same geometry: with fx = 1156 px the bottom row is 4.79 m ahead, the camera 1.25 m above the
-road, and row 470 is 28.25 m ahead: 23.5 m in all.
+The default points belong to the Udacity highway camera at 1280x720 (and lanelib's synthetic
+camera, built to match it), chosen on the undistorted ``straight_lines1.jpg`` and
+``straight_lines2.jpg``: the trapezoid's sides run through the point that balances the two
+images' vanishing points, so a straight lane becomes two vertical lines (tests/test_perspective.py).
+The top row lies 51 px below that point, as a row nearer the horizon magnifies a one-pixel
+error there into a visible slant; the bottom corners lie on a 3.7 m lane centred on the camera,
+so the two dst lines are 3.7 m apart, and the view covers 23.5 m of road.
 
-Geometry is a set of transform objects in the style of scikit-image's ``ProjectiveTransform``
+Geometry is a set of transforms in the style of scikit-image's ``ProjectiveTransform``
 (``Transform``): callable on (N, 2) points, with an ``inverse``, composed by ``+`` (``Chain``).
 ``Perspective`` is a ``Homography``; ``camera.Lens`` is the lens distortion. The pipeline's one
-remap is ``(lens.inverse + perspective).remap_maps(size)``, and the overlay and the evaluation
-map bird's-eye points to the raw frame by that chain's ``inverse``.
-
-``straight_line_check`` measures how well a set of points does that on a frame of a straight road
-(the perspective notebook and ``widgets.PerspectiveTuner`` use it).
+remap is ``(lens.inverse + perspective).remap_maps(size)``; the overlay and the evaluation map
+bird's-eye points to the raw frame by its ``inverse``. ``straight_line_check`` measures how
+straight a set of points makes a straight road (the perspective notebook, the tuner).
 """
 from __future__ import annotations
 
@@ -56,11 +50,9 @@ def _row_widths(src_px) -> tuple[float, float]:
 
 
 def road_length_m(src_px, lane_width_m: float, focal_px: float) -> float:
-    """Return the road length (m) from the bottom to the top row of a src trapezoid.
-
-    Pinhole camera over a flat road: a lane ``lane_width_m`` wide that spans ``w`` px on a row
-    lies ``focal_px * lane_width_m / w`` metres ahead, so the trapezoid's top and bottom widths
-    give the two distances. ``focal_px`` is the horizontal focal length of the undistorted image.
+    """Return the road length (m) from the bottom to the top row of a src trapezoid: over a flat road
+    a lane ``lane_width_m`` wide spanning ``w`` px on a row lies ``focal_px * lane_width_m / w`` m
+    ahead (``focal_px``: the undistorted image's horizontal focal length).
     """
     top, bottom = _row_widths(src_px)
     return focal_px * lane_width_m * (1.0 / top - 1.0 / bottom)
@@ -92,11 +84,10 @@ def as_points(points) -> np.ndarray:
 class Transform:
     """A map of image points, in the style of scikit-image's ``ProjectiveTransform``.
 
-    ``tform(points)`` maps (N, 2) points (x, y) in px to an (N, 2) float64 array;
-    ``tform.inverse`` is the map back; ``a + b`` applies ``a``, then ``b`` (a ``Chain``).
-    ``valid(points)`` says where the map can be trusted (a lens model folds back far outside its
-    frame: ``camera.Lens.valid``), ``checked(points)`` gives the mapped points and that in one
-    pass, and ``remap_maps`` the ``cv2.remap`` grids that warp an image by the transform.
+    ``tform(points)`` maps (N, 2) points (x, y) in px to an (N, 2) float64 array; ``tform.inverse``
+    maps back; ``a + b`` applies ``a``, then ``b`` (a ``Chain``). ``valid(points)`` says where the
+    map is trusted (a lens model folds back far outside its frame), ``checked(points)`` gives the
+    mapped points and that in one pass, ``remap_maps`` the ``cv2.remap`` grids of the transform.
     """
 
     def __call__(self, points) -> np.ndarray:
@@ -120,11 +111,9 @@ class Transform:
         return Chain(self, other)
 
     def remap_maps(self, out_size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-        """Return the ``cv2.remap`` maps (CV_16SC2) that warp an image by this transform.
-
-        Output pixel q of the ``out_size`` (w, h) image samples the source at ``self.inverse(q)``,
-        or at (-1, -1), black, where that is not valid. Every output pixel is mapped: work for
-        once per configuration, not per frame.
+        """Return the ``cv2.remap`` maps (CV_16SC2) that warp an image by this transform: output pixel q
+        of the ``out_size`` (w, h) image samples the source at ``self.inverse(q)``, or black where that
+        is not valid. Every pixel is mapped: made once per configuration, not per frame.
         """
         w, h = int(out_size[0]), int(out_size[1])
         xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
@@ -136,10 +125,9 @@ class Transform:
 
 
 class Homography(Transform):
-    """The projective map of the plane by the 3x3 matrix ``params`` (scikit-image's ``params``).
-
-    ``inverse_params`` is the matrix back (default: the matrix inverse); it is kept as given, so
-    ``h.inverse.inverse`` has the very same matrix as ``h``.
+    """The projective map of the plane by the 3x3 matrix ``params`` (scikit-image's ``params``);
+    ``inverse_params`` (default: the matrix inverse) is kept as given, so ``h.inverse.inverse`` has
+    the very same matrix as ``h``.
     """
 
     def __init__(self, params: np.ndarray, inverse_params: np.ndarray | None = None):
@@ -165,9 +153,8 @@ class Homography(Transform):
 
 
 class Chain(Transform):
-    """Transforms applied in order: ``Chain(a, b)(p) == b(a(p))``, what ``a + b`` makes.
-
-    A point is valid where every step finds it valid (each step checks its own input).
+    """Transforms applied in order: ``Chain(a, b)(p) == b(a(p))``, what ``a + b`` makes; a point is
+    valid where every step finds it valid.
     """
 
     def __init__(self, *transforms: Transform):
@@ -207,10 +194,9 @@ class Chain(Transform):
 class Perspective(Homography):
     """Warp between the undistorted image and the bird's-eye view, with its metric scale.
 
-    As a ``Homography``, ``perspective(points)`` maps undistorted-image points to the bird's-eye
-    view and ``perspective.inverse`` maps back; ``M`` (= ``params``) and ``Minv`` are the two
-    matrices. ``lens.inverse + perspective`` (``camera.Lens``) takes raw-frame points to the
-    bird's-eye view, and its ``inverse`` bird's-eye points to the raw frame.
+    ``perspective(points)`` maps undistorted points to the view and ``perspective.inverse`` back;
+    ``M`` (= ``params``) and ``Minv`` are the two matrices. ``lens.inverse + perspective`` takes
+    raw-frame points to the view.
     """
 
     def __init__(self, config: PerspectiveConfig = PerspectiveConfig()):
@@ -261,11 +247,9 @@ class Perspective(Homography):
 
 @dataclass(frozen=True)
 class StraightLineCheck:
-    """How straight a straight lane comes out in the bird's-eye view.
-
-    ``left_slope``/``right_slope`` are the x drift of each line's straight fit in px per 100 px
-    of height (0: vertical; NaN: line not found); ``lane_width_m`` is the distance of the two
-    fits on the bottom row in metres. ``left_fit``/``right_fit`` are (slope, intercept) of
+    """How straight a straight lane comes out in the bird's-eye view: ``left_slope``/``right_slope``,
+    each line's x drift in px per 100 px of height (0: vertical; NaN: not found); ``lane_width_m``,
+    the fits' distance on the bottom row; ``left_fit``/``right_fit``, (slope, intercept) of
     x = slope * y + intercept in bird's-eye px, or None.
     """
 

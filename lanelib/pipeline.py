@@ -1,12 +1,11 @@
 """``LanePipeline``: the advanced lane-finding pipeline wired from one ``PipelineConfig``.
 
-One frame: raw RGB -> (one remap: undistort + warp) bird's-eye view -> thresholds -> lane-pixel
-search -> fits -> plausibility checks (``params.LaneChecks``, the same as the video tracker's) ->
-measurements -> overlay on the undistorted frame (``detect_lines``: every lane line in view as
-well, for the benchmarks, in a wider and longer view). A lane that fails the checks is not found; what
-it measured is kept apart in ``FrameResult.rejected``. The notebooks, the tuners and the CLI all
-use this object, so what a slider tunes is exactly what a video run uses. This module is the
-per-frame engine only: runs over image folders and videos are ``batch.process_images`` and
+One frame: raw RGB -> bird's-eye view (one remap: undistort + warp) -> thresholds -> lane-pixel
+search -> fits -> plausibility checks (``params.LaneChecks``, as the tracker's) -> measurements
+-> overlay on the undistorted frame; ``detect_lines`` finds every lane line in a wider, longer
+view, for the benchmarks. A lane that fails the checks is not found; what it measured is kept in
+``FrameResult.rejected``. The notebooks, tuners and CLI all use this object, so a slider tunes
+exactly what a video run uses. Runs over folders and videos are ``batch.process_images`` and
 ``batch.process_video``.
 """
 from __future__ import annotations
@@ -44,15 +43,15 @@ DETECT_PROPOSERS = DETECT
 class LanePipeline:
     """Find the lane in frames of one size with one configuration and (optional) calibration.
 
+    Everything that depends only on the configuration (remap maps, matrices, the car's position in
+    the view) is computed once, here. A pipeline pickles as (config, calibration, size) and is
+    rebuilt on unpickling, so it can be sent to Dask workers.
+
     Parameters
     ----------
     config : all parameters; its perspective points are scaled if ``size`` differs from theirs.
     calibration : the camera's calibration, or None for an undistorted (or uncalibrated) camera.
     size : (width, height) of the frames; defaults to the perspective's ``size_px``.
-
-    Everything that depends only on the configuration (remap maps, matrices, the car's position
-    in the bird's-eye view) is computed here, once. A pipeline pickles as (config, calibration,
-    size) and is built again on unpickling (its maps too), so it can be sent to Dask workers.
 
     Examples
     --------
@@ -96,9 +95,10 @@ class LanePipeline:
 
     def birdseye_rows(self, raw: np.ndarray, rows_px: np.ndarray,
                       cols_px: tuple[int, int] | None = None) -> np.ndarray:
-        """Return the rows ``rows_px`` (int) of the bird's-eye view of a RAW frame, (n, W, 3), or
-        their columns ``cols_px`` = (first, last + 1) only: the same pixels as
-        ``birdseye(raw)[rows_px, first:last + 1]`` at a fraction of its cost."""
+        """Return the bird's-eye rows ``rows_px`` (int) of a RAW frame, (n, W, 3), or only their columns
+        ``cols_px`` = (first, last + 1): ``birdseye(raw)[rows_px, first:last + 1]`` at a fraction of
+        its cost.
+        """
         self.undistorter.check(raw)
         m1, m2 = self._birdseye_maps
         rows = np.asarray(rows_px, int)
@@ -110,10 +110,9 @@ class LanePipeline:
         return self.undistorter.undistort(raw)
 
     def binary(self, birdseye: np.ndarray, fallback: bool = False, made: Made | None = None) -> np.ndarray:
-        """Return the combined 0/255 lane-pixel mask of a bird's-eye image.
-
-        ``fallback``: under ``ThresholdConfig.fallback_rule`` (the fallback searches' masks), or
-        the rule itself when there is none. ``made``: this image's masks (``thresholds.combine``)."""
+        """Return the combined 0/255 lane-pixel mask of a bird's-eye image; with ``fallback``, under
+        ``ThresholdConfig.fallback_rule`` if any. ``made``: this image's masks (``thresholds.combine``).
+        """
         tc = self.config.thresholds
         rule = tc.fallback_rule if fallback and tc.fallback_rule else None
         return thresholds.combine(birdseye, tc, clahe=self._clahe, rule=rule, made=made)
@@ -126,11 +125,10 @@ class LanePipeline:
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
                bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None) -> LaneSearch:
-        """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows.
-
-        The windows start from ``bases``, the lines' x (px) on the bottom row, when given (e.g.
-        the tracked lane's), else from the histogram peaks nearest the car. ``top_px`` is the
-        first row of the look-ahead (0: the whole view). ``pixels``: the mask's ``lane_pixels``.
+        """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows
+        starting from ``bases`` (the lines' x, px, on the bottom row, e.g. the track's) or the
+        histogram peaks nearest the car. ``top_px``: the look-ahead's first row (0: the whole view).
+        ``pixels``: the mask's ``lane_pixels``.
         """
         if prior is not None:
             return search_around(binary, prior[0], prior[1], self.config.search, top_px)
@@ -153,10 +151,10 @@ class LanePipeline:
     # ---- one frame ------------------------------------------------------------------------
 
     def band_binary(self, raw: np.ndarray, prior: tuple[LineFit, LineFit]) -> np.ndarray:
-        """Return the lane-pixel mask of a RAW frame near the ``prior`` fits only (0 elsewhere):
-        inside the bands that ``search.search_around`` reads it equals ``binary(birdseye(raw))``
-        (``bands.Bands.mask``). With ``thresholds.clahe`` on (CLAHE depends on the whole view) the
-        whole view is thresholded and the bands are cut from it."""
+        """Return the lane-pixel mask of a RAW frame near the ``prior`` fits only (0 elsewhere), equal to
+        ``binary(birdseye(raw))`` inside the bands ``search.search_around`` reads (``bands.Bands.mask``).
+        With CLAHE on (it depends on the whole view) the whole view is thresholded and cut.
+        """
         self.undistorter.check(raw)
         whole = self.binary(self.birdseye(raw)) if self._clahe is not None else None
         return self._bands.mask(raw, prior, whole)
@@ -166,11 +164,11 @@ class LanePipeline:
                      ) -> tuple[LaneSearch, dict]:
         """Return the lane search of one RAW frame, unchecked, and the stage images kept.
 
-        With a ``prior`` and no ``keep_images``, only the bands around the prior fits are
-        remapped and thresholded (``band_binary``); the search sees the same pixels either way.
-        ``images`` holds "birdseye" and "binary" when the whole view was thresholded (always
-        without a usable prior, or with ``keep_images``). ``top_px``: the look-ahead (``search``).
-        ``made``: gets the whole view's masks and colour spaces, for a second rule (``binary``)."""
+        With a ``prior`` and no ``keep_images`` only the bands around the prior fits are remapped and
+        thresholded (``band_binary``): the same pixels for the search. ``images`` holds "birdseye" and
+        "binary" when the whole view was thresholded. ``top_px``: the look-ahead (``search``).
+        ``made``: gets the whole view's masks and colour spaces, for a second rule (``binary``).
+        """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
@@ -189,12 +187,10 @@ class LanePipeline:
                keep_images: bool = False) -> FrameResult:
         """Return the lane found in one RAW frame, checked, without drawing (the per-frame hot path).
 
-        The fits of ``search_frame`` go through ``result``: a lane that fails the plausibility
-        checks is not found, and is kept apart in ``rejected``. Without a ``prior``, a lane of
-        the whole view that fails is looked for again by the proposers that need no track
-        (``DETECT_PROPOSERS``, in ``proposers.choose``, the tracker's chain): the fallback masks,
-        shorter views, other histogram peaks and the asphalt edge. The first whose pair passes
-        is taken.
+        The fits of ``search_frame`` go through ``result``: a lane that fails the checks is not found
+        and kept in ``rejected``. Without a ``prior``, a failed lane is looked for again by the
+        proposers that need no track (``DETECT_PROPOSERS``, through ``proposers.choose``): fallback
+        masks, shorter views, other histogram peaks, the asphalt edge. The first pair to pass is taken.
         """
         made = Made()  # the masks made, which the fallback rule's mask reuses
         search, images = self.search_frame(raw, prior, keep_images, made=made)
@@ -209,10 +205,10 @@ class LanePipeline:
         return result if best is search else self.result(best, images if keep_images else {})
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
-        """Return the lines view (``lines.view.LinesView`` of the ego view), its raw-frame remap
-        maps and the thresholds rescaled to it (``thresholds.scaled``); made once, when first asked,
-        with its transform back to the raw frame and its pixels that see the frame away from its
-        edge (``lines.detect.make_setup``, a ``lines.detect.LinesSetup``)."""
+        """Return the lines view (``lines.view.LinesView`` of the ego view), its raw-frame remap maps and
+        the thresholds rescaled to it, made once when first asked (``lines.detect.make_setup``, a
+        ``lines.detect.LinesSetup``, with its transform back and its pixels away from the frame's edge).
+        """
         if self._lines is None:
             self._lines = make_setup(self.perspective, self.lens, self.size, self.config.lines,
                                      self.config.thresholds)
@@ -230,12 +226,12 @@ class LanePipeline:
                      keep_images: bool = False, ego: bool = True) -> LinesResult:
         """Return every lane line seen in one RAW frame, left to right, and the ego lane.
 
-        The ego lane is ``detect``'s (what the overlay, curvature and offset use). The lines are
-        looked for in the lines view (``lines_view``: by default 28 m across and 150 m ahead) by
-        ``lines.detect.find_every_line``. ``keep_images`` keeps the view ("lines_birdseye") and
-        its mask ("lines_binary"). ``config``: the search's parameters (default:
-        ``PipelineConfig.lines``, so ``--config``/``--set lines.KEY=V`` tune ``predict``).
-        ``ego=False`` skips ``detect`` (a third of the time) and leaves ``LinesResult.ego`` None.
+        The ego lane is ``detect``'s (the overlay, curvature and offset); the lines are found in the
+        lines view (``lines_view``, by default 28 m across and 150 m ahead) by
+        ``lines.detect.find_every_line``. ``keep_images`` keeps "lines_birdseye" and "lines_binary".
+        ``config``: the search's parameters (default ``PipelineConfig.lines``, so ``--set
+        lines.KEY=V`` tunes ``predict``). ``ego=False`` skips ``detect`` (a third of the time) and
+        leaves ``LinesResult.ego`` None.
         """
         config = self.config.lines if config is None else config
         ego_result = self.detect(raw) if ego else None
@@ -247,10 +243,9 @@ class LanePipeline:
     def result(self, search: LaneSearch, images: dict | None = None) -> FrameResult:
         """Return the FrameResult of a search: its fits if they pass ``check``, else not found.
 
-        A line that fails its own check, or both lines when the pair fails, become not-found
-        fits whose ``reason`` is the failed check; the measurement is then NaN and the search's
-        fits with what they measured are kept in ``rejected``. Confidences are those of the
-        fits reported (0 for a rejected line).
+        A line failing its own check, or both when the pair fails, becomes a not-found fit whose
+        ``reason`` is the check; the measurements are then NaN and the search's fits and measurements
+        are kept in ``rejected``. Confidences are those of the fits reported (0 when rejected).
         """
         check = self.check(search)
         left, right, rejected = search.left, search.right, None
@@ -270,9 +265,8 @@ class LanePipeline:
                            sources)
 
     def process(self, raw: np.ndarray, keep_images: bool = False) -> FrameResult:
-        """Return the lane in one RAW frame with the annotated frame in ``images["result"]``.
-
-        With ``keep_images`` the stage images (undistorted, birdseye, binary, search) are kept too.
+        """Return the lane in one RAW frame with the annotated frame in ``images["result"]``; with
+        ``keep_images``, the stage images (undistorted, birdseye, binary, search) too.
         """
         result = self.detect(raw, keep_images=keep_images)
         if keep_images:
@@ -284,10 +278,8 @@ class LanePipeline:
     def annotate(self, frame: np.ndarray, result: FrameResult, raw: bool = False) -> np.ndarray:
         """Return the frame with the lane, the lines and the measurements drawn.
 
-        ``frame`` is the undistorted frame, or with ``raw`` the RAW frame: the lane is then mapped
-        through the lens model onto it (no full-frame undistortion needed). The lines are drawn
-        only from the row where they hold (``checks.holds_from_px``): not where a fit leaves the
-        view, hooks back beyond its paint or meets the other line.
+        ``frame`` is the undistorted frame, or with ``raw`` the RAW one: the lane is then mapped onto
+        it through the lens model. Lines are drawn only from where they hold (``checks.holds_from_px``).
         """
         to_frame = self.birdseye_to_raw if raw else self.perspective.inverse
         held = result.method == "hold"  # held from earlier frames: drawn in the held colour
@@ -301,12 +293,10 @@ class LanePipeline:
                                                           result.reason, held, edges), self.config.draw)
 
     def draw_views(self, result: FrameResult, raw: np.ndarray) -> dict:
-        """Return ``result.images`` with the drawn views added: undistorted, result and search.
-
-        ``result`` kept its stage images (``detect``, ``LaneTracker.update`` or ``process`` with
-        ``keep_images=True``) and ``raw`` is its RAW frame. Views already there are kept; the
-        search view needs the kept "binary". The one place the debug views are drawn, for
-        ``process``, ``debug_composite`` and the video's ``--debug``.
+        """Return ``result.images`` with the undistorted, result and search views added (those there are
+        kept), drawn from ``raw``, the RAW frame of a result that kept its stage images; the search
+        view needs "binary". The one place the debug views are drawn (``process``,
+        ``debug_composite``, the video's ``--debug``).
         """
         im = result.images
         if "undistorted" not in im:
@@ -319,9 +309,9 @@ class LanePipeline:
         return im
 
     def debug_composite(self, result: FrameResult, raw: np.ndarray | None = None) -> np.ndarray:
-        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result
-        (``process``, ``detect`` or ``LaneTracker.update`` with ``keep_images=True``), the views
-        missing drawn from its RAW frame ``raw`` (``draw_views``)."""
+        """Return the 2x2 debug view (undistorted, binary, search, result) of a kept-images result, the
+        missing views drawn from its RAW frame ``raw`` (``draw_views``).
+        """
         im = result.images
         if raw is not None and "binary" in im:
             self.draw_views(result, raw)

@@ -2,21 +2,16 @@
 
 A proposer is any object with a ``name``, a ``rule``, ``moves_lookahead`` and two methods:
 
-- ``where(frame)`` returns what to look for in this frame (a side, the bases, a row), or None
-  when the proposer has nothing to do here;
+- ``where(frame)`` returns what to look for in this frame (a side, the bases, a row), or None;
 - ``propose(frame, where)`` returns candidate searches, each with a note for the frame's
   reason, in the order they are to be judged.
 
-``choose`` asks the proposers in order. Each candidate is judged (``Frame.judge``: a single
+``choose`` asks the proposers in order; each candidate is judged (``Frame.judge``: a single
 image's checks for ``LanePipeline.detect``, the track's for ``LaneTracker``) and taken under the
-proposer's ``rule``: "more lines" takes it when more of its lines pass than of the best so far;
-"a pair" takes it only when both pass. The first candidate taken ends the proposer's turn.
-
-This module holds the protocol, the frame a proposer reads (``Frame``), the chain (``choose``)
-and a single image's check of a candidate (``passes``); the proposers themselves live with the
-parts they serve: the tracker's own in ``tracking.proposers``, the hard-road ones in
-``roads.fallbacks`` (no track needed: fallback masks, shorter views, other peaks) and
-``roads.proposers`` (the asphalt edge, and those that read the track).
+proposer's ``rule``: "more lines" when more of its lines pass than of the best so far, "a pair"
+only when both pass. The first taken ends the proposer's turn. The proposers live with the parts
+they serve: ``tracking.proposers``, ``roads.fallbacks`` (no track needed: fallback masks, shorter
+views, other peaks) and ``roads.proposers`` (the asphalt edge, and those reading the track).
 """
 from __future__ import annotations
 
@@ -56,11 +51,11 @@ class Candidate:
 
 @dataclass
 class Frame:
-    """One frame as the proposers see it: its pipeline and raw frame, the predicted lane
-    ``track`` (None without one), the look-ahead's first row ``top``, the prior fits, the
-    pipeline's images (the masks made once, when first asked), the ``judge`` of a candidate
-    search, the best candidate so far, the searches run and the proposers that ran. ``tracker``
-    is the ``LaneTracker`` of a video frame, None for a single image."""
+    """One frame as the proposers see it: pipeline and raw frame, the predicted lane ``track`` (None
+    without one), the look-ahead's first row ``top``, the prior fits, the images (masks made once,
+    when first asked), the candidates' ``judge``, the best so far, the searches and proposers that
+    ran, and ``tracker``, the ``LaneTracker`` of a video frame (None for a single image).
+    """
 
     pipeline: Any
     raw: np.ndarray
@@ -121,10 +116,9 @@ class Proposer(Protocol):
 
 
 def choose(frame: Frame, proposers) -> Candidate:
-    """Return the best candidate of a frame after asking each proposer in turn.
-
-    ``frame.best`` starts as the judged first search (``frame.first``); ``frame.looked`` and
-    ``frame.ran`` collect the searches run and the proposers that ran.
+    """Return the best candidate of a frame after asking each proposer in turn; ``frame.best`` starts
+    as the judged first search (``frame.first``), ``frame.looked`` and ``frame.ran`` collect the
+    searches run and the proposers that ran.
     """
     if frame.best is None:
         frame.best = frame.judge(frame.first)

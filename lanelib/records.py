@@ -1,10 +1,7 @@
 """The records the lane stages share: ``LineFit`` (one fitted line), ``Window`` (one sliding
-window), ``LaneSearch`` (what a search found: pixels, windows, fits) and ``LaneMeasurement`` (the
-lane in metres).
-
-Coordinates are bird's-eye pixels, x to the right and y down; each line is fitted as
-``x = a*y**2 + b*y + c`` (``fit``). The searches fill these records (``search``), the checks read
-them (``checks``), and so do the hard-road parts (``roads``) and the every-line search (``lines``).
+window), ``LaneSearch`` (a search's pixels, windows and fits) and ``LaneMeasurement`` (the lane
+in metres). Coordinates are bird's-eye pixels, x right, y down, a line being
+``x = a*y**2 + b*y + c`` (``fit``). Searches fill them; checks, ``roads`` and ``lines`` read them.
 """
 from __future__ import annotations
 
@@ -20,17 +17,14 @@ NEAR_SHARE = 0.02  # share of a line's pixels nearest the car left out of where 
 class LineFit:
     """One fitted line: pixel coefficients (a, b, c) of x = f(y), or not found with a reason.
 
-    ``scatter_px`` is the RMS horizontal distance (px) of the line's pixels from the fit (0 for a
-    line not fitted to pixels, e.g. a tracked one). ``stripe_scatter_px`` is their RMS distance
-    from the nearer of two parallel stripes fitted to them (``two_stripes``), measured by the
-    search (``sliding_windows``, ``search_around``) where the pixels scatter like a double line
-    (``scatter_px`` above a quarter of ``SearchConfig.double_line_px``) but are not narrowed to
-    its inner stripe, and split into two stripes of at least a fifth of them each; None where
-    not measured (one stripe: the texture rule reads ``scatter_px``). ``gap_px`` is how far
-    (rows) the line's pixels stop short of the view's bottom row, the car's end: from the bottom
-    row to the row that all but ``NEAR_SHARE`` of its pixels lie above (0 for a line that
-    reaches the car, or was not fitted to pixels). A few stray pixels near the car do not count
-    as reaching it.
+    ``scatter_px``: the RMS horizontal distance (px) of its pixels from the fit (0 when not fitted to
+    pixels, e.g. a tracked line). ``stripe_scatter_px``: their RMS distance from the nearer of two
+    parallel stripes (``two_stripes``), measured by the search where they scatter like a double line
+    (``scatter_px`` above a quarter of ``SearchConfig.double_line_px``) without being narrowed, and
+    split into stripes of at least a fifth of them each; else None (the texture rule reads
+    ``scatter_px``). ``gap_px``: the rows from the view's bottom row (the car's end) to the row all
+    but ``NEAR_SHARE`` of its pixels lie above, so a few stray pixels near the car do not count as
+    reaching it (0 when not fitted to pixels).
     """
 
     coeffs_px: tuple[float, float, float] | None

@@ -1,9 +1,5 @@
-"""What the pipeline (or the tracker) reports for one frame: ``FrameResult``, ``Rejected``, confidences.
-
-The per-frame result vocabulary that ``LanePipeline`` and ``LaneTracker`` both speak, beside the
-stage that measures it (``lanes``): the fits reported, what they measure, 0-1 confidences per
-line, why a lane is missing, and a detection that failed the plausibility checks kept apart in
-``rejected`` (never reported as the lane).
+"""What the pipeline (or the tracker) reports for one frame: ``FrameResult``, ``Rejected``,
+confidences; the vocabulary ``LanePipeline`` and ``LaneTracker`` share.
 """
 from __future__ import annotations
 
@@ -34,11 +30,8 @@ def _json_number(v: float, nd: int) -> float | None:
 
 @dataclass(frozen=True)
 class Rejected:
-    """A lane that failed the plausibility checks: its fits, what they measured, and why.
-
-    ``left``/``right`` are the fits as the search made them (a line the search did not find is
-    not found here either); ``measurement`` is what they would have measured (NaN where a line
-    is missing).
+    """A lane that failed the plausibility checks: its fits as the search made them, what they measured
+    (NaN where a line is missing), and why.
     """
 
     left: LineFit
@@ -57,17 +50,14 @@ class Rejected:
 class FrameResult:
     """What the pipeline (or the tracker) found in one frame.
 
-    ``found`` is true when both lines were found and passed the plausibility checks
-    (``LaneChecks``); ``reason`` says what was missing or implausible otherwise, and the
-    measurements are NaN. A detection that failed the checks is kept apart in ``rejected``, never
-    reported as the lane. ``left_conf``/``right_conf`` are 0-1 confidences per line (0 for a line
-    not found or rejected). ``sources`` says where each reported line comes from: "seen" (paint
-    found in this frame), "edge" (the unpainted asphalt edge, ``roads.edge.road_edge``), "shoulder"
-    (a faded painted line placed its measured shoulder inside the asphalt edge,
-    ``roads.proposers.AsphaltEdge``, ``roads.proposers.Shoulder``), "inferred" (from the other line and the tracked width),
-    "held" (from earlier frames), "" (no line).
-    ``images`` holds the stage images (undistorted, birdseye, binary,
-    search, result) when the pipeline was asked to keep them.
+    ``found`` is true when both lines were found and passed the checks (``LaneChecks``); otherwise
+    ``reason`` says why and the measurements are NaN, a detection that failed being kept in
+    ``rejected``, never reported as the lane. ``left_conf``/``right_conf``: 0-1 confidences (0 when
+    not found or rejected). ``sources`` says where each line comes from: "seen" (paint found in this
+    frame), "edge" (the unpainted asphalt edge, ``roads.edge.road_edge``), "shoulder" (a faded line
+    placed its shoulder inside the edge, ``roads.proposers.Shoulder``), "inferred" (from the other
+    line and the tracked width), "held" (earlier frames), "" (none). ``images`` holds the stage
+    images (undistorted, birdseye, binary, search, result) when asked to keep them.
     """
 
     left: LineFit
@@ -111,10 +101,8 @@ class FrameResult:
         return self.measurement.lane_width_m
 
     def summary(self) -> dict:
-        """Return the per-image record written to results.json (NaN where not found).
-
-        ``rejected`` is None, or the radius, offset and width of a detection that failed the
-        checks and why (``Rejected.summary``).
+        """Return the per-image record written to results.json (NaN where not found); ``rejected`` is None,
+        or a failed detection's radius, offset, width and why (``Rejected.summary``).
         """
         return {"found": self.found, "left_found": self.left_found, "right_found": self.right_found,
                 "radius_m": _round(self.radius_m, 1), "offset_m": _round(self.offset_m, 3),

@@ -1,9 +1,6 @@
 """Lane-pixel search in the bird's-eye mask: the histogram and its bases, sliding windows, the
-search around a prior fit, and the look-ahead that keeps a tracked lane in the view.
-
-Every search fits its lines through ``fit_side``: ``fit.fit_line`` of the line's pixels, narrowed
-to a double line's inner stripe where the pixels scatter like one (``roads.stripes``, switched on
-by ``SearchConfig.double_line_px``). Each returns a ``records.LaneSearch``.
+search around a prior fit, and the look-ahead that keeps a tracked lane in the view. Each
+returns a ``records.LaneSearch`` whose lines are fitted by ``fit_side``.
 """
 from __future__ import annotations
 
@@ -44,10 +41,8 @@ def find_bases(hist: np.ndarray, car_x: float | None = None) -> tuple[float | No
 
 def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
                     min_gap_px: float) -> tuple[list[float], list[float]]:
-    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``.
-
-    A peak is a column that holds the most pixels within ``min_gap_px`` either side (one per
-    line, however wide); columns with no pixels are never peaks.
+    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``: columns
+    holding the most pixels within ``min_gap_px`` either side (one per line), never empty ones.
     """
     mid = int(car_x if car_x is not None else len(hist) / 2)
     r = max(1, int(min_gap_px))
@@ -67,10 +62,8 @@ def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
 
 
 def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
-    """Return how much the histogram's peak at column ``x`` stands out: (peak - mean) / mean.
-
-    0 for a flat histogram, large for one strong line on an empty view; None for no base, 0.0
-    for an empty histogram.
+    """Return how much the histogram's peak at column ``x`` stands out, (peak - mean) / mean: 0 for a
+    flat or empty histogram, large for one strong line on an empty view; None for no base.
     """
     if x is None:
         return None
@@ -94,11 +87,10 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch:
     """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
 
-    With ``top_px`` > 0 the search reads only the rows from ``top_px`` down (a shorter
-    look-ahead, ``lookahead_top_px``): the histogram covers the lower ``histogram_fraction`` of
-    those rows and the windows, as tall as in the whole view, stop there. The fits stay in the
-    view's coordinates and their span rules in its rows (``fit_line``). ``pixels``: the mask's
-    ``lane_pixels``, when a mask searched several times has them already.
+    With ``top_px`` > 0 only the rows from ``top_px`` down are read (``lookahead_top_px``): the
+    histogram covers the lower ``histogram_fraction`` of them and the windows, as tall as in the
+    whole view, stop there; fits and their span rules stay in the view's rows. ``pixels``: the
+    mask's ``lane_pixels``, when already made.
     """
     h = binary.shape[0]
     top_px = int(min(max(top_px, 0), h - 1))
@@ -165,9 +157,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
 
 def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
                   config: SearchConfig = SearchConfig(), top_px: int = 0) -> LaneSearch:
-    """Return the lane pixels within ``prior_margin_px`` of previous fits, and their new fits.
-
-    With ``top_px`` > 0 only the rows from ``top_px`` down are read (as in ``sliding_windows``).
+    """Return the lane pixels within ``prior_margin_px`` of previous fits, and their new fits (with
+    ``top_px`` > 0, from the rows below it only).
     """
     h, w = binary.shape[:2]
     top_px = int(min(max(top_px, 0), h - 1))
@@ -206,15 +197,13 @@ def search_around(binary: np.ndarray, left: LineFit, right: LineFit,
 def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = SearchConfig()) -> int:
     """Return the first row (px) of the look-ahead that keeps the tracked lines in the view.
 
-    On a tight bend the lane leaves the bird's-eye view sideways long before its top row (a
-    line ``d`` m from the view's side leaves it after sqrt(2 * R * d) of road on a bend of radius
-    ``R``); above that row the other line sweeps across into its search
-    windows and every check compares a line with the extrapolation of one that is gone. The
-    look-ahead ends on the lowest row where a line comes within ``margin_px / 2`` of the view's
-    side (about to leave it), but keeps at least ``min_view_fraction`` of the view's height. It
-    is a band of rows of the same view, not a second warp: the metric scale (``ym_per_px``) and
-    the fits' coordinates stay those of the view, so radius, offset and width read the same,
-    and the overlay and the evaluation map the fits as they map those of the whole view.
+    On a tight bend the lane leaves the view sideways long before its top row (a line ``d`` m from
+    the side leaves after sqrt(2 * R * d) of road on radius ``R``); above that the other line
+    sweeps into its windows and checks compare a line with the extrapolation of one that is gone.
+    The look-ahead ends on the lowest row where a line comes within ``margin_px / 2`` of the side,
+    keeping at least ``min_view_fraction`` of the height. It is a band of rows of the same view,
+    not a second warp: scale and coordinates stay the view's, so measurements, overlay and
+    evaluation read the fits as the whole view's.
 
     Parameters
     ----------
@@ -237,11 +226,11 @@ def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = Sea
 
 def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
               missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
-    """Return ``fit_line`` of one line's pixels and the pixels it rests on. Every search fits its
-    lines here (``side``: "left" or "right", the side of the lane they bound; ``top_px``: the
-    search's look-ahead, ``fit_line``). With ``double_line_px`` on, pixels that scatter from the
-    fit like a double line (RMS above a quarter of ``double_line_px``) are read at the inner
-    stripe (``roads.stripes.double_line_fit``), so a single line costs no second fit."""
+    """Return ``fit_line`` of one line's pixels (``side``: "left" or "right"; ``top_px``: the
+    look-ahead) and the pixels it rests on. With ``double_line_px`` on, pixels scattering like a
+    double line (RMS above a quarter of it) are read at the inner stripe
+    (``roads.stripes.double_line_fit``), so a single line costs no second fit.
+    """
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
         return double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)

@@ -1,14 +1,12 @@
 """Colour and gradient thresholds that turn a road image into a binary mask of lane-line pixels.
 
-Every mask is a ``uint8`` array of 0 and 255. ``ThresholdConfig`` holds one parameter record per
-named mask and a ``rule`` that combines them, a boolean expression over the mask names with
-``|`` (or), ``&`` (and), ``~`` (not) and parentheses, e.g. ``"yellow | white | (sobel_x & s_channel)"``.
-A disabled mask drops out of the rule (it neither adds pixels to an ``|`` nor removes them
-through an ``&``), so the tuner's on/off toggles do what a user expects.
-
-Colour spaces: ``rgb``, ``hls``, ``hsv``, ``luv``, ``lab`` and ``gray``; channels are named by
-their letter (``h``, ``l``, ``s``, ``v``, ``b`` ...) as OpenCV's 8-bit conversions scale them
-(hue 0-179, the rest 0-255).
+Every mask is a ``uint8`` array of 0 and 255. ``ThresholdConfig`` holds one record per named
+mask and a ``rule`` combining them, a boolean expression over mask names with ``|``, ``&``, ``~``
+and parentheses, e.g. ``"yellow | white | (sobel_x & s_channel)"``. A disabled mask drops out of
+the rule (it neither adds pixels to an ``|`` nor removes them through an ``&``), so the tuner's
+toggles do what a user expects. Colour spaces: ``rgb``, ``hls``, ``hsv``, ``luv``, ``lab`` and
+``gray``; channels are named by letter (``h``, ``l``, ``s`` ...), scaled as OpenCV's 8-bit
+conversions do (hue 0-179, the rest 0-255).
 """
 from __future__ import annotations
 
@@ -34,11 +32,9 @@ SPACES: dict[str, tuple[int | None, str]] = {s: (_CONVERSIONS[s], letters)
 
 
 def make_clahe(config: ThresholdConfig, size: tuple[int, int]) -> cv2.CLAHE | None:
-    """Return the CLAHE of ``config`` for images of ``size`` (w, h) px, or None when it is off.
-
-    The tile grid is the image cut into tiles of about ``clahe_tile_px`` px (at least one each
-    way). Make it once per configuration and image size (``LanePipeline`` does) and pass it to
-    ``combine`` and ``masks``.
+    """Return the CLAHE of ``config`` for images of ``size`` (w, h) px, or None when it is off: tiles of
+    about ``clahe_tile_px`` px (at least one each way). Make it once per configuration and size (as
+    ``LanePipeline`` does) and pass it to ``combine`` and ``masks``.
     """
     if not config.clahe:
         return None
@@ -81,9 +77,9 @@ class Channels:
 
     def cut(self, pieces: list[tuple[slice, slice]], join: Callable[[list[np.ndarray]], np.ndarray]
             ) -> "Channels":
-        """Return the ``Channels`` of the ``pieces`` (row and column slices) of this image laid side
-        by side by ``join`` (e.g. ``np.hstack``), with every colour space converted so far cut
-        alike rather than converted again (a conversion is per pixel)."""
+        """Return the ``Channels`` of the ``pieces`` (row and column slices) of this image joined by
+        ``join`` (e.g. ``np.hstack``), every colour space converted so far cut alike, not converted again.
+        """
         out = Channels(join([self.rgb[c] for c in pieces]))
         for name, img in self._spaces.items():
             if name != "rgb":
@@ -125,14 +121,10 @@ def color_range_mask(rgb: np.ndarray | Channels, spec: ColorRange) -> np.ndarray
 
 
 def morph(image: np.ndarray, op: str, width_px: int, height_px: int) -> np.ndarray:
-    """Return ``image`` opened (``op="open"``) or closed (``"close"``) by a width x height rectangle.
-
-    The two passes take mirrored anchors: OpenCV puts the anchor of an even kernel half a pixel
-    off centre and ``cv2.morphologyEx`` uses it for both passes, so an opening or closing with an
-    even size moved the result by one pixel (a 20 px square opened by 4 x 4 came back one pixel
-    down and right). With the second pass's anchor mirrored, an opening or closing of a shape
-    wider than the kernel returns it in place, for every size. Works on masks and grey images
-    (the top-hat's background).
+    """Return ``image`` (a mask or grey image) opened (``op="open"``) or closed (``"close"``) by a
+    width x height rectangle. OpenCV anchors an even kernel half a pixel off centre for both passes,
+    which shifts the result a pixel; with the second pass's anchor mirrored, a shape wider than the
+    kernel comes back in place for every size.
     """
     kernel = np.ones((height_px, width_px), np.uint8)
     first = (width_px // 2, height_px // 2)
@@ -182,11 +174,9 @@ def sobel_mask(rgb: np.ndarray | Channels, spec: SobelMask) -> np.ndarray:
 
 
 def _integer_sobel_mask(gray: np.ndarray, spec: SobelMask) -> np.ndarray:
-    """Return ``sobel_mask`` for kind x or y and kernel 1 or 3 from the integer Sobel (int16).
-
-    The same mask as thresholding the float32 gradient, about 8x faster: for these kernels the
-    step scale is 1 or 1/4, so the float gradient is exactly the integer one times the scale, and
-    [low, high] (compared as float32, as ``cv2.inRange`` does) becomes an integer range of |s|.
+    """Return ``sobel_mask`` for kind x or y and kernel 1 or 3 from the integer Sobel (int16), about 8x
+    faster: the float gradient is exactly the integer one times 1 or 1/4, so [low, high] (compared
+    as float32, as ``cv2.inRange`` does) becomes an integer range of |s|.
     """
     scale = 1.0 / _sobel_step_scale(spec.kernel_px)
     lo = max(0, math.ceil(float(np.float32(spec.low)) / scale))
@@ -220,14 +210,9 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
 
 @functools.lru_cache(maxsize=32)
 def _least_tophat(spec: TopHatMask) -> np.ndarray:
-    """Return the least top-hat a pixel needs for each background level 0-255 (uint8, 256).
-
-    Made once per mask record (records are frozen, so the table is cached, read-only) rather
-    than on every frame.
-    max(low, ratio * background) rounded up (an integer top-hat passes exactly when it is at
-    least the real bound); 255 where the background is above ``max_background``. 255 is
-    reached by no top-hat there (a top-hat of 255 needs a background of 0) nor where
-    ratio * background exceeds 255 - background, so the capped table is exact.
+    """Return the least top-hat a pixel needs for each background level 0-255 (uint8, 256), cached
+    per (frozen) mask record: max(low, ratio * background) rounded up, 255 above ``max_background``.
+    The cap is exact: no top-hat reaches 255 there, nor where ratio * background > 255 - background.
     """
     levels = np.arange(256, dtype=np.float64)
     least = np.maximum(spec.low, np.ceil(spec.ratio * levels - 1e-9))
@@ -276,12 +261,9 @@ def rule_masks(config: ThresholdConfig) -> tuple[str, ...]:
 
 
 def mask_context_px(spec) -> tuple[int, int]:
-    """Return the border (x, y) in px around a pixel that one mask record looks at.
-
-    A colour mask looks at the pixel alone (0, 0), or with its own ``open_px`` of size k
-    (erosion, then dilation) at 2 * (k // 2) each way; a Sobel kernel of size k at
-    max(1, k // 2) pixels each way; the top-hat's opening at 2 * (width_px // 2) across, and its
-    least width's opening (1 x k, anchors mirrored) at k - 1 more.
+    """Return the border (x, y) in px around a pixel that one mask record looks at: a colour mask (0, 0),
+    or 2 * (k // 2) each way with its ``open_px`` k; a Sobel kernel k max(1, k // 2); the top-hat's
+    opening 2 * (width_px // 2) across, plus k - 1 for its least width's 1 x k opening.
     """
     if isinstance(spec, SobelMask):
         r = max(1, spec.kernel_px // 2)
@@ -295,12 +277,9 @@ def mask_context_px(spec) -> tuple[int, int]:
 
 
 def context_px(config: ThresholdConfig) -> tuple[int, int]:
-    """Return the border (x, y) in px a crop needs for ``combine`` on it to be exact inside the crop.
-
-    ``combine`` on a crop grown by this border on every side (where the image has one) gives,
-    inside the crop, the mask ``combine`` gives on the whole image: the widest
-    ``mask_context_px`` of the masks the rule uses, plus 2 * (size // 2) for each closing or
-    opening of the combined mask.
+    """Return the border (x, y) in px a crop needs for ``combine`` on it to give, inside the crop, the
+    whole image's mask: the widest ``mask_context_px`` the rule uses, plus 2 * (size // 2) for each
+    opening or closing of the combined mask.
     """
     cx = cy = 0
     for name in rule_masks(config):
@@ -314,10 +293,8 @@ def context_px(config: ThresholdConfig) -> tuple[int, int]:
 
 def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
           names: tuple[str, ...] | None = None, clahe: cv2.CLAHE | None = None) -> dict[str, np.ndarray]:
-    """Return the 0/255 mask of each enabled mask (all of them, or those in ``names``).
-
-    With ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made
-    once by ``make_clahe`` (else one is made for this image).
+    """Return the 0/255 mask of each enabled mask (all of them, or those in ``names``); with
+    ``config.clahe`` they see the equalised image (``clahe``: the one ``make_clahe`` made).
     """
     ch = Channels(mask_input(rgb, config, clahe))
     wanted = names if names is not None else mask_names(config)
@@ -326,9 +303,9 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 
 @dataclass
 class Made:
-    """What ``combine`` made of one image: its masks by name and its colour conversions, so a
-    second rule on the same image (``fallback_rule``) makes only the masks it adds, and converts
-    no colour space twice."""
+    """What ``combine`` made of one image (masks by name, colour conversions), so a second rule on it
+    (``fallback_rule``) makes only the masks it adds and converts no colour space twice.
+    """
 
     masks: dict[str, np.ndarray] = field(default_factory=dict)
     channels: Channels | None = None
@@ -338,16 +315,13 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             computed: dict[str, np.ndarray] | None = None, clahe: cv2.CLAHE | None = None,
             rule: str | None = None, channels: Channels | None = None,
             made: Made | None = None) -> np.ndarray:
-    """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``,
-    e.g. ``config.fallback_rule``).
+    """Return the combined 0/255 lane-pixel mask of ``rgb`` under ``config.rule`` (or ``rule``, e.g.
+    ``config.fallback_rule``), computing only the enabled masks the rule names.
 
-    Only masks that the rule names and that are enabled are computed; ``computed`` may pass
-    masks already made (e.g. by ``masks``) so the tuner does not compute them twice. With
-    ``config.clahe`` the masks see the equalised image; ``clahe`` passes the CLAHE made once by
-    ``make_clahe`` (else one is made for this image). ``channels``: the ``Channels`` of the
-    image the masks look at, made already (``Channels.cut``; without ``config.clahe`` only).
-    ``made``: what was made of this image already (``Made``), read like ``computed``; each mask
-    and colour conversion made here is added to it.
+    ``computed``: masks already made (e.g. by ``masks``, for the tuner). With ``config.clahe`` the
+    masks see the equalised image (``clahe``: the one ``make_clahe`` made). ``channels``: the image's
+    ``Channels`` made already (``Channels.cut``; without ``config.clahe`` only). ``made``: a ``Made``
+    read like ``computed``, to which every mask and conversion made here is added.
     """
     if made is None:
         made = Made(dict(computed or {}))
@@ -380,13 +354,11 @@ def _scale_px(v: int, factor: float, least: int = 1) -> int:
 
 
 def scaled(config: ThresholdConfig, factor: float) -> ThresholdConfig:
-    """Return ``config`` for a view whose pixels are ``1 / factor`` times as wide across the road.
-
-    For the same masks in a view of another scale (``lines.view.LinesView``: ``factor`` is the
-    view's px per metre over the ego view's). Widths in px across the road scale by ``factor``:
-    each top-hat's ``width_px`` (at least 3) and ``min_width_px`` (1 stays off; below the width),
-    the masks' ``open_px`` and the combined mask's ``open_px``/``close_px`` (0 stays off), and
-    ``clahe_tile_px`` (at least 8). Colour bounds and Sobel kernels do not change.
+    """Return ``config`` for a view whose pixels are ``1 / factor`` times as wide across the road (e.g.
+    ``lines.view.LinesView``: its px per metre over the ego view's). Widths across scale by
+    ``factor``: top-hat ``width_px`` (at least 3) and ``min_width_px`` (1 stays off; below the
+    width), ``open_px`` and ``close_px`` (0 stays off), ``clahe_tile_px`` (at least 8). Colour
+    bounds and Sobel kernels do not change.
     """
     if factor <= 0:
         raise ConfigError(f"thresholds.scaled: factor {factor} must be positive")

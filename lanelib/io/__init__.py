@@ -1,11 +1,7 @@
 """Reading and writing images and videos, and atomic output files.
 
 Images are RGB ``uint8`` arrays (H x W x 3) everywhere in lanelib; BGR exists only inside this
-package. Videos go through imageio-ffmpeg. Every output is written to a temporary file beside its
-target and renamed into place, so an interrupted run never leaves a half-written file under the
-output name, and no output may be written over one of the run's inputs.
-
-The modules, by job:
+package. Videos go through imageio-ffmpeg. Outputs are written atomically and never over an input.
 
 - ``images``: image files read as RGB arrays (``read_image``, ``read_image_info``), the frame
   check every stage runs (``check_rgb``), encoding and writing (``encode_image``,
@@ -15,9 +11,7 @@ The modules, by job:
 - ``video``: videos read frame by frame or by seeking (``VideoReader``, ``read_frame``,
   ``video_info``), written (``VideoWriter``) and joined (``join_videos``).
 
-Every public name of the three is a name of this package too (``io.read_image``), as are the
-errors they raise (``InputError``, ``DecodeStoppedError``), so callers need not know which module
-holds a name.
+Their public names, and the errors they raise, are names of this package too (``io.read_image``).
 """
 from ..errors import DecodeStoppedError, InputError
 from .files import (atomic_path, check_not_input, check_output, read_json, remove_stale_temp_files,

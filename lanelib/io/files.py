@@ -1,7 +1,6 @@
-"""Atomic output files: every output is written to a temporary file beside its target and
-renamed into place, so an interrupted run never leaves a half-written file under the output
-name, and no output may be written over one of the run's inputs. Text and JSON outputs, and the
-JSON reader, live here too; ``images`` and ``video`` write through ``atomic_path``.
+"""Atomic output files: every output is written to a temporary file beside its target and renamed
+into place, so an interrupted run never leaves a half-written output, and no output may
+overwrite one of the run's inputs. Text and JSON outputs and the JSON reader live here too.
 """
 from __future__ import annotations
 
@@ -27,10 +26,10 @@ def check_not_input(target: str | os.PathLike, inputs: Iterable[str | os.PathLik
 
 def check_output(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] = (),
                  others: Iterable[str | os.PathLike] = ()) -> None:
-    """Raise InputError if ``target`` could not be written by ``atomic_path``: it is one of
-    ``inputs`` (``check_not_input``) or of the command's ``others`` outputs, a folder, or its
-    nearest existing parent folder is no writable folder. A command checks its outputs with it
-    before any work."""
+    """Raise InputError if ``atomic_path`` could not write ``target`` (checked before any work): it is
+    one of ``inputs`` (``check_not_input``) or ``others`` outputs, a folder, or its nearest existing
+    parent is no writable folder.
+    """
     t = Path(target)
     check_not_input(t, inputs)
     if any(Path(o).resolve() == t.resolve() for o in others):
@@ -50,12 +49,9 @@ def _temp_affixes(target: Path) -> tuple[str, str]:
 
 
 def remove_stale_temp_files(target: str | os.PathLike) -> list[Path]:
-    """Remove the temporary files of ``atomic_path`` left beside ``target`` by a killed process;
-    return them.
-
-    An exception or Ctrl-C removes its temporary file; a process killed outright (SIGKILL, power
-    loss) leaves its ``.<stem>.<random>.part<suffix>`` behind. A resumed run calls this before it
-    writes ``target`` again (only ``target``'s own writer makes files of those names).
+    """Remove and return the ``.<stem>.<random>.part<suffix>`` files of ``atomic_path`` that a process
+    killed outright (SIGKILL, power loss) left beside ``target``; a resumed run calls it before
+    writing ``target`` again (only its own writer makes such names).
     """
     t = Path(target)
     if not t.parent.is_dir():
@@ -71,11 +67,9 @@ def remove_stale_temp_files(target: str | os.PathLike) -> list[Path]:
 
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike, inputs: Iterable[str | os.PathLike] = ()) -> Iterator[Path]:
-    """Yield a temporary path beside ``target``; rename it onto ``target`` when the block succeeds.
-
-    The temporary file keeps ``target``'s suffix (ffmpeg chooses the container by it). On any
-    exception, KeyboardInterrupt included, the temporary file is removed and ``target`` is left
-    as it was. A folder that cannot be made or written to raises ``InputError``.
+    """Yield a temporary path beside ``target`` with its suffix (ffmpeg picks the container by it);
+    rename it onto ``target`` when the block succeeds, remove it on any exception (Ctrl-C included).
+    A folder that cannot be made or written to raises ``InputError``.
     """
     t = Path(target)
     check_not_input(t, inputs)

@@ -1,9 +1,9 @@
 """Image files: reading them as RGB uint8 arrays, checking frames, encoding and writing them.
 
-Images are RGB ``uint8`` arrays (H x W x 3) everywhere in lanelib; BGR exists only inside this
-module, at OpenCV's decoder and encoder. What a decoder prints on the process's stderr while it
-reads a file is captured and kept as that file's note, so a batch run's output stays one line
-per problem. ``write_image`` goes through ``files.atomic_path``.
+Images are RGB ``uint8`` arrays (H x W x 3) everywhere in lanelib; BGR exists only here, at
+OpenCV's decoder and encoder. What a decoder prints on stderr while reading a file is kept as
+that file's note, so a batch run prints one line per problem. ``write_image`` goes through
+``files.atomic_path``.
 """
 from __future__ import annotations
 
@@ -34,8 +34,8 @@ class ImageFileInfo:
     path : the file.
     width, height : size in pixels.
     channels : 1 (grey) or 3 (colour) as decoded; an alpha channel is dropped.
-    bit_depth : 8 or 16 bits per sample as stored; 16-bit samples are scaled to 8 bits by keeping
-        their high byte (``value >> 8``: 65535 -> 255, 257 -> 1, 255 -> 0).
+    bit_depth : 8 or 16 bits per sample as stored; 16-bit samples keep their high byte
+        (``value >> 8``: 65535 -> 255, 257 -> 1, 255 -> 0).
     colour : False when every pixel has R == G == B (a grey image, whatever its format).
     decoder_messages : what the decoder printed while reading an image it could still decode
         (e.g. libjpeg's "Corrupt JPEG data: ..."), one line each.
@@ -59,10 +59,9 @@ _CV_LOG_PREFIX = re.compile(r"^\[\s*(?:WARN|ERROR|INFO|FATAL)[^\]]*\]\s*(?:globa
 def captured_native_stderr() -> Iterator[list[str]]:
     """Yield a list that, when the block ends, holds the lines C code wrote to stderr inside it.
 
-    libjpeg, libpng and OpenCV's log write straight to file descriptor 2, past ``sys.stderr``;
-    reading images inside this block turns those lines into a file's note or error instead of
-    letting them break a run's one-line-per-problem output. Not thread-safe: what another thread
-    writes to fd 2 during the block is captured too.
+    libjpeg, libpng and OpenCV's log write to file descriptor 2, past ``sys.stderr``; captured, they
+    become a file's note or error instead of breaking a run's one-line-per-problem output. Not
+    thread-safe: another thread's writes to fd 2 during the block are captured too.
     """
     lines: list[str] = []
     with contextlib.suppress(Exception):
@@ -95,16 +94,15 @@ def _decoder_message(line: str, limit: int = 160) -> str:
 def read_image_info(path: str | os.PathLike) -> tuple[np.ndarray, ImageFileInfo]:
     """Return the image at ``path`` as an RGB uint8 array (H x W x 3), and what the file held.
 
-    Grey images are returned with three equal channels, an alpha channel is dropped, and 16-bit
-    samples are scaled to 8 bits by keeping the high byte (``value >> 8``). The EXIF orientation
-    of a JPEG is applied, as OpenCV does by default.
+    Grey images get three equal channels, alpha is dropped, 16-bit samples keep their high byte
+    (``value >> 8``); a JPEG's EXIF orientation is applied, as OpenCV does by default.
 
     Raises
     ------
     InputError
-        If the file does not exist, is not a file, cannot be read, is empty, cannot be decoded
-        as an image, or holds samples other than 8- or 16-bit integers. The message names the
-        file, the cause and the fix, on one line.
+        If the file does not exist, is not a file, cannot be read, is empty, cannot be decoded,
+        or holds samples other than 8- or 16-bit integers; the one-line message names the file,
+        the cause and the fix.
     """
     p = Path(path)
     if not p.exists():
@@ -151,9 +149,8 @@ def read_image_info(path: str | os.PathLike) -> tuple[np.ndarray, ImageFileInfo]
 
 
 def read_image(path: str | os.PathLike) -> np.ndarray:
-    """Return the image at ``path`` as an RGB uint8 array (H x W x 3).
-
-    Grey, RGBA and 16-bit images are converted as ``read_image_info`` says.
+    """Return the image at ``path`` as an RGB uint8 array (H x W x 3), converted as
+    ``read_image_info`` says (grey, RGBA, 16-bit).
 
     Raises
     ------
@@ -177,10 +174,8 @@ PIPELINE_SIZE_FIX = ("make a pipeline for this size (LanePipeline(config, calibr
 def check_rgb(image, name: str = "image", size: tuple[int, int] | None = None, *,
               owner: str = "the pipeline", fix: str = PIPELINE_SIZE_FIX,
               mask_ok: bool = False) -> np.ndarray:
-    """Return ``image`` as a C-contiguous RGB uint8 array (H x W x 3); anything else raises InputError.
-
-    The one input check of every stage that takes a frame (``Undistorter``, ``Perspective``,
-    ``LanePipeline``, the Hough pipeline). A contiguous array is returned as it is (no copy).
+    """Return ``image`` as a C-contiguous RGB uint8 array (H x W x 3), without a copy when it is one:
+    the one input check of every stage that takes a frame.
 
     Parameters
     ----------
@@ -194,8 +189,8 @@ def check_rgb(image, name: str = "image", size: tuple[int, int] | None = None, *
     Raises
     ------
     InputError
-        If ``image`` is not an H x W x 3 uint8 array (or, with ``mask_ok``, an H x W one), is
-        empty, or is not ``size``.
+        If ``image`` is not an H x W x 3 uint8 array (or, with ``mask_ok``, H x W), is empty,
+        or is not ``size``.
     """
     shape_ok = isinstance(image, np.ndarray) and image.dtype == np.uint8 and (
         (image.ndim == 3 and image.shape[2] == 3) or (mask_ok and image.ndim == 2))
@@ -237,11 +232,9 @@ def write_image(path: str | os.PathLike, rgb: np.ndarray, jpeg_quality: int = 95
 
 
 def list_images(folder: str | os.PathLike) -> list[Path]:
-    """Return the entries of ``folder`` named like images (``IMAGE_SUFFIXES``), sorted by name.
-
-    Every entry with an image suffix is listed, also one that is not a readable file (a folder
-    named ``x.jpg``, a broken link): a batch run reports it as that file's error instead of
-    skipping it without a word.
+    """Return the entries of ``folder`` named like images (``IMAGE_SUFFIXES``), sorted by name; also
+    one that is not a readable file (a folder ``x.jpg``, a broken link), so that a batch run
+    reports it as an error rather than skip it silently.
 
     Raises
     ------

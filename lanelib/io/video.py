@@ -1,8 +1,8 @@
-"""Video files through imageio-ffmpeg: reading frames (all, a span, or one by seeking), the
-video's size and frame rate, writing H.264 mp4s, and joining the parts of a segmented run.
+"""Video files through imageio-ffmpeg: reading frames (all, a span, or one by seeking), the video's
+size and frame rate, writing H.264 mp4s, and joining the parts of a segmented run.
 
-Frames are RGB ``uint8`` arrays (H x W x 3). A broken or truncated video raises ``InputError``
-or ``DecodeStoppedError`` with the file's name and ffmpeg's cause; outputs go through
+Frames are RGB ``uint8`` arrays (H x W x 3). A broken or truncated video raises ``InputError`` or
+``DecodeStoppedError`` naming the file and ffmpeg's cause; outputs go through
 ``files.atomic_path``, so no half-written video stands under the output name.
 """
 from __future__ import annotations
@@ -71,20 +71,17 @@ def ffmpeg_cause(text: str) -> str:
 class VideoReader:
     """Iterate over a video's frames as RGB uint8 arrays, decoded by imageio-ffmpeg.
 
-    ``info`` is read when the reader is made, so an empty, corrupt or missing file, or one in a
-    codec ffmpeg cannot decode, raises ``InputError`` there, with the file's name, not halfway
-    through a run. A video that breaks off after some frames (a decoding error, or a file that
-    ends well before the length its container announces: a truncated download) raises
-    ``DecodeStoppedError`` after the frames it could decode; one with no frame at all raises
-    ``InputError``.
+    ``info`` (``video_info(path)``; given, it saves opening the file twice) is read when the reader
+    is made, so a missing, empty, corrupt or undecodable file raises ``InputError`` there, not
+    halfway through a run. A video that breaks off after some frames (a decoding error, or a
+    truncated file ending well before its announced length) raises ``DecodeStoppedError`` after the
+    frames it could decode, naming the clip's frame index; its ``frames`` counts those this reader
+    yielded. One with no frame at all raises ``InputError``.
 
-    ``start`` and ``stop`` (frame indices, as for ``range``) read part of the clip: frames
-    ``start .. stop - 1`` (to the end when ``stop`` is None). ffmpeg seeks to ``start`` as
-    ``read_frame`` does (``-ss`` before ``-i``: a few frames' decoding from the key frame before
-    it, not ``start``) and stops after ``stop - start`` frames, so the frames are the very ones
-    a reader from the start yields at those indices. ``info`` (``video_info(path)``) saves
-    opening the file twice when ``start`` > 0. A ``DecodeStoppedError`` then names the clip's
-    frame index where decoding stopped; its ``frames`` counts the frames this reader yielded.
+    ``start`` and ``stop`` (frame indices, as for ``range``; ``stop`` None: to the end) read part of
+    the clip: ffmpeg seeks to ``start`` as ``read_frame`` does (decoding from the key frame before
+    it) and stops after ``stop - start`` frames, the very frames a reader from the start yields at
+    those indices.
     """
 
     def __init__(self, path: str | os.PathLike, start: int = 0, stop: int | None = None,
@@ -188,9 +185,7 @@ _NTSC_RATES = (24, 30, 48, 60, 120)  # n * 1000 / 1001 fps, which ffmpeg prints 
 
 def exact_fps(fps: float) -> float:
     """Return the frame rate ``fps`` stands for: an NTSC rate printed rounded (29.97) as n*1000/1001.
-
-    ffmpeg prints (and imageio-ffmpeg reports) 30000/1001 fps as ``29.97``; at frame 30 that
-    rounding already moves ``t * fps`` by 3e-5 of a frame, enough to pick the frame before.
+    The rounding moves ``t * fps`` by 3e-5 of a frame at frame 30, enough to pick the frame before.
     """
     n = round(fps * 1.001)
     return n * 1000 / 1001 if n in _NTSC_RATES and abs(fps - n * 1000 / 1001) < 0.006 else fps
@@ -200,11 +195,10 @@ def read_frame(path: str | os.PathLike, index: int | None = None, time_s: float 
                info: VideoInfo | None = None) -> np.ndarray:
     """Return one frame of the video at ``path`` as an RGB uint8 array (H x W x 3), found by seeking.
 
-    The frame is chosen by ``index`` (0 .. n_frames - 1) or by ``time_s`` (seconds from the
-    start; frame ``floor(time_s * fps + 1e-6)``), exactly one of them. ffmpeg seeks to the key
-    frame before it (``-ss`` before ``-i``) and decodes from there, so frame 240 costs a few
-    frames' decoding, not 240; the frame is the very one a ``VideoReader`` yields at that index
-    (frame-accurate seek, checked by ``tests/test_io.py``).
+    Exactly one of ``index`` and ``time_s`` chooses the frame (by time: frame
+    ``floor(time_s * fps + 1e-6)``). ffmpeg seeks to the key frame before it and decodes from
+    there, so frame 240 costs a few frames' decoding, not 240, and the frame is the very one a
+    ``VideoReader`` yields at that index (checked by ``tests/test_io.py``).
 
     Parameters
     ----------
@@ -270,11 +264,9 @@ H264_PARAMS = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None, bitrate
 
 
 class VideoWriter:
-    """Write RGB uint8 frames to an H.264 mp4 through imageio-ffmpeg, atomically.
-
-    Frames go to a temporary file beside ``path``; ``close()`` renames it into place. Leaving the
-    ``with`` block by an exception (Ctrl-C included) removes the temporary file, so no
-    half-written video ever stands under the output name.
+    """Write RGB uint8 frames to an H.264 mp4 through imageio-ffmpeg, atomically: frames go to a
+    temporary file beside ``path`` that ``close()`` renames into place, and leaving the ``with``
+    block by an exception (Ctrl-C included) removes it.
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, size: tuple[int, int] | None = None,
@@ -344,9 +336,8 @@ def join_videos(parts: Iterable[str | os.PathLike], path: str | os.PathLike,
                 inputs: Iterable[str | os.PathLike] = ()) -> Path:
     """Write the videos ``parts`` one after the other to ``path``, atomically; return the path.
 
-    The parts (same codec, size and frame rate: the segments of one run, each written by
-    ``VideoWriter``) are joined by ffmpeg's concat demuxer without re-encoding (``-c copy``),
-    with imageio-ffmpeg's ffmpeg, so the frames are those of the parts.
+    The parts (same codec, size and frame rate: one run's segments) are joined by ffmpeg's concat
+    demuxer without re-encoding (``-c copy``), so the frames are those of the parts.
 
     Raises
     ------

@@ -1,35 +1,28 @@
 """Lane tracking across video frames: one loop over a pipeline, its proposers and its checks.
 
-``LaneTracker.update(frame)`` runs one frame through a ``LanePipeline`` and returns a
-``FrameResult`` whose fits are the tracked (smoothed) lane, so ``LanePipeline.annotate`` and the
-debug composite work on it unchanged. Per frame:
+``LaneTracker.update(frame)`` returns a ``FrameResult`` whose fits are the tracked lane, so
+``LanePipeline.annotate`` and the debug view work on it unchanged. Per frame:
 
-1. **Predict.** The smoothed lane, moved along the trend of its centre line with
-   ``trend_frames`` on (``roads.trend.predicted_lane``): the smoothed lane lags the road by
-   about a frame.
-2. **Search.** Around the predicted lane when the previous frame was accepted, with sliding
-   windows otherwise, in a look-ahead that keeps the tracked lines in view
-   (``LaneTracker.lookahead_top_px``).
-3. **Check.** Each line alone, each line against the track (jump at the car, bend in shape, a
-   line seen only far ahead joined near the car), the pair against the tracked width
-   (``judge.TrackChecks``).
-4. **Propose.** While no pair passes, the proposers look again, each where it has something
-   to look for (``proposers``: windows from the track, remembered bases; the hard-road ones,
-   each only when switched on, ``roads.proposers``: the road seen from the car,
+1. **Predict.** The smoothed lane, which lags the road by about a frame, moved along its centre
+   line's trend with ``trend_frames`` on (``roads.trend.predicted_lane``).
+2. **Search.** Around the predicted lane when the previous frame was accepted, else sliding
+   windows, in a look-ahead that keeps the lines in view (``LaneTracker.lookahead_top_px``).
+3. **Check.** Each line alone and against the track (jump at the car, bend, a line seen only far
+   ahead), the pair against the tracked width (``judge.TrackChecks``).
+4. **Propose.** While no pair passes, the proposers look again (``proposers``: windows from the
+   track, remembered bases; when switched on, ``roads.proposers``: the road seen from the car,
    re-acquisition, the asphalt edge, a faded line's shoulder, and ``roads.fallbacks``: fallback
    masks, shorter views, other peaks). The best candidate is kept.
 5. **Infer.** A line lost is inferred from the other at the width seen at the car.
-6. **Smooth.** The reported lane is a weighted average of the last ``smooth_frames`` accepted
-   frames, weight ``recency_decay ** age`` times each line's confidence. A weighted window, not
-   a Kalman filter: the tracker observes neither the steering nor the road that move the lane,
-   so a motion model would be "constant coefficients plus tuned noise"; the window has two plain
-   parameters, a bounded memory and a lag of about a frame.
-7. **Hold and reset.** With no line, the predicted lane is held for ``hold_frames`` frames with
-   a falling confidence, then the track is forgotten; one line alone may restart it soon after
-   (``roads.checks.restart``, when switched on), and a pair in a pitched flat view may start it.
+6. **Smooth.** The last ``smooth_frames`` accepted frames, weighted by ``recency_decay ** age``
+   times each line's confidence. Not a Kalman filter: the tracker observes neither the steering
+   nor the road, so a motion model would be "constant coefficients plus tuned noise"; the window
+   has two plain parameters, a bounded memory and a lag of about a frame.
+7. **Hold and reset.** With no line the predicted lane is held ``hold_frames`` frames with a
+   falling confidence, then forgotten; one line may restart it soon after
+   (``roads.checks.restart``, when on), and a pitched pair may start it.
 
-The state carried between frames is one record, ``TrackState``: it can be compared, copied and
-pickled (the Dask joints of a video's segments use it).
+The state carried between frames is one record, ``TrackState`` (compared, copied, pickled).
 """
 from ..proposers import Candidate, Frame, Proposer
 from .judge import TrackChecks

@@ -1,16 +1,14 @@
 """The checks of a tracked frame: which lines of a candidate search the track keeps, and why.
 
-``TrackChecks.judge`` runs, for each line, the checks of a single image (``checks.line_problem``)
-and the checks against the track: a line seen only far ahead (``checks.gap_problem``) is kept
-where it lies along its track and joined near the car to a reference (``fit.joined_fit``); a
-line that jumped at the car or bent away from its track is refused, unless both lines bent
-alike and are a lane on their own (the road changed, the track lags). The pair is then checked
-for width, parallelism and curvature against the tracked width, with two exceptions that read
-the view's pitch: a pitched flat view's lane and a grade read from a double line's stripes
-(``roads.checks.graded_pair``). Without a track, a pair refused as not parallel may start the
-track as a pitched lane (``start.pitched_start``), and one line alone may restart a track lost
-moments ago (``roads.checks.restart``). The hard-road checks (``roads.checks``) change nothing
-unless switched on.
+``TrackChecks.judge`` checks each line as in a single image (``checks.line_problem``) and
+against the track: a line seen only far ahead (``checks.gap_problem``) is joined near the car to
+a reference (``fit.joined_fit``); one that jumped at the car or bent away from its track is
+refused, unless both bent alike and are a lane on their own (the road changed, the track lags).
+The pair is then checked against the tracked width, except a pitched flat view's lane and a
+grade read from a double line's stripes (``roads.checks.graded_pair``). Without a track, a pair
+refused as not parallel may start one as a pitched lane (``start.pitched_start``), and one line
+may restart a track lost moments ago (``roads.checks.restart``). The hard-road checks
+(``roads.checks``) change nothing unless switched on.
 """
 from __future__ import annotations
 
@@ -34,13 +32,11 @@ class TrackChecks:
 
     def judge(self, search: LaneSearch, track, top_px: int = 0, mask=None,
               candidates: list | None = None, bands: tuple[float, float] | None = None) -> Candidate:
-        """Return what the checks keep of ``search`` against ``track`` (pixel coefficients, or
-        None without a track), over the look-ahead from ``top_px`` down.
-
-        ``mask``: a function returning the frame's whole-view mask, for the grade pair check
-        (None skips it). ``candidates``: where the lines this frame could restart the lane from
-        are collected (None leaves the state as it is). ``bands``: the width (px) of the band
-        each line was searched in (default: the search's, ``checks.search_bands_px``).
+        """Return what the checks keep of ``search`` against ``track`` (pixel coefficients, or None),
+        over the look-ahead from ``top_px`` down. ``mask``: returns the frame's whole-view mask, for the
+        grade pair check (None skips it). ``candidates``: collects the lines this frame could restart
+        the lane from (None: the state is left as it is). ``bands``: each line's search band width (px;
+        default ``checks.search_bands_px``).
         """
         t = self.t
         rows = t.rows if not top_px else np.linspace(float(top_px), t.bottom, len(t.rows))
@@ -110,11 +106,11 @@ class TrackChecks:
     # ---- a line against its track ---------------------------------------------------------
 
     def track_problem(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray, side: int) -> tuple[str, bool]:
-        """Return why a line is no continuation of its tracked line ("" when it is), and whether
-        it is refused only for its shape (a bend that the other line may share): it jumped
-        more than the jump limit at the car (``jump_limit_m``), or its shape bent more than
-        ``max_bend_m`` from the track over the rows where both lie in view (unless the track
-        inferred that line: a seen line is not checked against one never seen)."""
+        """Return why a line is no continuation of its tracked line ("" when it is), and whether only for
+        its shape (a bend the other line may share): it jumped more than ``jump_limit_m`` at the car, or
+        bent more than ``max_bend_m`` from the track where both are in view (not against an inferred
+        line: a seen line is not checked against one never seen).
+        """
         t = self.t
         name = SIDES[side]
         dx = (np.polyval(fit.coeffs_px, rows) - np.polyval(tracked, rows)) * t.xm
@@ -128,10 +124,10 @@ class TrackChecks:
         return "", False
 
     def bend_rows(self, fit: LineFit, tracked: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Return which ``rows`` a line's bend against its tracked line is read on: those where
-        both lie in the view, and always the bottom row (the car). On a tight bend the lines
-        leave the view sideways; above that both are extrapolations of fits made from different
-        pixels, and they part by metres though both lay on the line where it was seen."""
+        """Return the ``rows`` a line's bend against its track is read on: where both lie in the view, and
+        the bottom row. Beyond, on a tight bend, both are extrapolations of fits to different pixels
+        and part by metres though both lay on the line where seen.
+        """
         w = self.t.pipeline.size[0]
         x_fit, x_track = np.polyval(fit.coeffs_px, rows), np.polyval(tracked, rows)
         inside = (x_fit >= 0) & (x_fit < w) & (x_track >= 0) & (x_track < w)
@@ -160,11 +156,11 @@ class TrackChecks:
 
     def pair_problem(self, kept: dict, track, rows: np.ndarray, top_px: int, mask, distant: bool,
                      why: list[str]) -> str:
-        """Return why two kept lines are no lane ("" when they are), noting an exception in
-        ``why``: compared row by row with the tracked width (``width_reference``); checked on
-        their own when the track inferred a line, where a pitched flat view's lane is a lane;
-        with ``grade_pair_check``, a pair not parallel to the track is a lane when it is
-        parallel on the grade a double line's stripes show."""
+        """Return why two kept lines are no lane ("" when they are), noting an exception in ``why``:
+        compared row by row with the tracked width (``width_reference``); on their own when the track
+        inferred a line (a pitched flat view's lane is a lane); with ``grade_pair_check``, a lane when
+        parallel on the grade a double line's stripes show.
+        """
         t = self.t
         h = t.pipeline.size[1]
         left, right = kept["left"], kept["right"]
@@ -202,9 +198,10 @@ class TrackChecks:
         return not self.pair_alone(bent["left"], bent["right"], top_px)
 
     def width_reference(self, track, rows: np.ndarray) -> np.ndarray | None:
-        """Return the tracked lane's width (px) on ``rows``, or None without a track or when the
-        newest accepted frame inferred a line: an inferred line's width ahead is no measurement
-        but a width carried over, and a pair seen now would be refused against it."""
+        """Return the tracked lane's width (px) on ``rows``, or None without a track or when the newest
+        accepted frame inferred a line: that width was carried over, not measured, and would refuse a
+        pair seen now.
+        """
         s = self.t.state
         if track is None or s.newest_inferred(0) or s.newest_inferred(1):
             return None

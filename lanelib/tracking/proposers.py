@@ -1,11 +1,9 @@
 """The proposers that read the track: where the tracker looks again in a frame.
 
-The protocol and the chain are ``lanelib.proposers`` (``choose``), shared with a single image's
-``LanePipeline.detect``. These two need a track, or what the tracker remembers: windows
-started from the tracked lines, and windows from the remembered bases where a histogram peak is
-weak. The hard-road ones (the crest's road view, the re-acquisition of a line inferred for
-several frames, the asphalt edge, a faded line's shoulder, and those of ``roads.fallbacks``)
-live in ``lanelib.roads``.
+The protocol and chain are ``lanelib.proposers``, shared with ``LanePipeline.detect``. These two
+need what the tracker remembers: windows from the tracked lines, and from the remembered bases
+where a histogram peak is weak. The hard-road ones (the crest's road view, re-acquisition, the
+asphalt edge, a faded line's shoulder, ``roads.fallbacks``) live in ``lanelib.roads``.
 """
 from __future__ import annotations
 

@@ -1,9 +1,6 @@
-"""How a track starts from a pitched pair.
-
-Without a track a pair refused only as not parallel may be a lane in a pitched flat view: it
-starts the track when such pairs agree ``pitched_start_frames`` frames in a row
-(``pitched_start``). A restart from one line soon after a reset, a hard-road part, is
-``roads.checks.restart``.
+"""How a track starts from a pitched pair: without a track, a pair refused only as not parallel
+may be a lane in a pitched flat view, and starts the track when such pairs agree
+``pitched_start_frames`` frames in a row. (A restart from one line is ``roads.checks.restart``.)
 """
 from __future__ import annotations
 
@@ -13,10 +10,10 @@ from ..checks import pitched_pair_problem
 
 
 def pitched_start(t, kept: dict, problem: str, top_px: int, why: list[str]) -> bool:
-    """Return whether a pair refused without a track as not parallel starts the track as a
-    lane in a pitched flat view, ``pitched_start_frames`` frames in a row each agreeing with
-    the previous one's (``LaneTracker.agree``); remembers it for the next frame when it is such
-    a lane."""
+    """Return whether a pair refused without a track as not parallel starts the track as a pitched
+    lane, agreeing with the previous frame's (``LaneTracker.agree``) ``pitched_start_frames`` in a
+    row; remembers such a pair for the next frame.
+    """
     cfg = t.config
     if not cfg.pitched_start_frames or not problem.startswith("lines not parallel"):
         return False

@@ -1,10 +1,9 @@
 """The tracker's state: one record of everything the next frames' results depend on.
 
 ``TrackState`` holds the accepted frames the lane is smoothed over, the hold's counters and what
-the hard-road parts remember (widths seen at the car, shoulders, restart candidates). It is a
-plain record so that it can be compared, copied and pickled: a Dask segment of a video starts
-from the state the previous segment ended in (``cluster.settle_joints``), and ``key`` says
-whether two states give the same results.
+the hard-road parts remember. It is a plain record, compared, copied and pickled: a Dask segment
+of a video starts from the state the previous one ended in (``cluster.settle_joints``), and
+``key`` says whether two states give the same results.
 """
 from __future__ import annotations
 
@@ -33,9 +32,9 @@ class Accepted:
 
 @dataclass(frozen=True)
 class LostTrack:
-    """What a reset remembers of the track it forgot, for a restart from one line: the tracked
-    lines' x (px) on the bottom row, whether each was seen (not inferred) in the last accepted
-    frame, and the width seen at the car."""
+    """What a reset remembers for a restart from one line: the tracked lines' x (px) on the bottom row,
+    whether each was seen (not inferred) in the last accepted frame, and the width seen at the car.
+    """
 
     bases: tuple[float, float]
     seen: tuple[bool, bool]
@@ -44,16 +43,14 @@ class LostTrack:
 
 @dataclass(eq=False)
 class TrackState:
-    """Everything ``LaneTracker`` carries from one frame to the next.
+    """Everything ``LaneTracker`` carries from one frame to the next; equal when ``key`` is.
 
-    ``history`` and ``trend`` hold the accepted frames the lane is smoothed over and its trend
-    read from (``roads.trend``); ``lost`` counts frames since the last accepted one, ``blind`` those of them in
-    which nothing was seen. The rest serves single parts: ``seen_widths`` (the width a missing
-    line is inferred at), ``edge`` and ``shoulders`` (the asphalt edge and the shoulder beyond
-    paint), ``inferred_run`` and ``faded_run`` (re-acquisition, a faded line), ``lost_track``,
-    ``restart_width`` and ``restart_candidates`` (a restart from one line), ``pitched`` (a
-    pitched start) and ``base_history`` (remembered bases). Two states are equal when their
-    ``key`` is.
+    ``history`` and ``trend`` hold the accepted frames the lane is smoothed over and its trend read
+    from (``roads.trend``); ``lost`` counts frames since the last accepted one, ``blind`` those with
+    nothing seen. The rest serves single parts: ``seen_widths`` (a missing line's width),
+    ``edge`` and ``shoulders`` (the asphalt edge, the shoulder beyond paint), ``inferred_run`` and
+    ``faded_run`` (re-acquisition, a faded line), ``lost_track``, ``restart_width`` and
+    ``restart_candidates`` (a restart from one line), ``pitched`` and ``base_history`` (bases).
     """
 
     history: deque = field(default_factory=deque)
@@ -105,11 +102,9 @@ class TrackState:
         self.pitched = (self.pitched[1], [])
 
     def key(self) -> bytes:
-        """Return a fingerprint of the state the next frames' results depend on.
-
-        Two trackers of one pipeline with equal keys give the same results, to the last bit, on
-        the same next frames, whichever frame each started from: each remembered frame's number
-        is counted back from the last frame tracked.
+        """Return a fingerprint of the state the next frames' results depend on: two trackers of one
+        pipeline with equal keys give bit-identical results on the same next frames, whichever frame
+        each started from (remembered frames are counted back from the last one tracked).
         """
         def accepted(acc: Accepted) -> tuple:
             return (acc.left.tobytes(), acc.right.tobytes(), acc.left_conf, acc.right_conf,

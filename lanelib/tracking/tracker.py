@@ -31,18 +31,17 @@ PROPOSERS: tuple[Proposer, ...] = (*TRACKER_FIRST, WindowsFromTrack(), Remembere
 class LaneTracker:
     """Track the lane through consecutive frames of one video with one ``LanePipeline``.
 
+    Call ``update`` once per frame, in order; ``reset`` before a new video. After each ``update``,
+    ``retries`` names the proposers that frame needed, in order (none when the first search
+    passed); ``state`` is everything carried to the next frame.
+
     Parameters
     ----------
     pipeline : the pipeline that searches each frame (its size, perspective and search config).
     config : tracking parameters; defaults to ``pipeline.config.tracking``.
-    checks : the plausibility checks; defaults to ``pipeline.config.checks``, those of
-        ``pipeline.detect``.
+    checks : the plausibility checks; defaults to ``pipeline.config.checks`` (``detect``'s).
     proposers : where to look again when a frame's first search gives no lane, in order
         (``PROPOSERS``; the protocol in ``lanelib.proposers``).
-
-    Call ``update`` once per frame, in order; ``reset`` before a new video. After each
-    ``update``, ``retries`` names the proposers that frame needed, in the order they ran (none
-    when the first search passed). ``state`` is everything carried to the next frame.
 
     Examples
     --------
@@ -77,9 +76,9 @@ class LaneTracker:
         self.retries: tuple[str, ...] = ()
 
     def forget_track(self) -> None:
-        """Forget the track after a hold ran out, remembering what a restart from one line needs
-        (the lost lines' bases and the width seen at the car; none for a track that never saw
-        both lines at the car: restarts do not chain)."""
+        """Forget the track after a hold ran out, keeping what a restart from one line needs (the lost
+        lines' bases and the width at the car; none if the track never saw both: no chained restarts).
+        """
         lane, s = self.lane, self.state
         if lane is None or not s.seen_widths:
             s.lost_track = None
@@ -90,16 +89,16 @@ class LaneTracker:
 
     @property
     def lane(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Return the tracked (smoothed) pixel coefficients (left, right), or None when reset: a
-        weighted average of the last ``smooth_frames`` accepted fits, weight ``recency_decay **
-        age`` times the line's confidence (x(y) is linear in the coefficients, so this averages
-        the curves row by row)."""
+        """Return the smoothed pixel coefficients (left, right), or None when reset: the last
+        ``smooth_frames`` accepted fits weighted by ``recency_decay ** age`` times confidence (x(y) is
+        linear in them, so this averages the curves row by row).
+        """
         return self.state.lane(self.config.recency_decay)
 
     def predicted_lane(self, frame: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
-        """Return the tracked lane moved along the trend of its centre line to ``frame`` (default:
-        the frame being tracked; ``roads.trend.predicted_lane``, the tracked lane itself while
-        ``trend_frames`` is off)."""
+        """Return the tracked lane moved along its centre line's trend to ``frame`` (default: this one;
+        ``roads.trend.predicted_lane``; the lane itself while ``trend_frames`` is off).
+        """
         return predicted_lane(self.state, self.config, frame)
 
     @property
@@ -136,12 +135,11 @@ class LaneTracker:
     def update(self, raw: np.ndarray, keep_images: bool = False, index: int | None = None) -> FrameResult:
         """Return the tracked lane in the next RAW frame of the video.
 
-        Predict the lane (``predicted_lane``), search around it (or with windows without a
-        track), check the lines against the track (``judge.TrackChecks``), ask the proposers
-        while no lane passes, then infer a missing line, smooth, or hold (``update.accept``,
-        ``update.hold_or_lose``). ``index``: the frame's number in the video (0 for the first),
-        which picks the frames the shoulder is measured on; default: the frames tracked since
-        ``reset`` before this one.
+        Predict the lane, search around it (windows without a track), check the lines against the
+        track (``judge.TrackChecks``), ask the proposers while no lane passes, then infer a missing
+        line, smooth, or hold (``update.accept``, ``update.hold_or_lose``). ``index``: the frame's
+        number in the video, which picks the frames the shoulder is measured on (default: the frames
+        tracked since ``reset``).
         """
         pipe, s = self.pipeline, self.state
         index = s.frame if index is None else index
@@ -186,15 +184,15 @@ class LaneTracker:
     def check(self, left: LineFit, right: LineFit, track: tuple[np.ndarray, np.ndarray] | None,
               band_px: float | tuple[float, float] | None = None
               ) -> tuple[LineFit | None, LineFit | None, list[str]]:
-        """Return the lines that pass the track's checks (None where refused) and why others
-        failed, leaving the tracker as it is.
+        """Return the lines that pass the track's checks (None where refused) and why others failed,
+        leaving the tracker as it is.
 
         Parameters
         ----------
         left, right : this frame's fits (bird's-eye pixels).
         track : the tracked pixel coefficients (left, right), or None without a track.
-        band_px : width (px) of the band the lines' pixels were searched in, one for both or
-            (left, right) (``checks.search_bands_px``); None: the band checks are skipped.
+        band_px : width (px) of the lines' search bands, one or (left, right)
+            (``checks.search_bands_px``); None: the band checks are skipped.
         """
         bands = band_px if isinstance(band_px, tuple) else (band_px or 0.0, band_px or 0.0)
         empty = (np.empty(0, int), np.empty(0, int))
@@ -204,9 +202,10 @@ class LaneTracker:
     # ---- what the parts share -------------------------------------------------------------
 
     def lookahead_top_px(self, track: tuple[np.ndarray, np.ndarray]) -> int:
-        """Return the first row (px) of this frame's look-ahead for the tracked lane ``track``:
-        where the tracked lines stay in the view (``search.lookahead_top_px``), but no more than
-        ``lookahead_growth_m`` beyond the rows the tracked fits were measured on."""
+        """Return the first row (px) of this frame's look-ahead for ``track``: where the tracked lines
+        stay in view (``search.lookahead_top_px``), at most ``lookahead_growth_m`` beyond the rows the
+        tracked fits were measured on.
+        """
         measured = max(acc.top_px for acc in self.state.history)
         grow = int(round(self.config.lookahead_growth_m / self.ym))
         top = lookahead_top_px(track, self.pipeline.size, self.pipeline.config.search)
@@ -222,16 +221,15 @@ class LaneTracker:
         return fit is not None and fit.gap_px * self.ym <= self.config.max_gap_m
 
     def jump_limit_m(self, side: int) -> float:
-        """Return how far (m) line ``side`` may lie from its tracked line at the car: ``max_jump_m``,
-        or the re-acquisition band's half width when that line is being re-acquired
-        (``roads.proposers.reacquire_half_px``)."""
+        """Return how far (m) line ``side`` may lie from its track at the car: ``max_jump_m``, or the
+        re-acquisition band's half width while re-acquired (``roads.proposers.reacquire_half_px``).
+        """
         return max(self.config.max_jump_m, reacquire_half_px(self, side) * self.xm)
 
     def agree(self, now, before) -> str:
-        """Return how a line lies within ``max_jump_m`` at the car and ``max_bend_m`` in shape of
-        another (pixel coefficients of both), "" when it does not: a pitched start's pairs and a
-        restart's line (``start.pitched_start``, ``roads.checks.restart``) agree so with the
-        previous frame's."""
+        """Return how a line lies within ``max_jump_m`` at the car and ``max_bend_m`` in shape of another
+        (both pixel coefficients), "" when it does not (``start.pitched_start``, ``roads.checks.restart``).
+        """
         dx = (np.polyval(now, self.rows) - np.polyval(before, self.rows)) * self.xm
         if abs(dx[-1]) > self.config.max_jump_m or dx.max() - dx.min() > self.config.max_bend_m:
             return ""
@@ -239,15 +237,13 @@ class LaneTracker:
 
     def inferred_line(self, seen: np.ndarray, track, side: int, top_px: int,
                       spread: np.ndarray | None = None) -> np.ndarray:
-        """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the
-        ``seen`` line moved along its normal by the lane's width on each row from ``top_px`` down
-        (``fit.offset_line``), so it has the seen line's shape.
+        """Return the pixel coefficients of the missing line ``side`` (0 left, 1 right): the ``seen`` line
+        moved along its normal by the lane's width on each row from ``top_px`` (``fit.offset_line``).
 
-        At the car the width is the one seen there in the last frames that saw both lines
-        (``seen_width_m``): a width read back from inferred lines drifts frame after frame.
-        Ahead it follows the tracked lane's width scaled to it (a grade widens or narrows the flat
-        view's lane), or with a ``spread`` (a double line's stripes) the seen width times it.
-        Without a ``track`` (a restart from one line) the width is the one seen before the loss.
+        At the car the width is that seen in the last frames with both lines (``seen_width_m``): a width
+        read back from inferred lines drifts. Ahead it follows the tracked width (a grade changes the
+        flat view's lane), or with ``spread`` (a double line's stripes) the seen width times it. Without
+        a ``track`` (a restart from one line) it is the width seen before the loss.
         """
         s = self.state
         rows = offset_rows_px(self.pipeline.size[1], top_px)

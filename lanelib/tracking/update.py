@@ -1,12 +1,11 @@
 """The end of a tracked frame: infer a missing line and smooth, or hold, or lose the lane.
 
-``accept`` takes a frame that kept at least one line: a missing line is inferred from the kept
-one (``LaneTracker.inferred_line``, confidence half the kept line's), the frame joins the
-remembered ones and the reported lane is their smoothed average. ``hold_or_lose`` takes a frame
-that kept none: the predicted lane is held for up to ``hold_frames`` frames with a confidence
-falling to zero (frames in which no search saw any line, under an overpass, are held for up to
-``blind_hold_frames`` beside them); then the track is forgotten and no lane is reported until
-a pair passes the checks.
+``accept`` takes a frame that kept a line: a missing one is inferred from it
+(``LaneTracker.inferred_line``, half its confidence) and the reported lane is the remembered
+frames' smoothed average. ``hold_or_lose`` takes a frame that kept none: the predicted lane is
+held up to ``hold_frames`` frames with a confidence falling to zero (blind frames, no line seen
+at all, as under an overpass, up to ``blind_hold_frames`` more); then the track is forgotten
+until a pair passes the checks.
 """
 from __future__ import annotations
 
@@ -91,9 +90,9 @@ def hold_or_lose(t: "LaneTracker", best: Candidate, track, images: dict, blind: 
 
 
 def _hold(t: "LaneTracker", blind: bool) -> str:
-    """Count one more frame without a lane and return the note of its hold, or "" when the hold
-    is over. A blind frame uses the ``blind_hold_frames`` first and does not count toward
-    ``hold_frames``; any other, or one beyond those, counts toward it."""
+    """Count one more frame without a lane and return its hold's note, or "" when the hold is over; a
+    blind frame uses up ``blind_hold_frames`` first, any other counts toward ``hold_frames``.
+    """
     s, cfg = t.state, t.config
     if blind and s.blind < cfg.blind_hold_frames:
         s.lost += 1
