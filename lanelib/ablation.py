@@ -110,6 +110,8 @@ PARTS: tuple[Part, ...] = (
          "a line under the car whose paint starts ahead is refused"),
     Part("vote: crossing lines kept", ("lines.refused_clear_crossings=true",), True,
          "a refused line (a vehicle's edge, scattered paint) hides no line that crosses it (culane preset)"),
+    Part("vote: seen span", ("lines.seen_window_m=0",), True,
+         "a voted line spans the rows where its runs hug it, not a vehicle's edges ahead of it"),
     Part("vote: lines followed ahead", ("lines.follow_ahead_m=0",), True,
          "each line is followed along its paint 40 m beyond the lines view (tusimple preset)"),
     Part("CLAHE", ("thresholds.clahe=true",), False,

@@ -248,3 +248,19 @@ def test_predict_reports_lines_as_far_as_their_paint_goes(settings, reach_m):
     assert [line.offset_m for line in found.lines] == pytest.approx([-1.85, 1.85], abs=0.05)
     reach = view.inverse(np.array([[view.car_x_px, view.bottom_px - reach_m / view.ym_per_px]]))[0, 1]
     assert [line.points_px[0, 1] for line in found.lines] == pytest.approx([reach, reach], abs=2.0)
+
+
+@pytest.mark.parametrize("seen_window_m, top", [(2.0, 200.0), (0.0, 100.0)])
+def test_a_line_is_seen_where_its_runs_hug_it_not_in_the_vehicle_ahead(seen_window_m, top):
+    """A line painted from the car to 20 m ahead (rows 200-399) runs into a vehicle ahead, whose
+    edges give runs 0.1-0.2 m either side of it up to 30 m (rows 100-199): the line is seen up to
+    its paint's end, where its runs stop hugging its fit; counting every run near it, up to the
+    vehicle's top."""
+    m = np.zeros((H, W), np.uint8)
+    paint(m, 300.5, rows=range(200, H))
+    for y in range(100, 200):
+        x = 300 + (-10, -6, 6, 10)[y % 4]                               # px, 0.02 m each
+        m[y, x - 1:x + 1] = 255
+    cfg = LinesConfig(min_span_m=5.0, extend_m=0.0, vote_tolerance_m=0.25, seen_window_m=seen_window_m)
+    line, = vote_lines(m, cfg, XM, YM)
+    assert abs(line.y_top_px - top) <= 1 and line.y_bottom_px == H - 1

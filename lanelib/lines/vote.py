@@ -20,7 +20,8 @@ across the road, set by the car's heading). The search, in the order it runs:
    (nearer than ``min_gap_fraction`` of a lane width, or crossing it, within the view) is
    cleared. Its runs are fitted (a parabola when they span ``curved_span_m``); with
    ``follow_bends`` they are followed by windows where the line bends away from the straight one.
-5. **Checks.** A line is refused, saying why (``Candidate.refused``), with less than
+5. **Checks.** A line is seen over the rows where its runs hug its fit (``seen_span``,
+   ``seen_window_m``). It is refused, saying why (``Candidate.refused``), with less than
    ``min_peak_m`` of paint, paint spanning less than ``min_span_m``, runs scattering more than
    ``max_scatter_m`` about the fit, or when it runs under the car (``min_offset_m``) while its
    paint starts more than ``near_paint_m`` ahead (a vehicle's edge).
@@ -113,6 +114,38 @@ def _same_cells(x0s: np.ndarray, slopes: np.ndarray, x0: float, s: float, t_max:
     if not crossing:
         return np.maximum(np.abs(d0), np.abs(d1)) < gap_px
     return (np.minimum(np.abs(d0), np.abs(d1)) < gap_px) | (d0 * d1 < 0)
+
+
+def seen_span(rows: np.ndarray, residual_px: np.ndarray, tol_px: float, window_px: float,
+              height: int) -> tuple[float, float]:
+    """Return the first and last view rows (top, bottom) where a voted line is seen, from the
+    rows of its runs and their distances from its fit (px).
+
+    The runs within ``tol_px`` of a line are its paint and whatever else lies there: texture, a
+    vehicle ahead. Paint hugs the fit; the rest spreads evenly over the tolerance, a quarter of
+    it within ``tol_px / 4``. The line is seen in the windows of ``window_px`` rows (from the
+    bottom row up) where at least half of its runs lie that close, twice the share of runs spread
+    evenly, and its span runs from the first to the last such run; ``window_px`` 0, or no such
+    window: every run's row.
+
+    Examples
+    --------
+    Paint on rows 40-99; on rows 0-39 (a vehicle ahead) runs spread over the tolerance:
+
+    >>> rows = np.arange(100.0)
+    >>> residual = np.where(rows < 40, np.tile([-10.0, -5.0, 5.0, 10.0], 25), 0.0)
+    >>> seen_span(rows, residual, 12.0, 20, 100)
+    (40.0, 99.0)
+    """
+    if window_px > 0:
+        tight = np.abs(residual_px) <= tol_px / 4
+        window = ((height - 1 - rows) // max(1.0, round(window_px))).astype(np.int64)
+        runs = np.bincount(window)
+        close = np.bincount(window, tight.astype(np.float64))
+        seen = tight & (close[window] >= 0.5 * runs[window])
+        if seen.any():
+            return float(rows[seen].min()), float(rows[seen].max())
+    return float(rows.min()), float(rows.max())
 
 
 def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: float) -> tuple | None:
@@ -212,8 +245,10 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
             near, fitted = _followed(v, near, fitted, s, config, xm_per_px, ym_per_px)
         line = None
         if fitted is not None:
-            y_near = v.rows[near]
-            line = ViewLine(fitted[0], float(y_near.min()), float(y_near.max()), int(near.sum()), fitted[1])
+            y_near = v.rows[near].astype(np.float64)
+            top, bottom = seen_span(y_near, v.xc[near] - np.polyval(fitted[0], y_near), v.tol,
+                                    config.seen_window_m / ym_per_px, v.height)
+            line = ViewLine(fitted[0], top, bottom, int(near.sum()), fitted[1])
         why = _refusal(paint * ym_per_px, line, reported, config, xm_per_px, ym_per_px, v)
         # weighed once (``refused_clear_crossings``: a refused line is no line, and the lines
         # that only cross it may stay)

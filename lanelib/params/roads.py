@@ -132,6 +132,12 @@ class LinesConfig:
     follow_bends : a voted line is also traced by windows (``window_m``, ``max_empty_windows``)
         from its paint near the car, and the traced paint is kept where it fits tighter
         (``lines.vote``): a bend of the road or the lens bends a line away from a straight one.
+    seen_window_m : a voted line is seen in the windows of this height along the road where at
+        least half of the runs near it hug its fit (within a quarter of ``vote_tolerance_m``,
+        twice the share of runs spread evenly: texture, a vehicle ahead); its span, which the
+        checks read (``min_span_m``, ``near_paint_m``) and from which it is extended, runs over
+        those windows (``lines.vote.seen_span``; 0: over every run near it). Shorter than a dash,
+        so a window on a dash is all paint.
     follow_ahead_m : the lines view goes on this far beyond ``view_ahead_m`` (0: off); the lines
         found within ``view_ahead_m`` are followed by windows (``window_m``, ``max_empty_windows``)
         along their paint into it, and each is reported as far as its paint goes
@@ -187,6 +193,7 @@ class LinesConfig:
     near_paint_m: float = 3.0
     refused_clear_crossings: bool = True
     follow_ahead_m: float = 0.0
+    seen_window_m: float = 2.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -198,8 +205,9 @@ class LinesConfig:
                               "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
-        if self.follow_ahead_m < 0:
-            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m} must be 0 (off) or more")
+        if self.follow_ahead_m < 0 or self.seen_window_m < 0:
+            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m} and seen_window_m {self.seen_window_m} "
+                              "must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
