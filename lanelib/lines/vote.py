@@ -341,21 +341,24 @@ def follow_ahead(lines: list[ViewLine], binary: np.ndarray, first_row: int, conf
     >>> far.y_top_px, far.y_bottom_px, round(float(far.x_at(60.0)), 6)
     (40.0, 150.0, 200.0)
     """
-    rows, xc = run_centres(binary, config.max_paint_width_m / xm_per_px)
+    h = binary.shape[0]
+    win = max(2, int(round(config.window_m / ym_per_px)))
+    # the rows beyond and the first window searched, where each trace starts: the trace upwards
+    # reads nothing below them
+    reach = min(h, first_row + win)
+    rows, xc = run_centres(binary[:reach], config.max_paint_width_m / xm_per_px)
     if len(rows) < 3:
         return [None] * len(lines)
-    h = binary.shape[0]
     ys = rows.astype(np.float64)
     tol = config.vote_tolerance_m / xm_per_px
-    win = max(2, int(round(config.window_m / ym_per_px)))
     least = max(3, config.min_window_pixels // 3)
-    reference_rows = np.arange(first_row, min(h, first_row + win), dtype=np.float64)
+    reference_rows = np.arange(first_row, reach, dtype=np.float64)
+    y0 = first_row + win / 2.0
     out: list[ViewLine | None] = []
     for line in lines:
-        y0 = first_row + win / 2.0
         a, b, _ = line.coeffs_px
-        idx = trace_line(ys, xc, float(line.x_at(y0)), y0, h, win, tol, 0.0, config.max_empty_windows, least,
-                         config.max_slope * ym_per_px / xm_per_px + 0.5, slope=float(2 * a * y0 + b))
+        idx = trace_line(ys, xc, float(line.x_at(y0)), y0, reach, win, tol, 0.0, config.max_empty_windows,
+                         least, config.max_slope * ym_per_px / xm_per_px + 0.5, slope=float(2 * a * y0 + b))
         far = idx[ys[idx] < first_row]
         if len(far) < least:
             out.append(None)
