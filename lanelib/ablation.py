@@ -114,6 +114,8 @@ PARTS: tuple[Part, ...] = (
          "a voted line spans the rows where its runs hug it, not a vehicle's edges ahead of it"),
     Part("vote: lines followed ahead", ("lines.follow_ahead_m=0",), True,
          "each line is followed along its paint 40 m beyond the lines view (tusimple preset)"),
+    Part("vote: paint contrast", ("lines.contrast_full=0",), True,
+         "a run votes by how clearly it is brighter than the road beside it (culane and tusimple presets)"),
     Part("CLAHE", ("thresholds.clahe=true",), False,
          "the bird's-eye view's lightness is equalised before the masks"),
     Part("window histogram", ("search.window_histogram=true",), False,

@@ -190,13 +190,26 @@ def _integer_sobel_mask(gray: np.ndarray, spec: SobelMask) -> np.ndarray:
     return cv2.bitwise_or(cv2.inRange(s, lo, hi), cv2.inRange(s, -hi, -lo))
 
 
-def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
-    """Return the 0/255 mask of pixels brighter than their surroundings by [low, high] levels
-    (and, with ``spec.ratio``, by that multiple of the surroundings; see ``TopHatMask``)."""
+def tophat_levels(rgb: np.ndarray | Channels, spec: TopHatMask) -> tuple[np.ndarray, np.ndarray]:
+    """Return how much each pixel is brighter than its surroundings (uint8 levels of
+    ``spec.channel``), and the surroundings: a horizontal white top-hat ``spec.width_px`` wide.
+
+    Examples
+    --------
+    >>> road = np.full((1, 9, 3), 80, np.uint8); road[0, 4] = 200
+    >>> tophat_levels(road, TopHatMask(space="gray", channel="y", width_px=5))[0].tolist()
+    [[0, 0, 0, 0, 120, 0, 0, 0, 0]]
+    """
     ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
     values = ch.channel(spec.space, spec.channel)
     background = morph(values, "open", spec.width_px, 1)
-    tophat = cv2.subtract(values, background)
+    return cv2.subtract(values, background), background
+
+
+def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
+    """Return the 0/255 mask of pixels brighter than their surroundings by [low, high] levels
+    (and, with ``spec.ratio``, by that multiple of the surroundings; see ``TopHatMask``)."""
+    tophat, background = tophat_levels(rgb, spec)
     if spec.ratio <= 0 and spec.max_background >= 255:
         out = in_range(tophat, spec.low, spec.high)
     else:

@@ -264,3 +264,18 @@ def test_a_line_is_seen_where_its_runs_hug_it_not_in_the_vehicle_ahead(seen_wind
     cfg = LinesConfig(min_span_m=5.0, extend_m=0.0, vote_tolerance_m=0.25, seen_window_m=seen_window_m)
     line, = vote_lines(m, cfg, XM, YM)
     assert abs(line.y_top_px - top) <= 1 and line.y_bottom_px == H - 1
+
+
+@pytest.mark.parametrize("use_strength, x_bottom", [(True, 300.5), (False, 340.5)])
+def test_a_faint_seam_beside_dashed_paint_outvotes_it_only_when_every_run_counts_alike(use_strength, x_bottom):
+    """Dashes (3 m paint, 3 m gap: 20 m of paint in 40 m) and, 0.8 m beside them, a seam along
+    the whole view that passes the mask's floor but barely (strength 0.5: counts half): one line
+    is reported there. By its strength the paint's 20 m outvote the seam's 40 m at half; every
+    run alike, the seam's 40 m win."""
+    m = np.zeros((H, W), np.uint8)
+    paint(m, 300.5, rows=[y for y in range(H) if y % 60 < 30])
+    paint(m, 340.5)
+    strength = np.ones((H, W), np.float32)
+    strength[:, 330:350] = 0.5
+    weighed = vote_candidates(m, CFG, XM, YM, strength=strength if use_strength else None)
+    assert xs_at_bottom(reported(weighed, CFG, H, YM)) == [x_bottom]

@@ -69,6 +69,32 @@ def row_weights(setup: LinesSetup, config: LinesConfig) -> np.ndarray:
     return np.clip(seen / config.row_weight_full, 0.0, 1.0) ** config.row_weight_power
 
 
+def paint_strength(view: np.ndarray | thresholds.Channels, tconf: thresholds.ThresholdConfig,
+                   config: LinesConfig) -> np.ndarray | None:
+    """Return how much a run of paint on each pixel of the view counts in the vote
+    (``LinesConfig.contrast_full``; None when off): its top-hat (``tconf.line_tophat``) over
+    ``contrast_full`` times the lowest top-hat floor the mask takes (``line_tophat.low``, or
+    ``LinesConfig.tophat_low`` when lower), between one half and 1. Paint stands out from the
+    road; a seam, a barrier's foot or a vehicle's edge that passes the floor barely does, and
+    counts half as much.
+
+    ``view`` is the view's RGB image, or its ``thresholds.Channels`` made already.
+
+    Examples
+    --------
+    >>> view = np.full((1, 80, 3), 90, np.uint8); view[0, 10:14] = 102; view[0, 50:54] = 200
+    >>> s = paint_strength(view, thresholds.ThresholdConfig(), LinesConfig(contrast_full=2))
+    >>> float(s[0, 12]), float(s[0, 52]), float(s[0, 30])
+    (0.5, 1.0, 0.5)
+    """
+    if config.contrast_full <= 0 or not tconf.line_tophat.enabled:
+        return None
+    spec = tconf.line_tophat
+    floor = min(spec.low, config.tophat_low) if config.tophat_low > 0 else spec.low
+    levels = thresholds.tophat_levels(view, spec)[0]
+    return np.clip(levels.astype(np.float32) / (config.contrast_full * max(floor, 1)), 0.5, 1.0)
+
+
 def search_first_row(view, config: LinesConfig) -> int:
     """Return the first row of the lines view that the search looks at: the row ``view_ahead_m``
     ahead of the ego view's bottom row when the view goes on beyond it (``follow_ahead_m``),
@@ -94,7 +120,8 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     """
     view, maps, tconf = setup.view, setup.maps, setup.tconf
     bird = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
-    mask = thresholds.combine(bird, tconf)
+    made = thresholds.Made()
+    mask = thresholds.combine(bird, tconf, made=made)
     if config.tophat_low and tconf.line_tophat.enabled:  # far paint: blurred, dimmer
         far = replace(tconf.line_tophat, low=min(config.tophat_low, tconf.line_tophat.low))
         low = thresholds.mask(bird, far)
@@ -111,8 +138,10 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     first = search_first_row(view, config)
     refused: tuple = ()
     if config.method == "vote":
+        strength = paint_strength(bird if made.channels is None else made.channels, tconf, config)
         weighed = vote.vote_candidates(mask[first:], config, view.xm_per_px, view.ym_per_px, view.car_x_px,
-                                       None if weights is None else weights[first:])
+                                       None if weights is None else weights[first:],
+                                       None if strength is None else strength[first:])
         found = vote.reported(weighed, config, mask.shape[0] - first, view.ym_per_px)
         refused = tuple((c.line, c.refused) for c in weighed if c.refused and c.line is not None)
     else:

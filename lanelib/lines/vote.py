@@ -10,7 +10,8 @@ across the road, set by the car's heading). The search, in the order it runs:
    wider run (a car, a shadow's edge, a verge) casts no vote (``run_centres``).
 2. **Vote.** Each run's centre votes for the ``(x0, s)`` cells it lies on, within
    ``vote_tolerance_m``; a cell's votes are the metres of road along which the line has paint,
-   a far row counting less when ``row_weights`` say it sees less of the frame; a cell keeps
+   a far row counting less when ``row_weights`` say it sees less of the frame, and a run less
+   when its ``strength`` says it is barely brighter than the road beside it; a cell keeps
    what stands above the mean of its slope's cells (texture votes everywhere alike).
 3. **Heading.** Lane lines are parallel: only slopes within ``heading_spread`` of a common
    heading count. The ``headings`` slopes with the most strong votes are tried, and the one whose
@@ -163,7 +164,7 @@ def _fit(t: np.ndarray, xc: np.ndarray, near: np.ndarray, h: int, curved_px: flo
 
 def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_per_px: float = 0.016,
                     ym_per_px: float = 0.1, car_x_px: float | None = None,
-                    row_weights: np.ndarray | None = None) -> list[Candidate]:
+                    row_weights: np.ndarray | None = None, strength: np.ndarray | None = None) -> list[Candidate]:
     """Return every straight line the vote weighs in a bird's-eye lane mask, strongest first, each
     with its fit and why it is refused ("" for a reported line).
 
@@ -180,6 +181,8 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     binary, config, xm_per_px, ym_per_px : as for ``vote_lines``.
     car_x_px : the car's centre line in the view (px); None: the view's middle column.
     row_weights : how much each row of the view counts in the vote (None: every row alike).
+    strength : how much a run centred on each pixel of the view counts in the vote, 0-1
+        (``lines.detect.paint_strength``; None: every run alike).
 
     Examples
     --------
@@ -196,7 +199,11 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     max_slope = config.max_slope * ym_per_px / xm_per_px  # px across per px along
     tol = config.vote_tolerance_m / xm_per_px
     slopes = np.arange(-max_slope, max_slope + 1e-9, max(tol / 2, 1.0) / max(h, 1))
-    table = _votes(t, xc, slopes, tol, w, None if row_weights is None else row_weights[rows])
+    weights = None if row_weights is None else row_weights[rows]
+    if strength is not None:
+        clear = strength[rows, np.clip(np.rint(xc).astype(np.int64), 0, w - 1)]
+        weights = clear if weights is None else weights * clear
+    table = _votes(t, xc, slopes, tol, w, weights)
     least = config.min_peak_m / ym_per_px
     spread = config.heading_spread * ym_per_px / xm_per_px
     votes = _Votes(rows, t, xc, slopes, np.arange(table.shape[1]) * tol, h, tol,

@@ -150,6 +150,11 @@ class LinesConfig:
     headings : how many common headings the vote tries (the slopes with the most strong votes,
         ``heading_spread`` apart); it keeps the one whose reported lines hold the most paint
         (junk beside the road can outvote the paint for a heading, but not pass as lines).
+    contrast_full : a run votes by how clearly it is brighter than the road beside it
+        (``lines.detect.paint_strength``; 0: every run alike): its top-hat over this multiple
+        of the lowest top-hat floor of the lines view's mask, between one half and 1. Paint
+        stands out from the road; a concrete seam, a barrier's foot or a vehicle's edge beside a
+        line passes the floor but barely, and outvotes the paint less.
     refused_clear_crossings : a weighed line clears the vote cells of the lines that cross it
         in the view (they would be the same paint counted twice); False: a refused line (too
         scattered, a vehicle's edge) clears only its own cells, so a lane line it crosses is
@@ -194,6 +199,7 @@ class LinesConfig:
     refused_clear_crossings: bool = True
     follow_ahead_m: float = 0.0
     seen_window_m: float = 2.0
+    contrast_full: float = 0.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -205,9 +211,9 @@ class LinesConfig:
                               "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
-        if self.follow_ahead_m < 0 or self.seen_window_m < 0:
-            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m} and seen_window_m {self.seen_window_m} "
-                              "must be 0 (off) or more")
+        if self.follow_ahead_m < 0 or self.seen_window_m < 0 or self.contrast_full < 0:
+            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m}, seen_window_m {self.seen_window_m} and "
+                              f"contrast_full {self.contrast_full} must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
