@@ -1,5 +1,5 @@
 """Video files through imageio-ffmpeg: reading frames (all, a span, or one by seeking), the video's
-size and frame rate, writing H.264 mp4s, and joining the parts of a segmented run.
+size and frame rate, writing H.264 mp4s.
 
 Frames are RGB ``uint8`` arrays (H x W x 3). A broken or truncated video raises ``InputError`` or
 ``DecodeStoppedError`` naming the file and ffmpeg's cause; outputs go through
@@ -11,7 +11,6 @@ import contextlib
 import math
 import os
 import re
-import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -330,35 +329,3 @@ class VideoWriter:
             self.close()
         else:
             self.abort()
-
-
-def join_videos(parts: Iterable[str | os.PathLike], path: str | os.PathLike,
-                inputs: Iterable[str | os.PathLike] = ()) -> Path:
-    """Write the videos ``parts`` one after the other to ``path``, atomically; return the path.
-
-    The parts (same codec, size and frame rate: one run's segments) are joined by ffmpeg's concat
-    demuxer without re-encoding (``-c copy``), so the frames are those of the parts.
-
-    Raises
-    ------
-    InputError
-        If there is no part, or ffmpeg cannot join them (its cause in the message).
-    """
-    parts = [Path(p).resolve() for p in parts]
-    target = Path(path)
-    if not parts:
-        raise InputError(f"{target}: no video parts to join")
-    with atomic_path(target, inputs=[*inputs, *parts]) as tmp:
-        listing = tmp.with_name(tmp.name + ".txt")
-        # the concat demuxer's list: one `file '...'` line per part, quotes escaped as '\''
-        listing.write_text("".join("file '" + str(p).replace("'", "'\\''") + "'\n" for p in parts))
-        try:
-            done = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-v", "error", "-f", "concat",
-                                   "-safe", "0", "-i", str(listing), "-c", "copy", "-map", "0:v",
-                                   str(tmp)], capture_output=True, text=True)
-        finally:
-            listing.unlink(missing_ok=True)
-        if done.returncode != 0:
-            raise InputError(f"{target}: ffmpeg could not join {len(parts)} video parts "
-                             f"({ffmpeg_cause(done.stderr)}); check the parts ({parts[0]}, ...)")
-    return target
