@@ -27,11 +27,12 @@ import numpy as np
 import pytest
 
 from lanelib import batch, cluster, evaluate, hough, io
+from lanelib.batch.pipelines import pipeline_for
 from lanelib.batch.segments import join_videos
 from lanelib.cli import main
 from lanelib.config import preset
 from lanelib.errors import InputError
-from lanelib.pipeline import LanePipeline, pipeline_for
+from lanelib.pipeline import LanePipeline
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
