@@ -200,17 +200,6 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
                        tuple(sorted(reasons)), reasons)
 
 
-def parse_pattern(text: str) -> tuple[int, int]:
-    """Return (cols, rows) from a pattern like "9x6"; anything else raises InputError."""
-    try:
-        cols, rows = (int(v) for v in text.lower().split("x"))
-        if cols < 2 or rows < 2:
-            raise ValueError
-    except ValueError:
-        raise InputError(f"pattern {text!r}: give inner corners as COLSxROWS, e.g. 9x6") from None
-    return cols, rows
-
-
 def distort_points(calibration: Calibration, pts: np.ndarray) -> np.ndarray:
     """Map (N, 2) undistorted pixel positions to where they lie in the raw (distorted) image."""
     K = calibration.camera_matrix

@@ -9,7 +9,7 @@ import pytest
 
 from lanelib import io
 from lanelib.camera import (MODEL_MARGIN, Calibration, Lens, Undistorter, board_points, calibrate,
-                            distort_points, parse_pattern, undistort_points)
+                            distort_points, undistort_points)
 from lanelib.errors import CalibrationError, InputError
 from lanelib.perspective import Perspective
 
@@ -240,12 +240,6 @@ def test_remap_maps_of_the_chain_are_the_old_composed_maps(cal):
         m = und.lens.undistort_maps()
         ref = cv2.initUndistortRectifyMap(K, DIST, None, K, (1280, 720), cv2.CV_16SC2)
         assert np.array_equal(m[0], ref[0]) and np.array_equal(m[1], ref[1])
-
-
-def test_parse_pattern():
-    assert parse_pattern("9x6") == (9, 6)
-    with pytest.raises(InputError, match="COLSxROWS"):
-        parse_pattern("nine")
 
 
 def test_board_points_layout():
