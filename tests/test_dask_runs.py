@@ -29,6 +29,7 @@ import pytest
 from lanelib import batch, cluster, evaluate, hough, io
 from lanelib.batch.pipelines import pipeline_for
 from lanelib.batch.segments import join_videos
+from lanelib.batch.video import VideoWriter
 from lanelib.cli import main
 from lanelib.config import preset
 from lanelib.errors import InputError
@@ -93,7 +94,7 @@ def test_join_videos_round_trip(tmp_path):
     rng = np.random.default_rng(0)
     shown = []
     for name, n in (("a.mp4", 5), ("b.mp4", 7)):
-        with io.VideoWriter(tmp_path / name, 25) as w:
+        with VideoWriter(tmp_path / name, 25) as w:
             for _ in range(n):
                 shown.append(np.repeat(rng.integers(0, 256, (6, 8, 3), np.uint8), 8, 0).repeat(8, 1))
                 w.write(shown[-1])

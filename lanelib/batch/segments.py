@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from .. import cluster, io
 from ..errors import DecodeStoppedError, InputError, PartialOutputError
-from .video import FrameFn, VideoRun, CsvLog, clip_frames
+from .video import FrameFn, VideoRun, VideoWriter, CsvLog, clip_frames
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
         try:
             try:
                 reader = io.VideoReader(in_path, first, None if to_end else stop)
-                writer = io.VideoWriter(parts / f"{start:09d}.mp4", reader.info.fps, inputs=[in_path],
+                writer = VideoWriter(parts / f"{start:09d}.mp4", reader.info.fps, inputs=[in_path],
                                         threads=threads)
                 with reader:
                     for n, frame in enumerate(reader):
