@@ -9,7 +9,7 @@
   thread, interleaved with it; ``detect_to_remap`` = their ratio (goal <= 2.5).
 - ``video_fps``: the whole ``video`` command (``batch.process_video``: decode, track, draw,
   encode) on a 1280x720 clip; ``codec_fps``: decode plus encode of the same clip with the same
-  encoder settings (``io.H264_PARAMS`` through ``io.VideoWriter``) and nothing else;
+  encoder settings (``batch.video.H264_PARAMS`` through ``batch.video.VideoWriter``) and nothing else;
   ``video_to_codec`` = their ratio (goal >= 0.7). The two runs alternate and the faster of each
   counts, so a burst of load on the machine does not decide the ratio. Beside them, the CPU
   time per frame of each run (this process and its ffmpeg children): their ratio is what the
@@ -61,6 +61,7 @@ from .evaluate import calibration_from_truth
 from .pipeline import LanePipeline
 from .autogeometry import GeometryOptions
 from .batch import process_video, sample_frames
+from .batch.video import VideoWriter
 from .tracking import LaneTracker
 
 GOALS = {"detect_to_remap": ("<=", 2.5), "video_to_codec": (">=", 0.7), "robust_to_remap": ("<=", 3.0)}
@@ -220,7 +221,7 @@ def codec_run(clip: Path, out: Path) -> tuple[float, float]:
     """Return (fps, CPU ms per frame) of decoding ``clip`` and encoding it again, nothing else."""
     start = _clock()
     n = 0
-    with io.VideoReader(clip) as reader, io.VideoWriter(out, reader.info.fps, inputs=[clip]) as writer:
+    with io.VideoReader(clip) as reader, VideoWriter(out, reader.info.fps, inputs=[clip]) as writer:
         for frame in reader:
             writer.write(frame)
             n += 1
@@ -250,7 +251,7 @@ def run(video: Path | None = None, calibration: Calibration | None = None,
     with tempfile.TemporaryDirectory(prefix="lanelib-bench-") as tmp:
         clip = Path(tmp) / "clip.mp4"
         frames = []
-        with io.VideoReader(video) as reader, io.VideoWriter(clip, reader.info.fps, inputs=[video]) as w:
+        with io.VideoReader(video) as reader, VideoWriter(clip, reader.info.fps, inputs=[video]) as w:
             size = reader.info.size
             for i, frame in enumerate(reader):
                 if i >= clip_frames:

@@ -200,17 +200,6 @@ def calibrate(folder: str | os.PathLike, pattern: tuple[int, int] = (9, 6),
                        tuple(sorted(reasons)), reasons)
 
 
-def parse_pattern(text: str) -> tuple[int, int]:
-    """Return (cols, rows) from a pattern like "9x6"; anything else raises InputError."""
-    try:
-        cols, rows = (int(v) for v in text.lower().split("x"))
-        if cols < 2 or rows < 2:
-            raise ValueError
-    except ValueError:
-        raise InputError(f"pattern {text!r}: give inner corners as COLSxROWS, e.g. 9x6") from None
-    return cols, rows
-
-
 def distort_points(calibration: Calibration, pts: np.ndarray) -> np.ndarray:
     """Map (N, 2) undistorted pixel positions to where they lie in the raw (distorted) image."""
     K = calibration.camera_matrix
@@ -311,8 +300,9 @@ class Lens(Transform):
     def undistort_maps(self, pad: tuple[int, int] = (0, 0), m1type: int = cv2.CV_16SC2):
         """Return the ``cv2.remap`` maps (map1, map2) that undistort a raw frame onto a canvas ``pad``
         (px in x, y) larger on each side: (0, 0) for the frame's undistortion (``Undistorter``), more
-        to hold what moves beyond the frame (``FastBirdseye``). ``m1type``: OpenCV's map type
-        (``cv2.CV_32FC2`` gives map2 None). The identity lens gives the plain pixel grid.
+        to hold what moves beyond the frame (``widgets.perspective.FastBirdseye``). ``m1type``:
+        OpenCV's map type (``cv2.CV_32FC2`` gives map2 None). The identity lens gives the plain pixel
+        grid.
         """
         w, h = self.size
         px, py = int(pad[0]), int(pad[1])
@@ -390,29 +380,3 @@ class Undistorter:
         """
         to_raw = Homography(Minv) + self.lens
         return to_raw.inverse.remap_maps(out_size)
-
-
-class FastBirdseye:
-    """Bird's-eye views of raw frames for any perspective, as the pipeline's remap makes them, quickly.
-
-    The exact composed remap (``(lens.inverse + perspective).remap_maps``) is too slow for a
-    slider. Here the undistortion map of a canvas ``MODEL_MARGIN`` larger on each side (as far as
-    ``Lens.valid`` lets the pipeline sample) is made once, and a perspective's maps are that map
-    warped by its inverse: within 2 grey levels of the pipeline's view (warping the undistorted
-    frame instead interpolates twice and moves marginal line pixels).
-    """
-
-    def __init__(self, lens: Lens):
-        w, h = lens.size
-        self.pad = (int(w * MODEL_MARGIN), int(h * MODEL_MARGIN))
-        self.map = lens.undistort_maps(self.pad, cv2.CV_32FC2)[0]
-        self.size = (w, h)
-
-    def birdseye(self, raw: np.ndarray, perspective: Homography) -> np.ndarray:
-        """Return the bird's-eye view of a RAW frame for ``perspective`` (undistorted -> view)."""
-        to_canvas = (np.array([[1, 0, self.pad[0]], [0, 1, self.pad[1]], [0, 0, 1]], float)
-                     @ perspective.inverse.params)
-        maps = cv2.warpPerspective(self.map, to_canvas, self.size,
-                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_CONSTANT, borderValue=(-1, -1, -1, -1))
-        return cv2.remap(raw, maps, None, cv2.INTER_LINEAR)

@@ -239,19 +239,6 @@ def preset_settings(name: str) -> tuple[str, ...]:
     return tuple(flat(data, ""))
 
 
-def benchmark_config(benchmark: str) -> PipelineConfig:
-    """Return the config a benchmark's frames are predicted with by default: the bundled preset named
-    like it (``tusimple``, ``culane``: its fixed camera), else the built-in one; frames of another
-    size get its points scaled (``pipeline.LanePipeline``).
-
-    Examples
-    --------
-    >>> benchmark_config("no such benchmark") == PipelineConfig()
-    True
-    """
-    return preset(benchmark) if benchmark in preset_names() else PipelineConfig()
-
-
 def load_config_or_preset(spec: str | os.PathLike) -> PipelineConfig:
     """Return the PipelineConfig in the JSON file ``spec``, or the bundled preset named ``spec`` (a
     file that exists wins).

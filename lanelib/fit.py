@@ -144,17 +144,6 @@ def normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
     return y, m, t, t2, t3, st, x0, x, xt, sx
 
 
-def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return each distinct key of ``keys`` (a row, or a shrunk grid's row; ascending) and the
-    median of the ``xs`` that share it (``np.median``'s, for all rows at once)."""
-    keys, xs = np.asarray(keys), np.asarray(xs, float)
-    order = np.lexsort((xs, keys))
-    k, v = keys[order], xs[order]
-    rows, first, counts = np.unique(k, return_index=True, return_counts=True)
-    lo, hi = first + (counts - 1) // 2, first + counts // 2
-    return rows, (v[lo] + v[hi]) / 2
-
-
 def parallel_fits(left: LineFit, right: LineFit, left_pixels, right_pixels, height_px: int,
                   config: SearchConfig = SearchConfig()) -> tuple[LineFit, LineFit]:
     """Return the two fits with a short line's curvature taken from the other, longer line.

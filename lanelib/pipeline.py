@@ -334,9 +334,3 @@ def _rejected(fit: LineFit, why: str) -> LineFit:
     if not why or not fit.found:
         return fit
     return LineFit(None, fit.n_pixels, fit.span_px, why, fit.scatter_px)
-
-
-def pipeline_for(image: np.ndarray, config: PipelineConfig = PipelineConfig(),
-                 calibration: Calibration | None = None) -> LanePipeline:
-    """Return a LanePipeline for frames of ``image``'s size."""
-    return LanePipeline(config, calibration, size=(image.shape[1], image.shape[0]))

@@ -4,7 +4,7 @@
 scoreboard``, ``make scoreboard``):
 
 - **CULane dev** (``data.culane_dev``): every listed frame predicted on its own
-  (``batch.predict_benchmark``: every line seen, up to two a side) with ``config.benchmark_config``
+  (``batch.predict_benchmark``: every line seen, up to two a side) with ``batch.benchmark_config``
   and scored by CULane's official rules (30 px lines on 1640x590, IoU > 0.5): precision, recall, F1.
 - **TuSimple dev** (``data.tusimple_dev``): its 512x288 frames upscaled to 1280x720
   (``upscaled_tusimple``: bicubic, PNG, written once into a cache folder under ``out``), predicted
@@ -43,7 +43,7 @@ from .bench import one_thread
 from .benchmarks import culane, tusimple
 from .benchmarks.metrics import MAX_RUN_TIME_MS, CULaneCounts
 from .camera import Calibration
-from .config import PipelineConfig, benchmark_config, override, preset, preset_names
+from .config import PipelineConfig, override, preset, preset_names
 from .errors import InputError, LaneLibError
 from .pipeline import LanePipeline
 from .synth.datasets import write_dataset
@@ -257,7 +257,7 @@ def _predict_ms(run: batch.PredictRun) -> int | None:
 def _culane_dev(out: Path, settings: Settings) -> Measured:
     root = _need(data.CULANE_DEV)
     listed = root / data.CULANE_DEV_LIST
-    run = _predict("culane", root, out / "culane", listed, override(benchmark_config("culane"), settings))
+    run = _predict("culane", root, out / "culane", listed, override(batch.benchmark_config("culane"), settings))
     c = culane.evaluate(root, listed, run.output).counts
     return Measured(f"{listed}; {_config_name('culane')}", c.images, detection_figures(c.tp, c.fp, c.fn),
                     _predict_ms(run))
@@ -291,7 +291,7 @@ def _tusimple_dev(out: Path, settings: Settings) -> Measured:
     root = _need(data.TUSIMPLE_DEV)
     labels = upscaled_tusimple(root, out / TUSIMPLE_CACHE)
     run = _predict("tusimple", labels.parent, out / "tusimple", labels,
-                   override(benchmark_config("tusimple"), settings))
+                   override(batch.benchmark_config("tusimple"), settings))
     s = tusimple.evaluate(labels, run.output)
     return Measured(f"{root / data.TUSIMPLE_DEV_FULLRES}, frames upscaled to 1280x720; "
                     f"{_config_name('tusimple')}", s.images,

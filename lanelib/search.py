@@ -39,28 +39,6 @@ def find_bases(hist: np.ndarray, car_x: float | None = None) -> tuple[float | No
     return (None if left is None else float(left), None if right is None else float(right))
 
 
-def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
-                    min_gap_px: float) -> tuple[list[float], list[float]]:
-    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``: columns
-    holding the most pixels within ``min_gap_px`` either side (one per line), never empty ones.
-    """
-    mid = int(car_x if car_x is not None else len(hist) / 2)
-    r = max(1, int(min_gap_px))
-    kernel = np.ones((1, 2 * r + 1), np.uint8)
-    local_max = cv2.dilate(hist.astype(np.float32).reshape(1, -1), kernel).ravel()
-    peaks = np.flatnonzero((hist > 0) & (hist >= local_max))
-    out = []
-    for side in (peaks[peaks < mid], peaks[peaks >= mid]):
-        chosen: list[float] = []
-        for x in side[np.argsort(-hist[side], kind="stable")]:
-            if all(abs(x - c) >= min_gap_px for c in chosen):
-                chosen.append(float(x))
-            if len(chosen) == count:
-                break
-        out.append(chosen)
-    return out[0], out[1]
-
-
 def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
     """Return how much the histogram's peak at column ``x`` stands out, (peak - mean) / mean: 0 for a
     flat or empty histogram, large for one strong line on an empty view; None for no base.

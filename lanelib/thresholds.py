@@ -13,7 +13,7 @@ from __future__ import annotations
 import ast
 import functools
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Callable
 
 import cv2
@@ -359,31 +359,3 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
     if config.close_px > 1:
         out = morph(out, "close", config.close_px, config.close_px)
     return out
-
-
-def _scale_px(v: int, factor: float, least: int = 1) -> int:
-    """Return ``v`` px times ``factor``, rounded, at least ``least`` (0 stays 0: off)."""
-    return 0 if v == 0 else max(least, int(round(v * factor)))
-
-
-def scaled(config: ThresholdConfig, factor: float) -> ThresholdConfig:
-    """Return ``config`` for a view whose pixels are ``1 / factor`` times as wide across the road (e.g.
-    ``lines.view.LinesView``: its px per metre over the ego view's). Widths across scale by
-    ``factor``: top-hat ``width_px`` (at least 3) and ``min_width_px`` (1 stays off; below the
-    width), ``open_px`` and ``close_px`` (0 stays off), ``clahe_tile_px`` (at least 8). Colour
-    bounds and Sobel kernels do not change.
-    """
-    if factor <= 0:
-        raise ConfigError(f"thresholds.scaled: factor {factor} must be positive")
-    changes = {}
-    for name in mask_names(config):
-        spec = getattr(config, name)
-        if isinstance(spec, TopHatMask):
-            width = max(3, int(round(spec.width_px * factor)))
-            least = 1 if spec.min_width_px <= 1 else min(width - 1, _scale_px(spec.min_width_px, factor))
-            changes[name] = replace(spec, width_px=width, min_width_px=least)
-        elif isinstance(spec, (ChannelMask, ColorRange)) and spec.open_px:
-            changes[name] = replace(spec, open_px=_scale_px(spec.open_px, factor))
-    return replace(config, **changes, open_px=_scale_px(config.open_px, factor),
-                   close_px=_scale_px(config.close_px, factor),
-                   clahe_tile_px=max(8, int(round(config.clahe_tile_px * factor))))

@@ -8,7 +8,8 @@ import pytest
 from lanelib import ablation
 from lanelib.ablation import Ablation, Part
 from lanelib.cli import main
-from lanelib.config import PipelineConfig, benchmark_config, override
+from lanelib.batch import benchmark_config
+from lanelib.config import PipelineConfig, override
 from lanelib.errors import InputError
 from lanelib.scoreboard import Row
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from lanelib import io
-from lanelib.camera import (MODEL_MARGIN, Calibration, FastBirdseye, Lens, Undistorter, board_points,
-                            calibrate, distort_points, parse_pattern, undistort_points)
+from lanelib.camera import (MODEL_MARGIN, Calibration, Lens, Undistorter, board_points, calibrate,
+                            distort_points, undistort_points)
 from lanelib.errors import CalibrationError, InputError
 from lanelib.perspective import Perspective
 
@@ -240,27 +240,6 @@ def test_remap_maps_of_the_chain_are_the_old_composed_maps(cal):
         m = und.lens.undistort_maps()
         ref = cv2.initUndistortRectifyMap(K, DIST, None, K, (1280, 720), cv2.CV_16SC2)
         assert np.array_equal(m[0], ref[0]) and np.array_equal(m[1], ref[1])
-
-
-def test_fast_birdseye_takes_the_lens_and_the_perspective():
-    cal = Calibration(K, DIST, (1280, 720))
-    rng = np.random.default_rng(4)
-    raw = cv2.resize(rng.integers(0, 255, (90, 160, 3), dtype=np.uint8), (1280, 720),
-                     interpolation=cv2.INTER_CUBIC)
-    lens = Lens(cal)
-    persp = Perspective()
-    fast = FastBirdseye(lens)
-    assert fast.pad == (320, 180)
-    maps = (lens.inverse + persp).remap_maps((1280, 720))
-    exact = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
-    diff = np.abs(fast.birdseye(raw, persp).astype(int) - exact)[:680]  # above the raw frame's edge
-    assert diff.max() <= 2
-
-
-def test_parse_pattern():
-    assert parse_pattern("9x6") == (9, 6)
-    with pytest.raises(InputError, match="COLSxROWS"):
-        parse_pattern("nine")
 
 
 def test_board_points_layout():

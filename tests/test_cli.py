@@ -13,6 +13,8 @@ import pytest
 
 from lanelib import io
 from lanelib.cli import build_parser, main
+from lanelib.cli.camera import parse_pattern
+from lanelib.errors import InputError
 
 
 def run(*args):
@@ -214,3 +216,9 @@ def test_a_reader_that_goes_away_ends_the_run_quietly():
     err = p.stderr.read()
     assert p.wait() == 141
     assert "Traceback" not in err and "BrokenPipe" not in err
+
+
+def test_parse_pattern():
+    assert parse_pattern("9x6") == (9, 6)
+    with pytest.raises(InputError, match="COLSxROWS"):
+        parse_pattern("nine")

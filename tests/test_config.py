@@ -182,11 +182,3 @@ def test_the_lines_part_is_set_saved_and_loaded(tmp_path):
     assert (cfg.lines.max_slope, cfg.lines.bands) == (0.3, 3)
     save_config(cfg, tmp_path / "c.json")
     assert load_config(tmp_path / "c.json").lines == cfg.lines != PipelineConfig().lines
-
-
-def test_a_benchmark_is_predicted_with_its_preset_or_the_defaults(tmp_path, monkeypatch):
-    monkeypatch.setattr(config, "PRESETS_DIR", tmp_path)
-    assert config.benchmark_config("culane") == PipelineConfig()
-    (tmp_path / "culane.json").write_text(json.dumps({"search": {"margin_px": 61}}))
-    assert config.benchmark_config("culane").search.margin_px == 61
-    assert config.benchmark_config("tusimple") == PipelineConfig()

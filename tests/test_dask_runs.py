@@ -1,5 +1,5 @@
 """Tests of the batch runs on Dask (``images``, ``hough``, ``video`` with ``--workers`` or
-``--scheduler``; ``cluster.segments``, ``io.join_videos``): the outputs are those of one process,
+``--scheduler``; ``cluster.segments``, ``batch.segments.join_videos``): the outputs are those of one process,
 a bad item is recorded and the run goes on, a bad scheduler writes nothing.
 
 Kept small for CI: one ``LocalCluster`` of 2 one-thread workers for the module (the commands get
@@ -27,10 +27,13 @@ import numpy as np
 import pytest
 
 from lanelib import batch, cluster, evaluate, hough, io
+from lanelib.batch.pipelines import pipeline_for
+from lanelib.batch.segments import join_videos
+from lanelib.batch.video import VideoWriter
 from lanelib.cli import main
 from lanelib.config import preset
 from lanelib.errors import InputError
-from lanelib.pipeline import LanePipeline, pipeline_for
+from lanelib.pipeline import LanePipeline
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]
@@ -91,11 +94,11 @@ def test_join_videos_round_trip(tmp_path):
     rng = np.random.default_rng(0)
     shown = []
     for name, n in (("a.mp4", 5), ("b.mp4", 7)):
-        with io.VideoWriter(tmp_path / name, 25) as w:
+        with VideoWriter(tmp_path / name, 25) as w:
             for _ in range(n):
                 shown.append(np.repeat(rng.integers(0, 256, (6, 8, 3), np.uint8), 8, 0).repeat(8, 1))
                 w.write(shown[-1])
-    out = io.join_videos([tmp_path / "a.mp4", tmp_path / "b.mp4"], tmp_path / "ab.mp4")
+    out = join_videos([tmp_path / "a.mp4", tmp_path / "b.mp4"], tmp_path / "ab.mp4")
     got = frames(out)
     assert len(got) == 12
     assert io.video_info(out).fps == 25
@@ -104,7 +107,7 @@ def test_join_videos_round_trip(tmp_path):
     assert all(np.array_equal(g, p) for g, p in zip(got, parts))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "ab.mp4", "b.mp4"]  # no temporaries
     with pytest.raises(InputError, match="no video parts"):
-        io.join_videos([], tmp_path / "none.mp4")
+        join_videos([], tmp_path / "none.mp4")
 
 
 def test_a_pipeline_pickles_as_its_config_calibration_and_size():

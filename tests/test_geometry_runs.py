@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from lanelib import autogeometry, batch, io
+from lanelib.batch.video import VideoWriter
 from lanelib.camera import Calibration, calibrate
 from lanelib.cli import main
 from lanelib.config import PipelineConfig, load_config, save_config
@@ -132,7 +133,7 @@ def test_video_auto_geometry_tracks_the_lane(calibration_file, tmp_path, capsys)
 
 
 def _grey_clip(path: Path, frames: int = 20) -> Path:
-    with io.VideoWriter(path, 25.0) as w:
+    with VideoWriter(path, 25.0) as w:
         for i in range(frames):
             w.write(np.full((360, 640, 3), 90 + i % 3, np.uint8))
     return path
@@ -150,7 +151,7 @@ def test_no_road_stops_the_run_with_the_reason(tmp_path, capsys):
 
 def test_a_rotated_clip_is_refused(tmp_path, capsys):
     rotated = tmp_path / "rotated.mp4"
-    with io.VideoReader(CLIP, 0, 40) as r, io.VideoWriter(rotated, 25.0) as w:
+    with io.VideoReader(CLIP, 0, 40) as r, VideoWriter(rotated, 25.0) as w:
         for frame in r:
             w.write(np.ascontiguousarray(np.rot90(frame)))
     assert main(["geometry", str(rotated), "-o", str(tmp_path / "g.json")]) == 2
@@ -160,7 +161,7 @@ def test_a_rotated_clip_is_refused(tmp_path, capsys):
 
 def test_a_night_clip_is_refused_unless_accepted(tmp_path, capsys):
     night = tmp_path / "night.mp4"
-    with io.VideoReader(CLIP, 0, 100) as r, io.VideoWriter(night, 25.0) as w:
+    with io.VideoReader(CLIP, 0, 100) as r, VideoWriter(night, 25.0) as w:
         for frame in r:
             w.write((frame * 0.12).astype(np.uint8))
     code = main(["geometry", str(night), "-o", str(tmp_path / "g.json")])

@@ -17,6 +17,7 @@ from hypothesis.extra.numpy import arrays
 
 from lanelib import ConfigError, InputError, LaneLibError, batch, hough, io
 from lanelib import config as config_module
+from lanelib.batch.video import VideoWriter
 from lanelib.cli import main
 
 H, W = 540, 960
@@ -236,7 +237,7 @@ def test_tracker_starts_afresh_when_the_frame_size_changes():
 # --------------------------------------------------------------------------- CLI
 
 def write_clip(path, frames=8):
-    with io.VideoWriter(path, 25) as writer:
+    with VideoWriter(path, 25) as writer:
         for i in range(frames):
             writer.write(road(shift_px=i))
 

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from lanelib import io
+from lanelib.batch.video import VideoWriter
 from lanelib.errors import DecodeStoppedError, InputError
 
 
@@ -63,7 +64,7 @@ def test_list_images(tmp_path):
 
 def test_video_round_trip(tmp_path):
     path = tmp_path / "v.mp4"
-    with io.VideoWriter(path, fps=25) as w:
+    with VideoWriter(path, fps=25) as w:
         for i in range(10):
             w.write(np.full((72, 128, 3), i * 20, np.uint8))
     reader = io.VideoReader(path)
@@ -75,7 +76,7 @@ def test_video_round_trip(tmp_path):
 def test_video_writer_abort_leaves_no_file(tmp_path):
     path = tmp_path / "v.mp4"
     with pytest.raises(KeyboardInterrupt):
-        with io.VideoWriter(path, fps=25) as w:
+        with VideoWriter(path, fps=25) as w:
             w.write(np.zeros((72, 128, 3), np.uint8))
             raise KeyboardInterrupt
     assert list(tmp_path.iterdir()) == []
@@ -295,7 +296,7 @@ def test_seeking_is_frame_accurate_at_an_ntsc_frame_rate(tmp_path):
     # 29.97 fps: frame times are not round numbers, so a seek to the exact time could land a
     # hair after a frame's timestamp; each frame is a different grey level, to tell them apart
     path = tmp_path / "ntsc.mp4"
-    with io.VideoWriter(path, fps=30000 / 1001) as w:
+    with VideoWriter(path, fps=30000 / 1001) as w:
         for i in range(40):
             w.write(np.full((48, 64, 3), 6 * i, np.uint8))
     with io.VideoReader(path) as reader:

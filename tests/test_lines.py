@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from lanelib.errors import ConfigError
+from lanelib.lines.detect import scaled_thresholds
 from lanelib.lines.trace import find_lines
 from lanelib.lines.view import LinesView
-from lanelib.params import LinesConfig
+from lanelib.params import LinesConfig, ThresholdConfig, TopHatMask
 from lanelib.perspective import Perspective
 
 
@@ -109,3 +110,19 @@ def test_lines_view_remap_keeps_a_road_point():
     ys, xs = np.nonzero(out[:, :, 0] > 128)
     x, y = view([[700.0, 560.0]])[0]
     assert abs(xs.mean() - x) < 3 and abs(ys.mean() - y) < 3
+
+
+def test_scaled_thresholds_for_a_coarser_view():
+    c = ThresholdConfig()
+    s = scaled_thresholds(c, 0.36)  # the lines view: 0.016 m/px against the ego view's 0.0058
+    assert s.line_tophat.width_px == 22 and s.line_tophat.min_width_px == 4
+    assert s.shade_tophat.width_px == 22 and s.shade_tophat.ratio == c.shade_tophat.ratio
+    assert s.white == c.white and s.yellow == c.yellow and s.sobel_x == c.sobel_x and s.rule == c.rule
+    assert s.open_px == 0 and s.close_px == 0  # off stays off
+    assert s.clahe_tile_px == 58
+    assert scaled_thresholds(c, 1.0) == c
+    t = scaled_thresholds(ThresholdConfig(close_px=5, line_tophat=TopHatMask(width_px=10, min_width_px=8)), 0.1)
+    # a least width scaled below 2 px is 1: off (a 1-px opening keeps everything)
+    assert t.close_px == 1 and t.line_tophat.width_px == 3 and t.line_tophat.min_width_px == 1
+    with pytest.raises(ConfigError):
+        scaled_thresholds(c, 0.0)

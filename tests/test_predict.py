@@ -307,14 +307,14 @@ def test_predict_uses_the_benchmarks_preset_unless_told_otherwise(tmp_path, cu_r
         assert main(["predict", "culane", str(cu_root), "-o", str(tmp_path / name), "--no-progress", *extra]) == 0
         return settings_config(tmp_path / name)
 
-    assert run("default") == config.to_dict(culane_preset) == config.to_dict(config.benchmark_config("culane"))
+    assert run("default") == config.to_dict(culane_preset) == config.to_dict(batch.benchmark_config("culane"))
     assert run("highway", "--config", "highway") == config.to_dict(config.preset("highway"))
     assert run("set", "--set", "lines.min_span_m=4") == config.to_dict(
         config.override(culane_preset, ["lines.min_span_m=4"]))
     # the library's default is the CLI's
     batch.predict_benchmark("culane", cu_root, tmp_path / "library", progress=False)
     assert settings_config(tmp_path / "library") == config.to_dict(culane_preset)
-    assert config.benchmark_config("no such benchmark") == PipelineConfig()
+    assert batch.benchmark_config("no such benchmark") == PipelineConfig()
     with pytest.raises(SystemExit):
         main(["predict", "--help"])
     assert "default: the preset named like the benchmark" in " ".join(capsys.readouterr().out.split())
@@ -382,3 +382,11 @@ def test_an_unconfident_estimate_falls_back_unless_accepted(tmp_path, cu_two):
                                        auto_geometry=autogeometry.GeometryOptions(accept_low_confidence=True))
     assert [s for s, _ in accepted.geometries] == [sequence] and accepted.fallbacks == ()
     assert accepted.geometries[0][1].low_confidence
+
+
+def test_a_benchmark_is_predicted_with_its_preset_or_the_defaults(tmp_path, monkeypatch):
+    monkeypatch.setattr(config, "PRESETS_DIR", tmp_path)
+    assert batch.benchmark_config("culane") == PipelineConfig()
+    (tmp_path / "culane.json").write_text(json.dumps({"search": {"margin_px": 61}}))
+    assert batch.benchmark_config("culane").search.margin_px == 61
+    assert batch.benchmark_config("tusimple") == PipelineConfig()

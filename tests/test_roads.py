@@ -1,5 +1,6 @@
-"""The hard-road parts (``roads``): double lines read at their inner stripe (``roads.stripes``)
-and the road seen ahead (``roads.edge.road_view_top_px``), on drawn masks and views."""
+"""The hard-road parts (``roads``): double lines read at their inner stripe (``roads.stripes``),
+the road seen ahead (``roads.edge.road_view_top_px``) and the other histogram peaks
+(``roads.fallbacks.candidate_bases``), on drawn masks and views."""
 from __future__ import annotations
 
 import math
@@ -12,6 +13,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import fit_line
 from lanelib.params import SearchConfig
 from lanelib.roads.edge import road_view_interior, road_view_top_px
+from lanelib.roads.fallbacks import candidate_bases
 from lanelib.roads.stripes import inner_stripe, stripe_spacing_px, two_stripes
 from lanelib.search import fit_side, lane_pixels, sliding_windows
 
@@ -279,3 +281,16 @@ def test_the_road_view_reads_only_the_lane_interior_and_needs_a_run_of_rows():
     crest = _drawn_view(400, False)
     part = crest[rows, 500:800]
     assert road_view_top_px(part, rows, LANE_LINES, YM_VIEW, 0.15, 1.0, 1280, 500) == 407
+
+
+def test_candidate_bases_are_the_strongest_peaks_each_side_one_per_line():
+    hist = np.zeros(1280, np.int64)
+    for x, height, width in ((100, 50, 20), (300, 80, 20), (700, 60, 20), (900, 90, 20), (1100, 20, 20)):
+        hist[x - width // 2:x + width // 2] = height
+        hist[x] = height + 1  # each line's own peak column
+    left, right = candidate_bases(hist, 640.0, 2, 80)
+    assert left == [300.0, 100.0] and right == [900.0, 700.0]
+    assert candidate_bases(hist, 640.0, 5, 80) == ([300.0, 100.0], [900.0, 700.0, 1100.0])
+    assert candidate_bases(np.zeros(100, np.int64), 50.0, 3, 10) == ([], [])
+    with pytest.raises(ConfigError, match="candidates 0 must be 1"):
+        SearchConfig(candidates=0)

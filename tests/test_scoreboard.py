@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lanelib import data, evaluate, io, scoreboard
+from lanelib.batch.video import VideoWriter
 from lanelib.benchmarks import tusimple
 from lanelib.cli import main
 from lanelib.errors import InputError
@@ -163,7 +164,7 @@ def test_tusimple_frames_upscaled_once_as_png_with_their_labels(tmp_path):
 def test_a_clip_is_tracked_as_the_video_command_tracks_it(tmp_path):
     clip = tmp_path / "cut.mp4"
     source = data.bundled("videos") / "project.mp4"
-    with io.VideoReader(source) as reader, io.VideoWriter(clip, reader.info.fps) as writer:
+    with io.VideoReader(source) as reader, VideoWriter(clip, reader.info.fps) as writer:
         for i, frame in zip(range(20), reader):
             writer.write(frame)
     run = scoreboard.track_clip(clip, calibration=evaluate.calibration_from_truth(source))

@@ -12,7 +12,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import measure
 from lanelib.params import SearchConfig
 from lanelib.records import LineFit
-from lanelib.search import (base_peak_confidence, candidate_bases, find_bases, histogram, search_around,
+from lanelib.search import (base_peak_confidence, find_bases, histogram, search_around,
                             sliding_windows)
 
 H, W = 720, 1280
@@ -170,19 +170,6 @@ def test_bad_search_switches():
         SearchConfig(trim_outliers_pct=120)
     with pytest.raises(ConfigError, match="grow_margin_px"):
         SearchConfig(grow_margin_px=-5)
-
-
-def test_candidate_bases_are_the_strongest_peaks_each_side_one_per_line():
-    hist = np.zeros(1280, np.int64)
-    for x, height, width in ((100, 50, 20), (300, 80, 20), (700, 60, 20), (900, 90, 20), (1100, 20, 20)):
-        hist[x - width // 2:x + width // 2] = height
-        hist[x] = height + 1  # each line's own peak column
-    left, right = candidate_bases(hist, 640.0, 2, 80)
-    assert left == [300.0, 100.0] and right == [900.0, 700.0]
-    assert candidate_bases(hist, 640.0, 5, 80) == ([300.0, 100.0], [900.0, 700.0, 1100.0])
-    assert candidate_bases(np.zeros(100, np.int64), 50.0, 3, 10) == ([], [])
-    with pytest.raises(ConfigError, match="candidates 0 must be 1"):
-        SearchConfig(candidates=0)
 
 
 # --------------------------------------------------------------------------- country roads (issue 16)

@@ -37,7 +37,6 @@ def test_masks_are_uint8_zero_or_255(road):
         assert m.dtype == np.uint8 and set(np.unique(m)) <= {0, 255}, name
 
 
-
 def test_channels_cut_from_a_larger_image_equal_those_of_the_pieces(road):
     """``Channels.cut``: the pieces of an image side by side, with the colour spaces converted so
     far cut alike, give the same spaces and masks as the pieces converted on their own."""
@@ -325,19 +324,3 @@ def test_an_even_opening_still_drops_what_is_narrower_than_it():
     assert cols(th.morph(m, "open", 3, 1)) == set(range(10, 13)) | set(range(25, 29))
     with pytest.raises(ValueError, match="'open' or 'close'"):
         th.morph(m, "erode", 3, 3)
-
-
-def test_scaled_thresholds_for_a_coarser_view():
-    c = th.ThresholdConfig()
-    s = th.scaled(c, 0.36)  # the lines view: 0.016 m/px against the ego view's 0.0058
-    assert s.line_tophat.width_px == 22 and s.line_tophat.min_width_px == 4
-    assert s.shade_tophat.width_px == 22 and s.shade_tophat.ratio == c.shade_tophat.ratio
-    assert s.white == c.white and s.yellow == c.yellow and s.sobel_x == c.sobel_x and s.rule == c.rule
-    assert s.open_px == 0 and s.close_px == 0  # off stays off
-    assert s.clahe_tile_px == 58
-    assert th.scaled(c, 1.0) == c
-    t = th.scaled(th.ThresholdConfig(close_px=5, line_tophat=th.TopHatMask(width_px=10, min_width_px=8)), 0.1)
-    # a least width scaled below 2 px is 1: off (a 1-px opening keeps everything)
-    assert t.close_px == 1 and t.line_tophat.width_px == 3 and t.line_tophat.min_width_px == 1
-    with pytest.raises(ConfigError):
-        th.scaled(c, 0.0)

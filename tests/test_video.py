@@ -21,6 +21,7 @@ from lanelib.config import PipelineConfig, load_config_or_preset, preset
 from lanelib.errors import ConfigError, DecodeStoppedError
 from lanelib.pipeline import LanePipeline
 from lanelib.batch import VIDEO_LOG_COLUMNS, process_video
+from lanelib.batch.video import VideoWriter
 
 COLUMNS = ["frame", "time_s", "found", "method", "left_conf", "right_conf", "radius_m", "offset_m",
            "lane_width_m", "left_a", "left_b", "left_c", "right_a", "right_b", "right_c",
@@ -44,7 +45,7 @@ def column(rows: list[dict], name: str) -> np.ndarray:
 def drawn_clip(path, n: int = 12, fps: float = 12.5, shift_px_per_frame: float = 2.0):
     """Write a clip of a straight lane (lines at bird's-eye x = 320 and 960, drifting right)."""
     pipe = LanePipeline()
-    with io.VideoWriter(path, fps) as w:
+    with VideoWriter(path, fps) as w:
         for i in range(n):
             bird = np.full((720, 1280, 3), 70, np.uint8)
             for x in (320, 960):

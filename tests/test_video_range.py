@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from lanelib import batch, io
+from lanelib.batch import VIDEO_LOG_COLUMNS, clip_frames, video_log_row
+from lanelib.batch.pipelines import pipeline_for
 from lanelib.cli import main
 from lanelib.errors import InputError
-from lanelib.pipeline import pipeline_for
-from lanelib.batch import VIDEO_LOG_COLUMNS, clip_frames, video_log_row
 from lanelib.tracking import LaneTracker
 
 REPO = Path(__file__).resolve().parents[1]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from lanelib import batch, io, widgets
+from lanelib.batch.video import VideoWriter
 from lanelib.cli import main
 from lanelib.errors import InputError
 from lanelib.pipeline import LanePipeline
@@ -116,8 +117,8 @@ def test_the_video_tuner_exports_the_frame_the_video_command_encodes(camera, tmp
     assert np.array_equal(io.read_image(written["preview"]), t.preview_sheet())
     # the frames batch.process_video hands to the encoder, over the same n frames (--end n / fps)
     encoded = []
-    real_write = io.VideoWriter.write
-    monkeypatch.setattr(io.VideoWriter, "write",
+    real_write = VideoWriter.write
+    monkeypatch.setattr(VideoWriter, "write",
                         lambda self, rgb: (encoded.append(rgb.copy()), real_write(self, rgb))[1])
     run = batch.process_video(CLIP, tmp_path / "run.mp4", t.config, camera, progress=False,
                               end_s=n / 25)

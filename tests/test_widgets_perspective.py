@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from lanelib import io, widgets
+from lanelib.camera import Calibration, Lens
 from lanelib.config import PipelineConfig, load_config, save_config
 from lanelib.errors import InputError
-from lanelib.perspective import PerspectiveConfig, scaled
-from lanelib.widgets.perspective import click_to_frame
+from lanelib.perspective import Perspective, PerspectiveConfig, scaled
+from lanelib.widgets.perspective import FastBirdseye, click_to_frame
 
 REPO = Path(__file__).resolve().parents[1]
 STRAIGHT = "straight_1.jpg"
@@ -31,7 +32,6 @@ PUBLISHED = [
 
 def _dst(left_x: float, right_x: float) -> tuple:
     return ((left_x, 0), (left_x, 720), (right_x, 720), (right_x, 0))
-
 
 
 @pytest.fixture()
@@ -280,3 +280,19 @@ def test_save_and_load_round_trip_the_asymmetric_points(tuner, camera, tmp_path)
     assert fresh.config.perspective.src_px == src
     assert fresh.controls["src.tr.x"].value == 690.0 and fresh.controls["dst.right_x"].value == 830.0
     assert fresh.check == tuner.check
+
+
+def test_fast_birdseye_takes_the_lens_and_the_perspective():
+    cal = Calibration(np.array([[1000.0, 0, 640.0], [0, 1000.0, 360.0], [0, 0, 1]]),
+                      np.array([-0.25, 0.05, 0.001, -0.0005, 0.0]), (1280, 720))
+    rng = np.random.default_rng(4)
+    raw = cv2.resize(rng.integers(0, 255, (90, 160, 3), dtype=np.uint8), (1280, 720),
+                     interpolation=cv2.INTER_CUBIC)
+    lens = Lens(cal)
+    persp = Perspective()
+    fast = FastBirdseye(lens)
+    assert fast.pad == (320, 180)
+    maps = (lens.inverse + persp).remap_maps((1280, 720))
+    exact = cv2.remap(raw, maps[0], maps[1], cv2.INTER_LINEAR)
+    diff = np.abs(fast.birdseye(raw, persp).astype(int) - exact)[:680]  # above the raw frame's edge
+    assert diff.max() <= 2

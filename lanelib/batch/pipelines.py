@@ -29,14 +29,13 @@ from ..autogeometry import GeometryOptions, GeometryWatch, RoadGeometry, geometr
 from ..camera import Calibration
 from ..config import PipelineConfig
 from ..errors import ConfigError, InputError
-from ..pipeline import LanePipeline, pipeline_for
+from ..pipeline import LanePipeline
 from ..result import FrameResult
 from ..tracking import LaneTracker
 from .geometry import estimate_road_geometry, with_geometry
 from .images import ImageFn, run_images
 from .segments import FrameState, run_video_segments
 from .video import FrameFn, VideoRun, run_video
-
 
 
 def lane_image_process(config: PipelineConfig, calibration: Calibration | None, debug: bool) -> ImageFn:
@@ -191,6 +190,12 @@ def process_video(in_path: str | os.PathLike, out_path: str | os.PathLike,
     return replace(run, notes=tuple(notes))
 
 
+def pipeline_for(image: np.ndarray, config: PipelineConfig = PipelineConfig(),
+                 calibration: Calibration | None = None) -> LanePipeline:
+    """Return a LanePipeline for frames of ``image``'s size."""
+    return LanePipeline(config, calibration, size=(image.shape[1], image.shape[0]))
+
+
 def lane_video_process(config: PipelineConfig, calibration: Calibration | None, debug: bool,
                        geo: RoadGeometry | None = None, auto_geometry: GeometryOptions | None = None,
                        fps: float | None = None) -> tuple[FrameFn, list[str], FrameState]:
@@ -310,7 +315,6 @@ def plan_lane_restarts(fresh: object, ends: Sequence[object], spans: Sequence[tu
     return plan
 
 
-
 def hough_images(files: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
                  config: hough.HoughConfig = hough.HoughConfig(), workers: int = 1,
                  scheduler: str | None = None, progress: bool = True) -> list[dict]:
@@ -385,4 +389,3 @@ def hough_video_process(config: hough.HoughConfig) -> tuple[FrameFn, list[str], 
         tracker[0] = state
 
     return process, [], FrameState(lambda: tracker[0].state_key(), lambda: tracker[0], put)
-

@@ -17,7 +17,7 @@ from .. import cluster, io
 from ..autogeometry import GeometryOptions, RoadGeometry, low_confidence
 from ..benchmarks import culane, tusimple, written
 from ..camera import Calibration
-from ..config import PipelineConfig, benchmark_config, to_dict
+from ..config import PipelineConfig, preset, preset_names, to_dict
 from ..errors import ConfigError, GeometryError, InputError, LaneLibError, naming_the_file
 from ..lines.result import LinesResult
 from ..pipeline import LanePipeline
@@ -116,6 +116,19 @@ class PredictRun:
     def without_lines(self) -> int:
         """Return how many frames run now found no line (an empty prediction was written)."""
         return sum(1 for o in self.outcomes if not o.error and o.lines == 0)
+
+
+def benchmark_config(benchmark: str) -> PipelineConfig:
+    """Return the config a benchmark's frames are predicted with by default: the bundled preset named
+    like it (``tusimple``, ``culane``: its fixed camera), else the built-in one; frames of another
+    size get its points scaled (``pipeline.LanePipeline``).
+
+    Examples
+    --------
+    >>> benchmark_config("no such benchmark") == PipelineConfig()
+    True
+    """
+    return preset(benchmark) if benchmark in preset_names() else PipelineConfig()
 
 
 def frame_sequence(benchmark: str, name: str) -> str:
@@ -405,7 +418,7 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     Parameters
     ----------
     benchmark, root, list_file : the dataset (``benchmark_work``).
-    config : as for ``LanePipeline``; None (the default): ``lanelib.config.benchmark_config``, the
+    config : as for ``LanePipeline``; None (the default): ``benchmark_config``, the
         bundled preset of the benchmark's camera. Frames of another size than its
         ``perspective.size_px`` get its points scaled to their size (``LanePipeline``), which is
         right for resized copies of the same camera's frames; the thresholds' widths in px are

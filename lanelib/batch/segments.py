@@ -3,24 +3,26 @@
 Each segment starts ``cluster.WARMUP_FRAMES`` early to warm the tracker up (``video_segment``);
 a segment whose tracker did not reach the previous segment's final state in that warm-up runs
 again from that state (``cluster.settle_joints``, ``FrameState``). The parts are joined without
-re-encoding (``run_video_segments``), so the frames, the log and the results are those of one
+re-encoding (``join_videos``), so the frames, the log and the results are those of one
 process.
 """
 from __future__ import annotations
 
 import os
 import shutil
+import subprocess
 import tempfile
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Iterable, Sequence
 
+import imageio_ffmpeg
 from tqdm import tqdm
 
 from .. import cluster, io
 from ..errors import DecodeStoppedError, InputError, PartialOutputError
-from .video import FrameFn, VideoRun, CsvLog, clip_frames
+from .video import FrameFn, VideoRun, VideoWriter, CsvLog, clip_frames
 
 
 @dataclass(frozen=True)
@@ -78,7 +80,7 @@ def video_segment(chunk: Sequence[tuple[int, int, int, bool]], in_path: Path, pa
         try:
             try:
                 reader = io.VideoReader(in_path, first, None if to_end else stop)
-                writer = io.VideoWriter(parts / f"{start:09d}.mp4", reader.info.fps, inputs=[in_path],
+                writer = VideoWriter(parts / f"{start:09d}.mp4", reader.info.fps, inputs=[in_path],
                                         threads=threads)
                 with reader:
                     for n, frame in enumerate(reader):
@@ -132,7 +134,7 @@ def run_video_segments(in_path: str | os.PathLike, out_path: str | os.PathLike, 
     (``plan_lane_restarts``): before the joints are checked, the segments whose start was wrong
     as the end states' records tell (``fresh state``: ``make()``'s before any frame), each with
     the state to run it again from its warm-up; they run again at once (one round). This process joins
-    the parts (``io.join_videos``, no re-encoding) and writes the per-frame log, both
+    the parts (``join_videos``, no re-encoding) and writes the per-frame log, both
     atomically, and removes the parts. One progress bar counts the frames of the segments done
     (re-runs included). A clip that stops decoding keeps the frames before the break, as
     ``run_video`` (``PartialOutputError``).
@@ -216,11 +218,43 @@ def _join_parts(in_path: Path, out: Path, log_path: str | os.PathLike | None,
         for o in outcomes:
             for row in o.rows:
                 log.write(row)
-        io.join_videos(files, out, inputs=inputs)
+        join_videos(files, out, inputs=inputs)
         ok = True
     finally:
         log.finish(ok)
     return outcomes
+
+
+def join_videos(parts: Iterable[str | os.PathLike], path: str | os.PathLike,
+                inputs: Iterable[str | os.PathLike] = ()) -> Path:
+    """Write the videos ``parts`` one after the other to ``path``, atomically; return the path.
+
+    The parts (same codec, size and frame rate: one run's segments) are joined by ffmpeg's concat
+    demuxer without re-encoding (``-c copy``), so the frames are those of the parts.
+
+    Raises
+    ------
+    InputError
+        If there is no part, or ffmpeg cannot join them (its cause in the message).
+    """
+    parts = [Path(p).resolve() for p in parts]
+    target = Path(path)
+    if not parts:
+        raise InputError(f"{target}: no video parts to join")
+    with io.atomic_path(target, inputs=[*inputs, *parts]) as tmp:
+        listing = tmp.with_name(tmp.name + ".txt")
+        # the concat demuxer's list: one `file '...'` line per part, quotes escaped as '\''
+        listing.write_text("".join("file '" + str(p).replace("'", "'\\''") + "'\n" for p in parts))
+        try:
+            done = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-v", "error", "-f", "concat",
+                                   "-safe", "0", "-i", str(listing), "-c", "copy", "-map", "0:v",
+                                   str(tmp)], capture_output=True, text=True)
+        finally:
+            listing.unlink(missing_ok=True)
+        if done.returncode != 0:
+            raise InputError(f"{target}: ffmpeg could not join {len(parts)} video parts "
+                             f"({io.ffmpeg_cause(done.stderr)}); check the parts ({parts[0]}, ...)")
+    return target
 
 
 def _segments_run(outcomes: Sequence[SegmentOutcome], out: Path, log_path: str | os.PathLike | None,

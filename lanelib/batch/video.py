@@ -1,4 +1,5 @@
-"""A video, run frame by frame in one process: ``run_video``, the span of a clip, the CSV log.
+"""A video, run frame by frame in one process: ``run_video``, the span of a clip, the CSV log, and
+the H.264 writer of every output video (``VideoWriter``, ``H264_PARAMS``).
 
 ``run_video`` takes a ``process`` callable that turns one RGB frame into an output frame, a row of
 the per-frame CSV log and whether the lane was found, and does the reading, writing, progress bar
@@ -8,6 +9,7 @@ place. A video run returns one ``VideoRun`` record whichever the pipeline.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
 import os
@@ -16,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable
 
+import imageio_ffmpeg
 import numpy as np
 from tqdm import tqdm
 
@@ -87,6 +90,80 @@ def clip_frames(info: io.VideoInfo, start_s: float | None = None, end_s: float |
         raise InputError(f"{clip}; no frame starts from {start_s or 0:g} s to before --end "
                          f"{end_s:g} s (frames are {1 / fps:.3f} s apart); pass a longer span")
     return range(first, stop)
+
+
+# The H.264 settings every lanelib video is written with (the codec benchmark uses the same).
+H264_PARAMS = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None, bitrate=None,
+                   macro_block_size=1, output_params=["-preset", "veryfast", "-crf", "20"])
+
+
+class VideoWriter:
+    """Write RGB uint8 frames to an H.264 mp4 through imageio-ffmpeg, atomically: frames go to a
+    temporary file beside ``path`` that ``close()`` renames into place, and leaving the ``with``
+    block by an exception (Ctrl-C included) removes it.
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float, size: tuple[int, int] | None = None,
+                 inputs: Iterable[str | os.PathLike] = (), threads: int | None = None):
+        self.path = Path(path)
+        self.fps = float(fps)
+        self.size = size
+        self._inputs = list(inputs)
+        self._threads = threads
+        self._ctx = io.atomic_path(self.path, inputs=self._inputs)
+        self._tmp = self._ctx.__enter__()
+        self._gen = None
+        self.frames_written = 0
+
+    def _start(self, size: tuple[int, int]) -> None:
+        params = dict(H264_PARAMS)
+        out = list(params.pop("output_params"))
+        if self._threads is not None:
+            out += ["-threads", str(self._threads)]
+        self._gen = imageio_ffmpeg.write_frames(str(self._tmp), size, fps=self.fps,
+                                                output_params=out, **params)
+        self._gen.send(None)
+
+    def write(self, rgb: np.ndarray) -> None:
+        """Append one RGB uint8 frame; every frame must have the size of the first."""
+        h, w = rgb.shape[:2]
+        if self._gen is None:
+            self.size = self.size or (w, h)
+            self._start(self.size)
+        if (w, h) != tuple(self.size):
+            raise InputError(f"{self.path}: frame {self.frames_written} is {w}x{h}, "
+                             f"the video is {self.size[0]}x{self.size[1]}")
+        self._gen.send(np.ascontiguousarray(rgb))
+        self.frames_written += 1
+
+    def close(self) -> Path:
+        """Finish the file and move it into place under its name; return the path."""
+        if self._gen is not None:
+            self._gen.close()
+            self._gen = None
+        if self.frames_written == 0:
+            self._ctx.__exit__(InputError, InputError("no frames"), None)
+            raise InputError(f"{self.path}: no frames were written; nothing to save")
+        self._ctx.__exit__(None, None, None)
+        return self.path
+
+    def abort(self) -> None:
+        """Stop writing and remove the temporary file; nothing is left under ``path``."""
+        if self._gen is not None:
+            with contextlib.suppress(Exception):
+                self._gen.close()
+            self._gen = None
+        with contextlib.suppress(OSError):
+            self._tmp.unlink()
+
+    def __enter__(self) -> "VideoWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
 
 
 class CsvLog:
@@ -168,7 +245,7 @@ def run_video(in_path: str | os.PathLike, out_path: str | os.PathLike, process: 
         reader = io.VideoReader(in_path, frames.start, frames.stop if end_s is not None else None, info)
     inputs = [in_path]
     log = CsvLog(Path(log_path) if log_path else None, inputs)
-    writer = io.VideoWriter(out_path, reader.info.fps, inputs=inputs, threads=threads)
+    writer = VideoWriter(out_path, reader.info.fps, inputs=inputs, threads=threads)
     ok = False
     stopped: DecodeStoppedError | None = None
     n = found = 0

@@ -37,7 +37,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from .. import batch, data, io
-from ..config import PipelineConfig, benchmark_config
+from ..config import PipelineConfig
 from ..errors import InputError
 from ..pipeline import LanePipeline
 from . import WRITTEN, culane, metrics, tusimple
@@ -371,7 +371,7 @@ def explain_frame(benchmark: str, image, labels, config: PipelineConfig | None =
         upscaled to it first (``tusimple.full_size``), as the scoreboard does.
     labels : CULane: the frame's lines, each (n, 2) x, y (``culane.read_lines``); TuSimple: its
         ``TuSimpleRecord`` at the official 1280x720 rows.
-    config : the pipeline's config (default: ``config.benchmark_config(benchmark)``).
+    config : the pipeline's config (default: ``batch.benchmark_config(benchmark)``).
     name : what the frame is called in the record (default: the path).
     pipeline : a pipeline for this frame's size and ``config`` to reuse (it keeps its maps).
     keep_mask : keep the lines view's mask and the labels mapped into it (for ``draw_why``).
@@ -386,7 +386,7 @@ def explain_frame(benchmark: str, image, labels, config: PipelineConfig | None =
     """
     if benchmark not in BENCHMARKS:
         raise InputError(f"{benchmark!r}: not a benchmark; choose one of {', '.join(BENCHMARKS)}")
-    config = benchmark_config(benchmark) if config is None else config
+    config = batch.benchmark_config(benchmark) if config is None else config
     rgb = image if isinstance(image, np.ndarray) else io.read_image(image)
     if benchmark == "tusimple":
         rgb = tusimple.full_size(rgb)
@@ -505,13 +505,13 @@ def explain_set(benchmark: str, root: str | os.PathLike | None = None, config: P
     benchmark : "culane" or "tusimple".
     root : the dataset root (default: the dev set, ``data.culane_dev`` or ``data.tusimple_dev``;
         ``InputError`` saying how to point at it when absent).
-    config : the pipeline's config (default: ``config.benchmark_config(benchmark)``).
+    config : the pipeline's config (default: ``batch.benchmark_config(benchmark)``).
     list_file : the frames (``set_frames``).
     on_frame : called with each frame's record as it is done (a progress line).
     """
     if root is None:
         root = data.require(data.CULANE_DEV if benchmark == "culane" else data.TUSIMPLE_DEV)
-    config = benchmark_config(benchmark) if config is None else config
+    config = batch.benchmark_config(benchmark) if config is None else config
     pipelines: dict = {}
     frames = []
     for name, image, labels in set_frames(benchmark, root, list_file):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import ablation, batch, evaluate, scoreboard
 from ..benchmarks import culane, metrics, tusimple, why, why_images
-from ..config import benchmark_config, preset_names
+from ..config import preset_names
 from ..errors import InputError
 from ..io import check_not_input, check_output, list_images, write_json, write_text
 from ..pipeline import LanePipeline
@@ -215,7 +215,7 @@ def _config_name(args) -> str:
 
 
 def _run_predict(args) -> int:
-    config, calibration = load_pipeline_inputs(args, benchmark_config(args.benchmark))
+    config, calibration = load_pipeline_inputs(args, batch.benchmark_config(args.benchmark))
     options = geometry_options(args) if args.auto_geometry else None
 
     def show(sequence, estimate) -> None:
@@ -345,7 +345,7 @@ def add_why(sub) -> None:
 
 
 def _run_why(args) -> int:
-    config = load_config(args, benchmark_config(args.benchmark))
+    config = load_config(args, batch.benchmark_config(args.benchmark))
     if args.frames:
         out = args.output if args.output is not None else Path("out") / "why"
         for frame, png in why_images.write_why(args.benchmark, args.frames, out, args.root, config):

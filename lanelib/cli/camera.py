@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from .. import batch
-from ..camera import Calibration, calibrate, parse_pattern
+from ..camera import Calibration, calibrate
 from ..config import PipelineConfig, load_config_or_preset, save_parts
 from ..errors import InputError
 from ..io import check_output, write_json
@@ -25,6 +25,17 @@ def add_calibrate(sub) -> None:
     p.add_argument("--pattern", default="9x6",
                    help="inner corners per row x per column (default: 9x6)")
     p.set_defaults(func=_run_calibrate)
+
+
+def parse_pattern(text: str) -> tuple[int, int]:
+    """Return (cols, rows) from a pattern like "9x6"; anything else raises InputError."""
+    try:
+        cols, rows = (int(v) for v in text.lower().split("x"))
+        if cols < 2 or rows < 2:
+            raise ValueError
+    except ValueError:
+        raise InputError(f"pattern {text!r}: give inner corners as COLSxROWS, e.g. 9x6") from None
+    return cols, rows
 
 
 def _run_calibrate(args) -> int:

@@ -1,9 +1,8 @@
 """Video files through imageio-ffmpeg: reading frames (all, a span, or one by seeking), the video's
-size and frame rate, writing H.264 mp4s, and joining the parts of a segmented run.
+size and frame rate. Output videos are written by ``batch.video.VideoWriter``.
 
 Frames are RGB ``uint8`` arrays (H x W x 3). A broken or truncated video raises ``InputError`` or
-``DecodeStoppedError`` naming the file and ffmpeg's cause; outputs go through
-``files.atomic_path``, so no half-written video stands under the output name.
+``DecodeStoppedError`` naming the file and ffmpeg's cause.
 """
 from __future__ import annotations
 
@@ -11,16 +10,14 @@ import contextlib
 import math
 import os
 import re
-import subprocess
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterator
 
 import imageio_ffmpeg
 import numpy as np
 
 from ..errors import DecodeStoppedError, InputError
-from .files import atomic_path
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm")
 
@@ -256,109 +253,3 @@ def read_frame(path: str | os.PathLike, index: int | None = None, time_s: float 
                          f"the {n} frames its container announces?); pass an earlier frame or "
                          f"{_VIDEO_FIX}")
     return np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()
-
-
-# The H.264 settings every lanelib video is written with (the codec benchmark uses the same).
-H264_PARAMS = dict(codec="libx264", pix_fmt_out="yuv420p", quality=None, bitrate=None,
-                   macro_block_size=1, output_params=["-preset", "veryfast", "-crf", "20"])
-
-
-class VideoWriter:
-    """Write RGB uint8 frames to an H.264 mp4 through imageio-ffmpeg, atomically: frames go to a
-    temporary file beside ``path`` that ``close()`` renames into place, and leaving the ``with``
-    block by an exception (Ctrl-C included) removes it.
-    """
-
-    def __init__(self, path: str | os.PathLike, fps: float, size: tuple[int, int] | None = None,
-                 inputs: Iterable[str | os.PathLike] = (), threads: int | None = None):
-        self.path = Path(path)
-        self.fps = float(fps)
-        self.size = size
-        self._inputs = list(inputs)
-        self._threads = threads
-        self._ctx = atomic_path(self.path, inputs=self._inputs)
-        self._tmp = self._ctx.__enter__()
-        self._gen = None
-        self.frames_written = 0
-
-    def _start(self, size: tuple[int, int]) -> None:
-        params = dict(H264_PARAMS)
-        out = list(params.pop("output_params"))
-        if self._threads is not None:
-            out += ["-threads", str(self._threads)]
-        self._gen = imageio_ffmpeg.write_frames(str(self._tmp), size, fps=self.fps,
-                                                output_params=out, **params)
-        self._gen.send(None)
-
-    def write(self, rgb: np.ndarray) -> None:
-        """Append one RGB uint8 frame; every frame must have the size of the first."""
-        h, w = rgb.shape[:2]
-        if self._gen is None:
-            self.size = self.size or (w, h)
-            self._start(self.size)
-        if (w, h) != tuple(self.size):
-            raise InputError(f"{self.path}: frame {self.frames_written} is {w}x{h}, "
-                             f"the video is {self.size[0]}x{self.size[1]}")
-        self._gen.send(np.ascontiguousarray(rgb))
-        self.frames_written += 1
-
-    def close(self) -> Path:
-        """Finish the file and move it into place under its name; return the path."""
-        if self._gen is not None:
-            self._gen.close()
-            self._gen = None
-        if self.frames_written == 0:
-            self._ctx.__exit__(InputError, InputError("no frames"), None)
-            raise InputError(f"{self.path}: no frames were written; nothing to save")
-        self._ctx.__exit__(None, None, None)
-        return self.path
-
-    def abort(self) -> None:
-        """Stop writing and remove the temporary file; nothing is left under ``path``."""
-        if self._gen is not None:
-            with contextlib.suppress(Exception):
-                self._gen.close()
-            self._gen = None
-        with contextlib.suppress(OSError):
-            self._tmp.unlink()
-
-    def __enter__(self) -> "VideoWriter":
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
-
-
-def join_videos(parts: Iterable[str | os.PathLike], path: str | os.PathLike,
-                inputs: Iterable[str | os.PathLike] = ()) -> Path:
-    """Write the videos ``parts`` one after the other to ``path``, atomically; return the path.
-
-    The parts (same codec, size and frame rate: one run's segments) are joined by ffmpeg's concat
-    demuxer without re-encoding (``-c copy``), so the frames are those of the parts.
-
-    Raises
-    ------
-    InputError
-        If there is no part, or ffmpeg cannot join them (its cause in the message).
-    """
-    parts = [Path(p).resolve() for p in parts]
-    target = Path(path)
-    if not parts:
-        raise InputError(f"{target}: no video parts to join")
-    with atomic_path(target, inputs=[*inputs, *parts]) as tmp:
-        listing = tmp.with_name(tmp.name + ".txt")
-        # the concat demuxer's list: one `file '...'` line per part, quotes escaped as '\''
-        listing.write_text("".join("file '" + str(p).replace("'", "'\\''") + "'\n" for p in parts))
-        try:
-            done = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-v", "error", "-f", "concat",
-                                   "-safe", "0", "-i", str(listing), "-c", "copy", "-map", "0:v",
-                                   str(tmp)], capture_output=True, text=True)
-        finally:
-            listing.unlink(missing_ok=True)
-        if done.returncode != 0:
-            raise InputError(f"{target}: ffmpeg could not join {len(parts)} video parts "
-                             f"({ffmpeg_cause(done.stderr)}); check the parts ({parts[0]}, ...)")
-    return target

@@ -13,12 +13,42 @@ import cv2
 import numpy as np
 
 from .. import thresholds
+from ..errors import ConfigError
 from ..params import LinesConfig
+from ..params.masks import ChannelMask, ColorRange, ThresholdConfig, TopHatMask, mask_names
 from ..perspective import Perspective, Transform
 from . import vote
 from .result import image_line
 from .trace import find_lines
 from .view import LinesView
+
+
+def _scale_px(v: int, factor: float, least: int = 1) -> int:
+    """Return ``v`` px times ``factor``, rounded, at least ``least`` (0 stays 0: off)."""
+    return 0 if v == 0 else max(least, int(round(v * factor)))
+
+
+def scaled_thresholds(config: ThresholdConfig, factor: float) -> ThresholdConfig:
+    """Return ``config`` for a view whose pixels are ``1 / factor`` times as wide across the road (e.g.
+    ``LinesView``: its px per metre over the ego view's). Widths across scale by ``factor``: top-hat
+    ``width_px`` (at least 3) and ``min_width_px`` (1 stays off; below the width), ``open_px`` and
+    ``close_px`` (0 stays off), ``clahe_tile_px`` (at least 8). Colour bounds and Sobel kernels do
+    not change.
+    """
+    if factor <= 0:
+        raise ConfigError(f"scaled_thresholds: factor {factor} must be positive")
+    changes = {}
+    for name in mask_names(config):
+        spec = getattr(config, name)
+        if isinstance(spec, TopHatMask):
+            width = max(3, int(round(spec.width_px * factor)))
+            least = 1 if spec.min_width_px <= 1 else min(width - 1, _scale_px(spec.min_width_px, factor))
+            changes[name] = replace(spec, width_px=width, min_width_px=least)
+        elif isinstance(spec, (ChannelMask, ColorRange)) and spec.open_px:
+            changes[name] = replace(spec, open_px=_scale_px(spec.open_px, factor))
+    return replace(config, **changes, open_px=_scale_px(config.open_px, factor),
+                   close_px=_scale_px(config.close_px, factor),
+                   clahe_tile_px=max(8, int(round(config.clahe_tile_px * factor))))
 
 
 @dataclass(frozen=True)
@@ -29,25 +59,25 @@ class LinesSetup:
 
     view: LinesView
     maps: tuple[np.ndarray, np.ndarray]
-    tconf: thresholds.ThresholdConfig
+    tconf: ThresholdConfig
     to_raw: Transform
     seen: np.ndarray
 
 
 def make_setup(ego: Perspective, lens: Transform, size_px: tuple[int, int], config: LinesConfig,
-               tconf: thresholds.ThresholdConfig) -> LinesSetup:
+               tconf: ThresholdConfig) -> LinesSetup:
     """Return the lines search's setup for frames of ``size_px`` (w, h) of one camera.
 
     The view is a ``LinesView`` of the ego view ``ego`` (``LinesConfig.view_*``, ``follow_ahead_m``
     further when lines are followed beyond ``view_ahead_m``), reached from the raw frame through
     ``lens.inverse`` (``camera.Lens``); the thresholds ``tconf`` are rescaled to it
-    (``thresholds.scaled``); its pixels that see the frame are eroded away from the frame's edge,
+    (``scaled_thresholds``); its pixels that see the frame are eroded away from the frame's edge,
     which is no paint.
     """
     view = LinesView(ego, config.view_half_width_m, config.view_xm_per_px,
                      config.view_ahead_m + config.follow_ahead_m, config.view_ym_per_px)
     raw_to_view = lens.inverse + view
-    view_tconf = thresholds.scaled(tconf, view.scale_from_ego)
+    view_tconf = scaled_thresholds(tconf, view.scale_from_ego)
     maps = raw_to_view.remap_maps(view.size)
     seen = cv2.remap(np.full(tuple(size_px)[::-1], 255, np.uint8), maps[0], maps[1], cv2.INTER_NEAREST,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)

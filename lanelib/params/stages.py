@@ -120,7 +120,7 @@ class SearchConfig:
         ``lookahead_top_px`` gives a tracked lane; below about 9 m of road a dashed line (3 m
         dashes, 12 m period) may show no dash at all.
     candidates : 1 (off), or the histogram peaks tried on each side when the lane of the
-        strongest ones fails its checks (``candidate_bases``): the robust path of
+        strongest ones fails its checks (``roads.fallbacks.candidate_bases``): the robust path of
         ``LanePipeline.detect``, which runs sliding windows from each pair of them, strongest
         first, and keeps the first pair that passes the checks.
     grow_margin_px : 0 (off), or px added to a window's half width for each empty window (fewer

@@ -15,11 +15,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import cv2
 import numpy as np
 
 from ..proposers import Frame, passes
 from ..records import LaneSearch
-from ..search import candidate_bases, histogram, lane_pixels, sliding_windows
+from ..search import histogram, lane_pixels, sliding_windows
 
 
 class FallbackMasks:
@@ -80,13 +81,35 @@ def short_view_search(pipeline, binary: np.ndarray,
     return None
 
 
+def candidate_bases(hist: np.ndarray, car_x: float | None, count: int,
+                    min_gap_px: float) -> tuple[list[float], list[float]]:
+    """Return up to ``count`` histogram peaks (x, strongest first) left and right of ``car_x``: columns
+    holding the most pixels within ``min_gap_px`` either side (one per line), never empty ones.
+    """
+    mid = int(car_x if car_x is not None else len(hist) / 2)
+    r = max(1, int(min_gap_px))
+    kernel = np.ones((1, 2 * r + 1), np.uint8)
+    local_max = cv2.dilate(hist.astype(np.float32).reshape(1, -1), kernel).ravel()
+    peaks = np.flatnonzero((hist > 0) & (hist >= local_max))
+    out = []
+    for side in (peaks[peaks < mid], peaks[peaks >= mid]):
+        chosen: list[float] = []
+        for x in side[np.argsort(-hist[side], kind="stable")]:
+            if all(abs(x - c) >= min_gap_px for c in chosen):
+                chosen.append(float(x))
+            if len(chosen) == count:
+                break
+        out.append(chosen)
+    return out[0], out[1]
+
+
 def robust_search(pipeline, binary: np.ndarray, first: LaneSearch,
                   pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch | None:
     """Return the first search from other histogram peaks whose lane passes the checks, or None.
 
     For a frame whose search from the strongest peaks failed its checks (a seam, a kerb or a
     shadow edge took a line): sliding windows from each pair of the ``candidates`` strongest
-    peaks on each side (``search.candidate_bases``), the pairs with the stronger peaks first,
+    peaks on each side (``candidate_bases``), the pairs with the stronger peaks first,
     skipping the pair already tried. Its search's ``method`` is "robust". ``pixels``: the mask's
     ``search.lane_pixels`` when made already.
     """

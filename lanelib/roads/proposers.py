@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..fit import joined_fit, offset_line, parallel_fits, row_medians
+from ..fit import joined_fit, offset_line, parallel_fits
 from ..records import NEAR_SHARE, LaneSearch, LineFit, Window
 from ..search import fit_side, search_around
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
@@ -241,7 +241,6 @@ def edge_search(pipeline, bird: np.ndarray, search: LaneSearch, guide_px=None,
     return found if pipeline.check(found).ok else None
 
 
-
 class Shoulder:
     """A painted line faded out: placed its measured shoulder inside the asphalt edge."""
 
@@ -429,6 +428,17 @@ def joined_paint(tracker, pixels, placed: LineFit, top_px: int) -> LineFit | Non
     top = min(float(rows[0]), bottom - placed.gap_px - placed.span_px)
     return replace(placed, coeffs_px=coeffs, n_pixels=placed.n_pixels + int(keep.sum()),
                    span_px=float(bottom - placed.gap_px - top))
+
+
+def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return each distinct key of ``keys`` (a row, or a shrunk grid's row; ascending) and the
+    median of the ``xs`` that share it (``np.median``'s, for all rows at once)."""
+    keys, xs = np.asarray(keys), np.asarray(xs, float)
+    order = np.lexsort((xs, keys))
+    k, v = keys[order], xs[order]
+    rows, first, counts = np.unique(k, return_index=True, return_counts=True)
+    lo, hi = first + (counts - 1) // 2, first + counts // 2
+    return rows, (v[lo] + v[hi]) / 2
 
 
 # the hard-road proposers in the tracker's chain (``tracking.PROPOSERS``), each asking only when

@@ -22,7 +22,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from ..io import H264_PARAMS, VideoWriter, write_image, write_json
+from ..batch.video import H264_PARAMS, VideoWriter
+from ..io import write_image, write_json
 from .camera import Camera
 from .chessboard import (PATTERN_SIZE, board_corners_px, board_poses, camera_normals, fully_visible,
                          render_board)
@@ -300,7 +301,7 @@ def _next_exposure(frame: np.ndarray, gain: float) -> float:
 
 
 class _ClipWriter(VideoWriter):
-    """lanelib.io's VideoWriter at another x264 quality (``crf``); at H264_CRF it is the same."""
+    """``batch.video.VideoWriter`` at another x264 quality (``crf``); at H264_CRF it is the same."""
 
     def __init__(self, path: str | os.PathLike, fps: float, threads: int | None, crf: int):
         super().__init__(path, fps, threads=threads)
@@ -313,7 +314,7 @@ class _ClipWriter(VideoWriter):
         saved = H264_PARAMS["output_params"]
         out = list(saved)
         out[out.index("-crf") + 1] = str(self._crf)
-        try:  # VideoWriter._start reads lanelib.io.H264_PARAMS when the first frame comes
+        try:  # VideoWriter._start reads batch.video.H264_PARAMS when the first frame comes
             H264_PARAMS["output_params"] = out
             super()._start(size)
         finally:

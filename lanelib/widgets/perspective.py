@@ -15,13 +15,13 @@ import ipywidgets as widgets
 import numpy as np
 
 from .. import autogeometry, thresholds
-from ..camera import Calibration, FastBirdseye, Undistorter
+from ..camera import MODEL_MARGIN, Calibration, Lens, Undistorter
 from ..config import PipelineConfig
 from ..draw import shrink
 from ..errors import LaneLibError
 from ..autogeometry import RoadGeometry
-from ..perspective import (Perspective, PerspectiveConfig, implied_focal_px, road_length_m, scaled,
-                           straight_line_check, trapezoid_src)
+from ..perspective import (Homography, Perspective, PerspectiveConfig, implied_focal_px, road_length_m,
+                           scaled, straight_line_check, trapezoid_src)
 from .base import Tuner, row, sized
 from .geometry_view import GeometryEstimate, draw_horizon, geometry_lines, low_confidence_line
 
@@ -164,6 +164,32 @@ def click_to_frame(event: dict, tile_px: tuple[int, int], columns: int,
     if not (0 <= sx < tw and 0 <= sy < th):
         return None
     return round(sx * frame_px[0] / tw, 2), round(sy * frame_px[1] / th, 2)
+
+
+class FastBirdseye:
+    """Bird's-eye views of raw frames for any perspective, as the pipeline's remap makes them, quickly.
+
+    The exact composed remap (``(lens.inverse + perspective).remap_maps``) is too slow for a
+    slider. Here the undistortion map of a canvas ``MODEL_MARGIN`` larger on each side (as far as
+    ``Lens.valid`` lets the pipeline sample) is made once, and a perspective's maps are that map
+    warped by its inverse: within 2 grey levels of the pipeline's view (warping the undistorted
+    frame instead interpolates twice and moves marginal line pixels).
+    """
+
+    def __init__(self, lens: Lens):
+        w, h = lens.size
+        self.pad = (int(w * MODEL_MARGIN), int(h * MODEL_MARGIN))
+        self.map = lens.undistort_maps(self.pad, cv2.CV_32FC2)[0]
+        self.size = (w, h)
+
+    def birdseye(self, raw: np.ndarray, perspective: Homography) -> np.ndarray:
+        """Return the bird's-eye view of a RAW frame for ``perspective`` (undistorted -> view)."""
+        to_canvas = (np.array([[1, 0, self.pad[0]], [0, 1, self.pad[1]], [0, 0, 1]], float)
+                     @ perspective.inverse.params)
+        maps = cv2.warpPerspective(self.map, to_canvas, self.size,
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=(-1, -1, -1, -1))
+        return cv2.remap(raw, maps, None, cv2.INTER_LINEAR)
 
 
 class PerspectiveTuner(GeometryEstimate, Tuner):

@@ -13,6 +13,7 @@ import ipywidgets as widgets
 import numpy as np
 
 from .. import io
+from ..batch.video import VideoWriter
 from ..camera import Calibration
 from ..config import PipelineConfig
 from ..data import repo_root
@@ -190,7 +191,7 @@ class VideoTuner(Tuner):
         fps = self._video_info(clip).fps
         n = played_frames(len(self.results), seconds, fps)
         size = played_size(self._clip[1][0].shape, width_px)
-        with io.VideoWriter(target, fps, inputs=[clip]) as writer:
+        with VideoWriter(target, fps, inputs=[clip]) as writer:
             for frame, result in zip(self.frames[:n], self.results[:n]):
                 out = self._annotate(frame, result)
                 if size is not None:
