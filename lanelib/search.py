@@ -16,12 +16,23 @@ from .roads.stripes import double_line_fit
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y (int32 arrays)."""
-    pts = cv2.findNonZero(binary)
+    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y then x (int32 arrays).
+
+    ``cv2.findNonZero`` tests pixel by pixel; a contiguous mask whose width is a multiple of 4 is
+    scanned as int32 words instead (a quarter of the tests), then the nonzero bytes of the nonzero
+    words are read: the same pixels in the same order.
+    """
+    h, w = binary.shape[:2]
+    words = binary.ndim == 2 and binary.dtype == np.uint8 and w % 4 == 0 and binary.flags.c_contiguous
+    pts = cv2.findNonZero(binary.view(np.int32) if words else binary)
     if pts is None:
         return np.empty(0, np.int32), np.empty(0, np.int32)
     pts = pts.reshape(-1, 2)
-    return pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+    ys, xs = pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+    if not words:
+        return ys, xs
+    which, byte = np.nonzero(binary.reshape(h, w // 4, 4)[ys, xs])
+    return ys[which], xs[which] * 4 + byte.astype(np.int32)
 
 
 def histogram(binary: np.ndarray, fraction: float = 0.5) -> np.ndarray:
