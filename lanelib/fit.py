@@ -25,7 +25,7 @@ from dataclasses import replace
 import numpy as np
 
 from .params import SearchConfig
-from .records import NEAR_SHARE, LaneMeasurement, LineFit
+from .records import LaneMeasurement, LineFit, near_row_px
 
 
 RADIUS_MAX_M = 100_000.0
@@ -72,7 +72,7 @@ def fit_line_with_first(ys: np.ndarray, xs: np.ndarray, height_px: int, config: 
             ys, xs, n = ys[idx], xs[idx], keep
             span = float(ys.max() - ys.min())
             a, b, c, rss = least_squares_rss(ys, xs, degree, float(height_px))
-    gap = max(0.0, height_px - 1.0 - float(np.quantile(ys, 1.0 - NEAR_SHARE)))
+    gap = max(0.0, height_px - 1.0 - near_row_px(ys))
     return LineFit((a, b, c), n, span, scatter_px=math.sqrt(rss / n), gap_px=gap), first
 
 
@@ -117,7 +117,7 @@ def least_squares_rss(ys: np.ndarray, xs: np.ndarray, degree: int, scale: float,
     k = degree + 1
     gram = np.array([[st[i + j] for j in range(k)] for i in range(k)])
     p = np.linalg.solve(gram, np.array(sx[:k]))  # x - x0 = p0 + p1*t (+ p2*t**2)
-    rss = max(0.0, float((x * x).sum()) - sum(float(p[i]) * sx[i] for i in range(k)))
+    rss = max(0.0, float(np.add.reduce(x * x)) - sum(float(p[i]) * sx[i] for i in range(k)))
     p2 = p[2] if degree == 2 else 0.0
     a = p2 / scale ** 2
     b = p[1] / scale - 2 * p2 * m / scale ** 2
@@ -129,18 +129,20 @@ def normal_sums(ys: np.ndarray, xs: np.ndarray, scale: float) -> tuple:
     """Return what ``least_squares_rss`` fits from: y (float), its mean m, t = (y - m) / ``scale``,
     t**2, t**3, the sums of t**0..4, x's mean x0, x - x0, (x - x0) * t and the sums of (x - x0) *
     t**0..2; ``two_stripes`` starts from the same arrays and sums."""
+    total = np.add.reduce  # ``ndarray.sum``'s and ``mean``'s pairwise sum, without their Python wrappers
     y = ys.astype(np.float64)
     x = xs.astype(np.float64)
-    m = float(y.mean())
+    n = len(y)
+    m = float(total(y)) / n
     t = (y - m) / scale
     # sums of products by numpy reductions, not BLAS dot products: BLAS threads spin on a busy machine
     t2 = t * t
     t3 = t2 * t
-    st = [float(len(t)), float(t.sum()), float(t2.sum()), float(t3.sum()), float((t2 * t2).sum())]
-    x0 = float(x.mean())
+    st = [float(n), float(total(t)), float(total(t2)), float(total(t3)), float(total(t2 * t2))]
+    x0 = float(total(x)) / n
     x -= x0
     xt = x * t
-    sx = [float(x.sum()), float(xt.sum()), float((x * t2).sum())]
+    sx = [float(total(x)), float(total(xt)), float(total(x * t2))]
     return y, m, t, t2, t3, st, x0, x, xt, sx
 
 

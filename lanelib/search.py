@@ -16,12 +16,20 @@ from .roads.stripes import double_line_fit
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y (int32 arrays)."""
-    pts = cv2.findNonZero(binary)
+    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y then x (int32 arrays); a contiguous
+    mask of a width divisible by 4 is scanned as int32 words (``cv2.findNonZero`` tests pixel by pixel),
+    then the nonzero bytes of the nonzero words are read: the same pixels in the same order."""
+    h, w = binary.shape[:2]
+    words = binary.ndim == 2 and binary.dtype == np.uint8 and w % 4 == 0 and binary.flags.c_contiguous
+    pts = cv2.findNonZero(binary.view(np.int32) if words else binary)
     if pts is None:
         return np.empty(0, np.int32), np.empty(0, np.int32)
     pts = pts.reshape(-1, 2)
-    return pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+    ys, xs = pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+    if not words:
+        return ys, xs
+    which, byte = np.nonzero(binary.reshape(h, w // 4, 4)[ys, xs])
+    return ys[which], xs[which] * 4 + byte.astype(np.int32)
 
 
 def histogram(binary: np.ndarray, fraction: float = 0.5) -> np.ndarray:
@@ -89,6 +97,13 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                                for b, c, w in zip(bases, confidence, whole))
             bases = tuple(b if b is not None else w for b, w in zip(bases, whole))
     win_h = h / config.n_windows
+    rows = []  # each window's rows (y_low, y_high), the same on both sides
+    for i in range(config.n_windows):
+        y_high = int(round(h - i * win_h))
+        if y_high <= top_px:
+            break
+        rows.append((max(top_px, int(round(h - (i + 1) * win_h))), y_high))
+    cuts = np.searchsorted(ys, [y for pair in rows for y in pair]).tolist()  # their slices of ys
     windows: list[Window] = []
     picked = {}
     for side, base in zip(("left", "right"), bases):
@@ -96,16 +111,11 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
         x = base
         margin = config.margin_px
         toward_centre = 1 if side == "left" else -1  # the lane centre lies right of the left line
-        for i in range(config.n_windows):
+        for (y_low, y_high), lo, hi in zip(rows, cuts[::2], cuts[1::2]):
             if x is None:
                 break
-            y_high = int(round(h - i * win_h))
-            y_low = max(top_px, int(round(h - (i + 1) * win_h)))
-            if y_high <= top_px:
-                break
-            lo, hi = np.searchsorted(ys, [y_low, y_high])
             row_xs = xs[lo:hi]
-            inside = np.nonzero((row_xs >= x - margin) & (row_xs < x + margin))[0]
+            inside = ((row_xs >= x - margin) & (row_xs < x + margin)).nonzero()[0]
             windows.append(Window(side, int(x - margin), int(x + margin), y_low, y_high))
             if config.centre_first and len(inside) >= config.minpix:
                 full = [c for c in _window_clusters(row_xs[inside]) if len(c) >= config.minpix]
@@ -118,8 +128,8 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     wx = row_xs[inside]
                     x0 = int(wx.min())
                     x = float(x0 + int(np.argmax(np.bincount(wx - x0))))
-                else:
-                    x = float(row_xs[inside].mean())
+                else:  # their mean: the sum is exact in int64, so this is np.mean's float
+                    x = int(row_xs[inside].sum()) / len(inside)
                 margin = config.margin_px
             elif config.grow_margin_px:
                 margin += config.grow_margin_px

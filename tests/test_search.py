@@ -12,7 +12,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import measure
 from lanelib.params import SearchConfig
 from lanelib.records import LineFit
-from lanelib.search import (base_peak_confidence, find_bases, histogram, search_around,
+from lanelib.search import (base_peak_confidence, find_bases, histogram, lane_pixels, search_around,
                             sliding_windows)
 
 H, W = 720, 1280
@@ -179,3 +179,18 @@ YM_VIEW = 0.03263888888888889  # the default 1280 x 720 view's metres per row
 
 
 LANE_LINES = (np.array([0.0, 0.0, 420.0]), np.array([0.0, 0.0, 860.0]))
+
+
+def test_lane_pixels_equal_find_non_zero_for_any_width_and_view():
+    # lane_pixels scans a contiguous mask of a width divisible by 4 as int32 words; any other mask
+    # pixel by pixel: both give cv2.findNonZero's pixels in its order
+    rng = np.random.default_rng(0)
+    for trial in range(60):
+        h, w = int(rng.integers(1, 30)), int(rng.integers(1, 120))
+        mask = ((rng.random((h, w)) < rng.random()) * rng.integers(1, 256)).astype(np.uint8)
+        for view in (mask, mask[:, 1:], mask[1:]):
+            pts = cv2.findNonZero(view)
+            pts = np.empty((0, 2), np.int32) if pts is None else pts.reshape(-1, 2)
+            ys, xs = lane_pixels(view)
+            assert ys.dtype == xs.dtype == np.int32
+            assert np.array_equal(ys, pts[:, 1]) and np.array_equal(xs, pts[:, 0])

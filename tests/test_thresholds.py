@@ -324,3 +324,27 @@ def test_an_even_opening_still_drops_what_is_narrower_than_it():
     assert cols(th.morph(m, "open", 3, 1)) == set(range(10, 13)) | set(range(25, 29))
     with pytest.raises(ValueError, match="'open' or 'close'"):
         th.morph(m, "erode", 3, 3)
+
+
+def test_row_morphology_and_colour_boxes_equal_opencv_on_random_images():
+    # th.row_extreme (a row kernel's erosion or dilation by doubling runs) and th.color_range_mask (one
+    # channel at a time) give exactly cv2.erode / cv2.dilate and the 3-channel cv2.inRange
+    import cv2
+    rng = np.random.default_rng(0)
+    for trial in range(60):
+        h, w = int(rng.integers(1, 12)), int(rng.integers(1, 150))
+        img = rng.integers(0, 256, (h, w), dtype=np.uint8)
+        for width in (1, 2, 3, 12, 61):
+            kernel = np.ones((1, width), np.uint8)
+            for anchor in {0, width // 2, width - 1}:
+                assert np.array_equal(th.row_extreme(img, width, anchor, True),
+                                      cv2.erode(img, kernel, anchor=(anchor, 0)))
+                assert np.array_equal(th.row_extreme(img, width, anchor, False),
+                                      cv2.dilate(img, kernel, anchor=(anchor, 0)))
+        rgb = rng.integers(0, 256, (h, w, 3), dtype=np.uint8)
+        low = tuple(int(v) for v in rng.integers(0, 128, 3) * (rng.random(3) < 0.7))
+        high = tuple(int(v) for v in 255 - rng.integers(0, 128, 3) * (rng.random(3) < 0.7))
+        spec = th.ColorRange("hls", low, high)
+        expected = cv2.inRange(cv2.cvtColor(rgb, cv2.COLOR_RGB2HLS), np.array(low, np.uint8),
+                               np.array(high, np.uint8))
+        assert np.array_equal(th.color_range_mask(rgb, spec), expected)

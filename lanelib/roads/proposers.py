@@ -26,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..fit import joined_fit, offset_line, parallel_fits
-from ..records import NEAR_SHARE, LaneSearch, LineFit, Window
+from ..records import LaneSearch, LineFit, Window, near_row_px
 from ..search import fit_side, search_around
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
 from .fallbacks import FallbackMasks, OtherPeaks, ShorterViews
@@ -420,7 +420,7 @@ def joined_paint(tracker, pixels, placed: LineFit, top_px: int) -> LineFit | Non
     if len(ys) < tracker.pipeline.config.search.min_line_pixels // 2:
         return None
     bottom = tracker.bottom
-    near = float(np.quantile(ys, 1.0 - NEAR_SHARE))
+    near = near_row_px(ys)
     keep = ys <= near
     rows, med = row_medians(ys[keep], xs[keep])
     coeffs = joined_fit(rows.astype(float), med, placed.coeffs_px, np.arange(np.floor(near) + 1.0, bottom + 1.0),
