@@ -16,8 +16,9 @@ NEAR_SHARE = 0.02  # share of a line's pixels nearest the car left out of where 
 
 def near_row_px(ys: np.ndarray) -> float:
     """Return the row all but ``NEAR_SHARE`` of the pixels on rows ``ys`` lie above (how near the car a
-    line's pixels reach): ``np.quantile(ys, 1 - NEAR_SHARE)`` to the bit, its two rows read from the
-    count of pixels per row when the rows are integers from 0 (no partial sort).
+    line's pixels reach): ``np.quantile(ys, 1 - NEAR_SHARE)``, to the bit. The two rows it lies
+    between are read from the count of pixels per row when the rows are integers from 0 (no partial
+    sort), then interpolated as ``np.quantile`` does.
 
     Examples
     --------
@@ -31,11 +32,14 @@ def near_row_px(ys: np.ndarray) -> float:
         return float(ys.max())
     i = math.floor(at)
     t = at - i
-    if ys.dtype.kind in "iu" and ys.min() >= 0:  # the pixels on each row and the rows above it
-        a, b = (int(v) for v in np.searchsorted(np.cumsum(np.bincount(ys)), (i, i + 1), side="right"))
+    if ys.dtype.kind in "iu" and ys.min() >= 0:
+        below = np.cumsum(np.bincount(ys))  # pixels on each row and the rows above it
+        a, b = (int(v) for v in np.searchsorted(below, (i, i + 1), side="right"))
     else:
-        a, b = np.partition(ys, (i, i + 1))[i:i + 2]
-    return float(a + (b - a) * t) if t < 0.5 else float(b - (b - a) * (1 - t))
+        part = np.partition(ys, (i, i + 1))
+        a, b = part[i], part[i + 1]
+    diff = b - a
+    return float(a + diff * t) if t < 0.5 else float(b - diff * (1 - t))
 
 
 @dataclass(frozen=True)

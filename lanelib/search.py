@@ -16,9 +16,12 @@ from .roads.stripes import double_line_fit
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y then x (int32 arrays); a contiguous
-    mask of a width divisible by 4 is scanned as int32 words (``cv2.findNonZero`` tests pixel by pixel),
-    then the nonzero bytes of the nonzero words are read: the same pixels in the same order."""
+    """Return (ys, xs) of the nonzero pixels of a mask, sorted by y then x (int32 arrays).
+
+    ``cv2.findNonZero`` tests pixel by pixel; a contiguous mask whose width is a multiple of 4 is
+    scanned as int32 words instead (a quarter of the tests), then the nonzero bytes of the nonzero
+    words are read: the same pixels in the same order.
+    """
     h, w = binary.shape[:2]
     words = binary.ndim == 2 and binary.dtype == np.uint8 and w % 4 == 0 and binary.flags.c_contiguous
     pts = cv2.findNonZero(binary.view(np.int32) if words else binary)

@@ -138,7 +138,7 @@ def morph(image: np.ndarray, op: str, width_px: int, height_px: int) -> np.ndarr
     width x height rectangle. OpenCV anchors an even kernel half a pixel off centre for both passes,
     which shifts the result a pixel; with the second pass's anchor mirrored, a shape wider than the
     kernel comes back in place for every size. A kernel one row tall on a uint8 image runs as
-    ``row_extreme`` (the same result in log2 of the width passes).
+    ``row_extreme`` (OpenCV's result, in time growing with log2 of the width, not with the width).
     """
     if op not in ("open", "close"):
         raise ValueError(f"morph: op {op!r} must be 'open' or 'close'")
@@ -155,13 +155,17 @@ def morph(image: np.ndarray, op: str, width_px: int, height_px: int) -> np.ndarr
 
 def row_extreme(image: np.ndarray, width_px: int, anchor_px: int, low: bool) -> np.ndarray:
     """Return ``cv2.erode`` (``low``) or ``cv2.dilate`` of a uint8 image by a kernel one row tall and
-    ``width_px`` wide anchored at ``anchor_px``, exactly: each row padded with the value that changes
-    no min (max), then the min (max) of two shifted runs, doubling their length at each step: about
-    log2(width) whole-image passes for OpenCV's one per kernel column.
+    ``width_px`` wide anchored at ``anchor_px``: each pixel's min (max) over the row's pixels from
+    ``anchor_px`` left of it to ``width_px - 1 - anchor_px`` right, those beyond the edge left out.
+
+    The row is padded with the value that changes no min (max); each step then takes the min (max)
+    of two shifted runs, doubling their length, so about log2(width) whole-image passes replace
+    OpenCV's one pass per kernel column.
 
     Examples
     --------
-    >>> row_extreme(np.array([[5, 1, 7, 3, 9, 2]], np.uint8), 3, 1, low=True).tolist()
+    >>> row = np.array([[5, 1, 7, 3, 9, 2]], np.uint8)
+    >>> row_extreme(row, 3, 1, low=True).tolist()
     [[1, 1, 1, 3, 2, 2]]
     """
     op, border = (cv2.min, 255) if low else (cv2.max, 0)
@@ -172,7 +176,8 @@ def row_extreme(image: np.ndarray, width_px: int, anchor_px: int, low: bool) -> 
     n, cols = 1, run.shape[1]  # ``run`` holds each pixel's extreme over ``n`` pixels from it, ``cols`` valid
     while n < width_px:
         step = min(n, width_px - n)
-        n, cols = n + step, cols - step
+        cols -= step
+        n += step
         dst = np.empty((h, w), np.uint8) if n == width_px else spare[:, :cols]
         run, spare = op(run[:, :cols], run[:, step:step + cols], dst=dst), run
     return run if width_px > 1 else np.ascontiguousarray(run[:, :w])
