@@ -135,16 +135,42 @@ class VergeGrid:
 
 
 def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None,
-               sampled: bool = False) -> VergeGrid:
+               sampled: bool = False, cells: tuple[int, int, int, int] | None = None) -> VergeGrid:
     """Return the ``VergeGrid`` of a bird's-eye image, or of its rows from ``row0_px`` (a multiple
     of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height).
     ``sampled``: ``bird`` holds one row of each ``scale`` rows (``grid_rows_px``), shrunk only
-    across (a quarter of the remap and of the features for a grid read on every frame)."""
+    across (a quarter of the remap and of the features for a grid read on every frame).
+    ``cells``: (first row, last row + 1, first column, last column + 1) of the grid, the only
+    cells measured, the others left unseen and 0 (``road_edge`` measures what it reads); for an
+    image whose size is a multiple of ``scale`` each way, where a cell is the mean of its
+    ``scale`` x ``scale`` pixels whichever cells are shrunk with it."""
     h, w = bird.shape[:2]
     rows = h if sampled else h // scale
-    small = cv2.resize(bird, (w // scale, rows), interpolation=cv2.INTER_AREA) if scale > 1 else bird
-    sat, grain, seen = verge_features(small)
+    if cells is not None:
+        sat, grain, seen = _cell_features(bird, scale, cells)
+    else:
+        small = cv2.resize(bird, (w // scale, rows), interpolation=cv2.INTER_AREA) if scale > 1 else bird
+        sat, grain, seen = verge_features(small)
     return VergeGrid(sat, grain, seen, row0_px // scale, h if height_px is None else height_px, scale)
+
+
+def _cell_features(bird: np.ndarray, scale: int, cells: tuple[int, int, int, int]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return ``verge_features`` of the whole grid of ``bird`` measured on ``cells`` only (see
+    ``verge_grid``), 0 and unseen elsewhere: those cells and one more around them (the grain's
+    3 x 3 blur reads them; its sums of whole levels are exact in any order) are shrunk and
+    measured, so each cell measured is the whole grid's."""
+    h, w = bird.shape[0] // scale, bird.shape[1] // scale
+    r0, r1, c0, c1 = cells
+    out = [np.zeros((h, w), np.float32), np.zeros((h, w), np.float32), np.zeros((h, w), bool)]
+    if r1 <= r0 or c1 <= c0:
+        return out[0], out[1], out[2]
+    a0, a1, b0, b1 = max(0, r0 - 1), min(h, r1 + 1), max(0, c0 - 1), min(w, c1 + 1)
+    crop = bird[a0 * scale:a1 * scale, b0 * scale:b1 * scale]
+    small = cv2.resize(crop, (b1 - b0, a1 - a0), interpolation=cv2.INTER_AREA) if scale > 1 else crop
+    for whole, part in zip(out, verge_features(small)):
+        whole[r0:r1, c0:c1] = part[r0 - a0:r1 - a0, c0 - b0:c1 - b0]
+    return out[0], out[1], out[2]
 
 
 def grid_rows_px(row0_px: int, height_px: int, scale: int) -> np.ndarray:
@@ -251,11 +277,15 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
     no edge. ``bottom_px``: the rows below it are not read (default: the view's bottom row).
     ``grid``: the view's ``verge_grid`` made already (``bird`` is then not read).
     """
-    if grid is None:
-        grid = verge_grid(bird, config.scale)
-    s = _edge_search(grid, other, side, xm_per_px, ym_per_px, checks, config, top_px, guide_px, range_m,
+    k = config.scale if grid is None else grid.scale
+    shape = (k, 0, bird.shape[0] // k, bird.shape[1] // k) if grid is None else \
+        (k, grid.row0, grid.sat.shape[0], grid.sat.shape[1])
+    s = _edge_search(shape, other, side, xm_per_px, ym_per_px, checks, config, top_px, guide_px, range_m,
                      bottom_px)
-    refs = _road_references(grid, s, checks)
+    if grid is None:  # without a trace, only the cells read are measured (``_cells_read``)
+        whole = s.trace_half > 0 or bird.shape[0] % k or bird.shape[1] % k
+        grid = verge_grid(bird, k, cells=None if whole else _cells_read(s))
+    refs = _road_references(grid, s)
     if s.trace_half <= 0:  # every row at once: its own road surface, its range from the guide
         ys, xs = _edge_points_every_row(grid, s, refs, config)
     else:
@@ -279,15 +309,20 @@ class _EdgeSearch(NamedTuple):
     pad: tuple[int, int]   # the columns the windows reach beyond a search range, inside and outside
     trace_half: float      # half the width (shrunk px) a traced row is searched in (0: no trace)
     gap_rows: int          # rows without a point that end a trace
+    ref0: np.ndarray       # the first and last-plus-one column (shrunk px) of each row's road reference
+    ref1: np.ndarray
+    a: np.ndarray          # the first and last column (shrunk px) of each row's range from the guide
+    b: np.ndarray
 
 
-def _edge_search(grid: VergeGrid, other: LineFit, side: str, xm_per_px: float, ym_per_px: float,
-                 checks: LaneChecks, config: EdgeConfig, top_px: int, guide_px, range_m,
+def _edge_search(shape: tuple[int, int, int, int], other: LineFit, side: str, xm_per_px: float,
+                 ym_per_px: float, checks: LaneChecks, config: EdgeConfig, top_px: int, guide_px, range_m,
                  bottom_px: int | None) -> _EdgeSearch:
     """Return the rows ``road_edge`` reads (from ``top_px`` to ``bottom_px``), the other line and
-    the guide on them, and its windows in shrunk pixels."""
-    k, row0 = grid.scale, grid.row0
-    sh = row0 + grid.sat.shape[0]
+    the guide on them, and its windows and columns in shrunk pixels, on a grid of ``shape``: its
+    scale, first row (``VergeGrid.row0``), rows and columns."""
+    k, row0, n_rows, sw = shape
+    sh = row0 + n_rows
     sign = 1.0 if side == "right" else -1.0
     last_row = sh if bottom_px is None else min(sh, int(np.ceil((bottom_px + 1) / k)))
     rows = np.arange(max(row0, top_px // k), last_row)[::-1]  # from the bottom up
@@ -303,21 +338,38 @@ def _edge_search(grid: VergeGrid, other: LineFit, side: str, xm_per_px: float, y
     near_m, far_m = (checks.min_width_m - 0.2, checks.max_width_m + 0.2) if range_m is None else range_m
     win = max(2, int(round(config.step_m / xm_per_px / k)))
     pad = (win, 2 * win) if sign > 0 else (2 * win, win)  # the outer window is 2 x step_m
-    return _EdgeSearch(rows, yf, x_line, stretch_of(np.asarray(other.coeffs_px, float)), x_guide,
-                       stretch_of(guide), sign, near_m, far_m, win, pad,
+    stretch, stretch_g = stretch_of(np.asarray(other.coeffs_px, float)), stretch_of(guide)
+    # the road reference: from 0.3 x the least lane width beyond the other line to 0.3 m short of it
+    near = np.round((x_line + sign * 0.3 * checks.min_width_m * stretch) / k).astype(int)
+    far = np.round((x_line + sign * (checks.min_width_m - 0.3) * stretch) / k).astype(int)
+    # the edge's range from the guide, the windows inside the grid
+    x0, x1 = x_guide + sign * near_m * stretch_g, x_guide + sign * far_m * stretch_g
+    a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
+    return _EdgeSearch(rows, yf, x_line, stretch, x_guide, stretch_g, sign, near_m, far_m, win, pad,
                        config.trace_margin_m / xm_per_px / k,
-                       max(1, int(round(config.trace_gap_m / ym_per_px / k))))
+                       max(1, int(round(config.trace_gap_m / ym_per_px / k))),
+                       np.maximum(0, np.minimum(near, far)), np.minimum(sw, np.maximum(near, far) + 1),
+                       np.maximum(np.minimum(a, b), pad[0]), np.minimum(np.maximum(a, b), sw - pad[1]))
 
 
-def _road_references(grid: VergeGrid, s: _EdgeSearch, checks: LaneChecks) -> np.ndarray:
+def _cells_read(s: _EdgeSearch) -> tuple[int, int, int, int]:
+    """Return the grid cells (first row, last row + 1, first column, last column + 1) that
+    ``road_edge`` reads without a trace: its rows, and on them each row's road reference and its
+    range from the guide with the windows' reach beyond it."""
+    if not len(s.rows):
+        return 0, 0, 0, 0
+    c0 = min(int(s.ref0.min()), int(s.a.min()) - s.pad[0])
+    c1 = max(int(s.ref1.max()), int(s.b.max()) + s.pad[1])
+    return int(s.rows.min()), int(s.rows.max()) + 1, max(0, c0), c1
+
+
+def _road_references(grid: VergeGrid, s: _EdgeSearch) -> np.ndarray:
     """Return the road surface of each row, (saturation, grain): the medians of the row between
     the other line and the nearest the edge may be, for all rows at once; NaN where a row's
     window is shorter than the inner window or not all seen."""
-    k, row0, sw = grid.scale, grid.row0, grid.sat.shape[1]
+    row0, sw = grid.row0, grid.sat.shape[1]
     rows, win = s.rows, s.win
-    near = np.round((s.x_line + s.sign * 0.3 * checks.min_width_m * s.stretch) / k).astype(int)
-    far = np.round((s.x_line + s.sign * (checks.min_width_m - 0.3) * s.stretch) / k).astype(int)
-    p0, p1 = np.maximum(0, np.minimum(near, far)), np.minimum(sw, np.maximum(near, far) + 1)
+    p0, p1 = s.ref0, s.ref1
     span = p1 - p0
     refs = np.full((len(rows), 2), np.nan)
     if len(rows) and span.max() > 0:
@@ -339,12 +391,9 @@ def _edge_points_every_row(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
                            config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
     """Return the edge points (y, x in view px) of every row with a road reference, each searched
     over the range from the guide (``road_edge`` without a trace)."""
-    k, row0, sw = grid.scale, grid.row0, grid.sat.shape[1]
+    k, row0 = grid.scale, grid.row0
     use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
-    x0 = s.x_guide + s.sign * s.near_m * s.stretch_g
-    x1 = s.x_guide + s.sign * s.far_m * s.stretch_g
-    a, b = (x0 // k).astype(int), np.ceil(x1 / k).astype(int)
-    a, b = np.maximum(np.minimum(a, b), s.pad[0]), np.minimum(np.maximum(a, b), sw - s.pad[1])
+    a, b = s.a, s.b
     ys, xs = _edge_steps(grid.sat, grid.grain, grid.seen, s.rows[use] - row0, a[use], b[use], s.pad, s.win,
                          s.sign, refs[use, 0].astype(grid.sat.dtype),
                          np.maximum(refs[use, 1], 1e-3).astype(grid.grain.dtype), config)
