@@ -32,14 +32,17 @@ def saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return (hi - cv2.min(cv2.min(r, g), b)) / np.maximum(hi, DARK_V), hi
 
 
-def verge_features(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def verge_features(rgb: np.ndarray, grain: bool = True) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Return the per-pixel features that tell a verge from the road surface in a (shrunk)
     bird's-eye image: saturation (``saturation``: the bluish tint of a shadow or the noise of a
-    dark pixel is not colour), grain (local std / mean of V over 3 x 3 px) and where the camera
+    dark pixel is not colour), grain (local std / mean of V over 3 x 3 px; None without
+    ``grain``, for an edge found by saturation alone) and where the camera
     sees (not black). Both are free of the light's brightness, so a shadow on
     the road, a repaved strip, a tar seam and a concrete barrier (grey and smooth like the road)
     look like road; grass and dirt differ in saturation, gravel in grain."""
     sat, hi = saturation(rgb)
+    if not grain:
+        return sat, None, hi > 0
     mean = cv2.blur(hi, (3, 3))
     var = np.maximum(cv2.blur(hi * hi, (3, 3)) - mean * mean, 0.0)
     return sat, np.sqrt(var) / np.maximum(mean, 8.0), hi > 0
@@ -127,7 +130,7 @@ class VergeGrid:
     once for several edges of one frame (``verge_grid``). ``height_px`` is the whole view's."""
 
     sat: np.ndarray
-    grain: np.ndarray
+    grain: np.ndarray | None  # None where not measured (``EdgeConfig.min_texture_ratio`` 0)
     seen: np.ndarray
     row0: int
     height_px: int
@@ -135,7 +138,8 @@ class VergeGrid:
 
 
 def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | None = None,
-               sampled: bool = False, cells: tuple[int, int, int, int] | None = None) -> VergeGrid:
+               sampled: bool = False, cells: tuple[int, int, int, int] | None = None,
+               grain: bool = True) -> VergeGrid:
     """Return the ``VergeGrid`` of a bird's-eye image, or of its rows from ``row0_px`` (a multiple
     of ``scale``) down when ``bird`` holds only those (``height_px``: the whole view's height).
     ``sampled``: ``bird`` holds one row of each ``scale`` rows (``grid_rows_px``), shrunk only
@@ -143,33 +147,36 @@ def verge_grid(bird: np.ndarray, scale: int, row0_px: int = 0, height_px: int | 
     ``cells``: (first row, last row + 1, first column, last column + 1) of the grid, the only
     cells measured, the others left unseen and 0 (``road_edge`` measures what it reads); for an
     image whose size is a multiple of ``scale`` each way, where a cell is the mean of its
-    ``scale`` x ``scale`` pixels whichever cells are shrunk with it."""
+    ``scale`` x ``scale`` pixels whichever cells are shrunk with it. ``grain``: the grain is measured
+    (``verge_features``; ``road_edge`` reads it only with ``EdgeConfig.min_texture_ratio``)."""
     h, w = bird.shape[:2]
     rows = h if sampled else h // scale
     if cells is not None:
-        sat, grain, seen = _cell_features(bird, scale, cells)
+        sat, texture, seen = _cell_features(bird, scale, cells, grain)
     else:
         small = cv2.resize(bird, (w // scale, rows), interpolation=cv2.INTER_AREA) if scale > 1 else bird
-        sat, grain, seen = verge_features(small)
-    return VergeGrid(sat, grain, seen, row0_px // scale, h if height_px is None else height_px, scale)
+        sat, texture, seen = verge_features(small, grain)
+    return VergeGrid(sat, texture, seen, row0_px // scale, h if height_px is None else height_px, scale)
 
 
-def _cell_features(bird: np.ndarray, scale: int, cells: tuple[int, int, int, int]
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _cell_features(bird: np.ndarray, scale: int, cells: tuple[int, int, int, int], grain: bool
+                   ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Return ``verge_features`` of the whole grid of ``bird`` measured on ``cells`` only (see
-    ``verge_grid``), 0 and unseen elsewhere: those cells and one more around them (the grain's
-    3 x 3 blur reads them; its sums of whole levels are exact in any order) are shrunk and
-    measured, so each cell measured is the whole grid's."""
+    ``verge_grid``), 0 and unseen elsewhere: those cells, and with ``grain`` one more around them
+    (the grain's 3 x 3 blur reads them; its sums of whole levels are exact in any order), are
+    shrunk and measured, so each cell measured is the whole grid's."""
     h, w = bird.shape[0] // scale, bird.shape[1] // scale
     r0, r1, c0, c1 = cells
-    out = [np.zeros((h, w), np.float32), np.zeros((h, w), np.float32), np.zeros((h, w), bool)]
+    out = [np.zeros((h, w), np.float32), np.zeros((h, w), np.float32) if grain else None, np.zeros((h, w), bool)]
     if r1 <= r0 or c1 <= c0:
         return out[0], out[1], out[2]
-    a0, a1, b0, b1 = max(0, r0 - 1), min(h, r1 + 1), max(0, c0 - 1), min(w, c1 + 1)
+    m = 1 if grain else 0
+    a0, a1, b0, b1 = max(0, r0 - m), min(h, r1 + m), max(0, c0 - m), min(w, c1 + m)
     crop = bird[a0 * scale:a1 * scale, b0 * scale:b1 * scale]
     small = cv2.resize(crop, (b1 - b0, a1 - a0), interpolation=cv2.INTER_AREA) if scale > 1 else crop
-    for whole, part in zip(out, verge_features(small)):
-        whole[r0:r1, c0:c1] = part[r0 - a0:r1 - a0, c0 - b0:c1 - b0]
+    for whole, part in zip(out, verge_features(small, grain)):
+        if whole is not None:
+            whole[r0:r1, c0:c1] = part[r0 - a0:r1 - a0, c0 - b0:c1 - b0]
     return out[0], out[1], out[2]
 
 
@@ -284,7 +291,7 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
                      bottom_px)
     if grid is None:  # without a trace, only the cells read are measured (``_cells_read``)
         whole = s.trace_half > 0 or bird.shape[0] % k or bird.shape[1] % k
-        grid = verge_grid(bird, k, cells=None if whole else _cells_read(s))
+        grid = verge_grid(bird, k, cells=None if whole else _cells_read(s), grain=config.min_texture_ratio > 0)
     refs = _road_references(grid, s)
     if s.trace_half <= 0:  # every row at once: its own road surface, its range from the guide
         ys, xs = _edge_points_every_row(grid, s, refs, config)
@@ -366,7 +373,8 @@ def _cells_read(s: _EdgeSearch) -> tuple[int, int, int, int]:
 def _road_references(grid: VergeGrid, s: _EdgeSearch) -> np.ndarray:
     """Return the road surface of each row, (saturation, grain): the medians of the row between
     the other line and the nearest the edge may be, for all rows at once; NaN where a row's
-    window is shorter than the inner window or not all seen."""
+    window is shorter than the inner window or not all seen, and the grain NaN where the grid
+    has none."""
     row0, sw = grid.row0, grid.sat.shape[1]
     rows, win = s.rows, s.win
     p0, p1 = s.ref0, s.ref1
@@ -381,7 +389,8 @@ def _road_references(grid: VergeGrid, s: _EdgeSearch) -> np.ndarray:
         if ok.any():
             lo_i, hi_i = (span[ok] - 1) // 2, span[ok] // 2
             pick = np.arange(int(ok.sum()))
-            for j, feature in enumerate((grid.sat, grid.grain)):
+            features = (grid.sat,) if grid.grain is None else (grid.sat, grid.grain)
+            for j, feature in enumerate(features):
                 vals = np.sort(np.where(inside, feature[rr, cols], np.nan)[ok], axis=1)  # NaN last
                 refs[ok, j] = (vals[pick, lo_i] + vals[pick, hi_i]) / 2  # np.median's, in float32
     return refs
@@ -396,7 +405,7 @@ def _edge_points_every_row(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
     a, b = s.a, s.b
     ys, xs = _edge_steps(grid.sat, grid.grain, grid.seen, s.rows[use] - row0, a[use], b[use], s.pad, s.win,
                          s.sign, refs[use, 0].astype(grid.sat.dtype),
-                         np.maximum(refs[use, 1], 1e-3).astype(grid.grain.dtype), config)
+                         np.maximum(refs[use, 1], 1e-3).astype(grid.sat.dtype), config)
     ys = s.yf[use][ys] if len(ys) else np.zeros(0)
     return ys, xs * float(k)
 
@@ -434,7 +443,7 @@ def _edge_points_traced(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
         if b <= a or not grid.seen[r - row0, a - s.pad[0]:b + s.pad[1]].all():
             missed += 1
             continue
-        x = _edge_step(grid.sat[r - row0], grid.grain[r - row0], a, b, s.pad, s.win, s.sign, road_sat,
+        x = _edge_step(grid.sat[r - row0], None if grid.grain is None else grid.grain[r - row0], a, b, s.pad, s.win, s.sign, road_sat,
                        road_grain, config)
         if x is None:
             missed += 1
