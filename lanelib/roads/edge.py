@@ -217,26 +217,33 @@ def _edge_steps(sat, grain, seen, rows, a, b, pad: tuple[int, int], win: int, si
                 road_sat: np.ndarray, road_grain: np.ndarray, config: EdgeConfig) -> tuple[np.ndarray, np.ndarray]:
     """Return which of ``rows`` (indices into them) have a road-to-verge step between their
     columns ``a`` and ``b`` and its column (shrunk grid, float): ``_edge_step`` on every row at
-    once (the same sums in the same order, so the same columns)."""
+    once (the same sums in the same order, so the same columns).
+
+    A row whose verge score stays below ``min_outer`` by more than the rounding of its float32
+    running sums (n**2 * 2**-24 / ``win`` for n columns, at most 1 each) has no outer window that
+    reaches it, and is left out before its sums (on a road without a verge in view, most rows)."""
     lo, hi = a - pad[0], b + pad[1]
     length = hi - lo
     keep = b > a
-    if keep.any():
-        offs = np.arange(int(length[keep].max()))
-        inside = offs[None, :] < length[:, None]
-        cols = (lo[:, None] + offs[None, :]) if sign > 0 else (hi[:, None] - 1 - offs[None, :])
-        cols = np.clip(cols, 0, sat.shape[1] - 1)
-        rr = rows[:, None]
-        keep &= np.all(seen[rr, cols] | ~inside, axis=1)
+    if not keep.any():
+        return np.zeros(0, int), np.zeros(0)
+    offs = np.arange(int(length[keep].max()))
+    inside = offs[None, :] < length[:, None]
+    cols = (lo[:, None] + offs[None, :]) if sign > 0 else (hi[:, None] - 1 - offs[None, :])
+    cols = np.clip(cols, 0, sat.shape[1] - 1)
+    rr = rows[:, None]
+    score = np.clip((sat[rr, cols] - road_sat[:, None]) / config.min_saturation_step, 0, 1)
+    if config.min_texture_ratio > 0:
+        score = np.maximum(score, np.clip((grain[rr, cols] / road_grain[:, None] - 1.0)
+                                          / config.min_texture_ratio, 0, 1))
+    score = np.where(inside, score, 0.0)
+    slack = (len(offs) + 1) ** 2 * 2.0 ** -24 / win
+    keep &= score.max(axis=1) >= config.min_outer - slack
+    keep[keep] &= np.all(seen[rr[keep], cols[keep]] | ~inside[keep], axis=1)
     if not keep.any():
         return np.zeros(0, int), np.zeros(0)
     idx_rows = np.flatnonzero(keep)
-    rr, cols, inside, length = rows[keep][:, None], cols[keep], inside[keep], length[keep]
-    score = np.clip((sat[rr, cols] - road_sat[keep][:, None]) / config.min_saturation_step, 0, 1)
-    if config.min_texture_ratio > 0:
-        score = np.maximum(score, np.clip((grain[rr, cols] / road_grain[keep][:, None] - 1.0)
-                                          / config.min_texture_ratio, 0, 1))
-    score = np.where(inside, score, 0.0)
+    score, length = score[keep], length[keep]
     c = np.concatenate([np.zeros((len(score), 1)), np.cumsum(score, axis=1)], axis=1)
     n = c.shape[1]
     j = np.arange(win, max(win + 1, n - 2 * win))
