@@ -231,15 +231,15 @@ def _edge_steps(sat, grain, seen, rows, a, b, pad: tuple[int, int], win: int, si
     inside = offs[None, :] < length[:, None]
     cols = (lo[:, None] + offs[None, :]) if sign > 0 else (hi[:, None] - 1 - offs[None, :])
     cols = np.clip(cols, 0, sat.shape[1] - 1)
-    rr = rows[:, None]
-    score = np.clip((sat[rr, cols] - road_sat[:, None]) / config.min_saturation_step, 0, 1)
+    cells = rows[:, None] * sat.shape[1] + cols  # flat indices: ``take`` gathers them fastest
+    score = np.clip((sat.take(cells) - road_sat[:, None]) / config.min_saturation_step, 0, 1)
     if config.min_texture_ratio > 0:
-        score = np.maximum(score, np.clip((grain[rr, cols] / road_grain[:, None] - 1.0)
+        score = np.maximum(score, np.clip((grain.take(cells) / road_grain[:, None] - 1.0)
                                           / config.min_texture_ratio, 0, 1))
     score = np.where(inside, score, 0.0)
     slack = (len(offs) + 1) ** 2 * 2.0 ** -24 / win
     keep &= score.max(axis=1) >= config.min_outer - slack
-    keep[keep] &= np.all(seen[rr[keep], cols[keep]] | ~inside[keep], axis=1)
+    keep[keep] &= np.all(seen.take(cells[keep]) | ~inside[keep], axis=1)
     if not keep.any():
         return np.zeros(0, int), np.zeros(0)
     idx_rows = np.flatnonzero(keep)
@@ -391,14 +391,14 @@ def _road_references(grid: VergeGrid, s: _EdgeSearch) -> np.ndarray:
         offs = np.arange(int(span.max()))
         inside = offs[None, :] < span[:, None]
         cols = np.clip(p0[:, None] + offs[None, :], 0, sw - 1)
-        rr = (rows - row0)[:, None]
-        ok = (span >= win) & np.all(grid.seen[rr, cols] | ~inside, axis=1)
+        cells = (rows - row0)[:, None] * sw + cols  # flat indices: ``take`` gathers them fastest
+        ok = (span >= win) & np.all(grid.seen.take(cells) | ~inside, axis=1)
         if ok.any():
             lo_i, hi_i = (span[ok] - 1) // 2, span[ok] // 2
             pick = np.arange(int(ok.sum()))
             features = (grid.sat,) if grid.grain is None else (grid.sat, grid.grain)
             for j, feature in enumerate(features):
-                vals = np.sort(np.where(inside, feature[rr, cols], np.nan)[ok], axis=1)  # NaN last
+                vals = np.sort(np.where(inside, feature.take(cells), np.nan)[ok], axis=1)  # NaN last
                 refs[ok, j] = (vals[pick, lo_i] + vals[pick, hi_i]) / 2  # np.median's, in float32
     return refs
 
