@@ -167,7 +167,8 @@ def _cell_features(bird: np.ndarray, scale: int, cells: tuple[int, int, int, int
     shrunk and measured, so each cell measured is the whole grid's."""
     h, w = bird.shape[0] // scale, bird.shape[1] // scale
     r0, r1, c0, c1 = cells
-    out = [np.zeros((h, w), np.float32), np.zeros((h, w), np.float32) if grain else None, np.zeros((h, w), bool)]
+    out = [np.zeros((h, w), np.float32), np.zeros((h, w), np.float32) if grain else None,
+           np.zeros((h, w), bool)]
     if r1 <= r0 or c1 <= c0:
         return out[0], out[1], out[2]
     m = 1 if grain else 0
@@ -298,7 +299,8 @@ def road_edge(bird: np.ndarray, other: LineFit, side: str, xm_per_px: float, ym_
                      bottom_px)
     if grid is None:  # without a trace, only the cells read are measured (``_cells_read``)
         whole = s.trace_half > 0 or bird.shape[0] % k or bird.shape[1] % k
-        grid = verge_grid(bird, k, cells=None if whole else _cells_read(s), grain=config.min_texture_ratio > 0)
+        grid = verge_grid(bird, k, cells=None if whole else _cells_read(s),
+                          grain=config.min_texture_ratio > 0)
     refs = _road_references(grid, s)
     if s.trace_half <= 0:  # every row at once: its own road surface, its range from the guide
         ys, xs = _edge_points_every_row(grid, s, refs, config)
@@ -450,8 +452,8 @@ def _edge_points_traced(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
         if b <= a or not grid.seen[r - row0, a - s.pad[0]:b + s.pad[1]].all():
             missed += 1
             continue
-        x = _edge_step(grid.sat[r - row0], None if grid.grain is None else grid.grain[r - row0], a, b, s.pad, s.win, s.sign, road_sat,
-                       road_grain, config)
+        grain_row = None if grid.grain is None else grid.grain[r - row0]
+        x = _edge_step(grid.sat[r - row0], grain_row, a, b, s.pad, s.win, s.sign, road_sat, road_grain, config)
         if x is None:
             missed += 1
             continue
