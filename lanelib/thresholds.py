@@ -63,12 +63,14 @@ def mask_input(rgb: np.ndarray, config: ThresholdConfig, clahe: cv2.CLAHE | None
 # --------------------------------------------------------------------------- channels
 
 class Channels:
-    """Colour-space conversions of one RGB image and their channels, each computed at most once."""
+    """Colour-space conversions of one RGB image, their channels and top-hats, each computed at most
+    once."""
 
     def __init__(self, rgb: np.ndarray):
         self.rgb = rgb
         self._spaces: dict[str, np.ndarray] = {"rgb": rgb}
         self._planes: dict[str, tuple[np.ndarray, ...]] = {}  # each space's channels, split once
+        self._tophats: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def space(self, name: str) -> np.ndarray:
         """Return the image converted to colour space ``name``."""
@@ -86,6 +88,24 @@ class Channels:
             if name != "rgb":
                 out._spaces[name] = join([img[c] for c in pieces])
         return out
+
+    def tophat(self, spec: TopHatMask) -> tuple[np.ndarray, np.ndarray]:
+        """Return how much each pixel is brighter than its surroundings (uint8 levels of
+        ``spec.channel``), and the surroundings: a horizontal white top-hat ``spec.width_px`` wide,
+        made once for every mask and reader of that channel and width.
+
+        Examples
+        --------
+        >>> road = np.full((1, 9, 3), 80, np.uint8); road[0, 4] = 200
+        >>> Channels(road).tophat(TopHatMask(space="gray", channel="y", width_px=5))[0].tolist()
+        [[0, 0, 0, 0, 120, 0, 0, 0, 0]]
+        """
+        key = (spec.space, spec.channel, spec.width_px)
+        if key not in self._tophats:
+            values = self.channel(spec.space, spec.channel)
+            background = morph(values, "open", spec.width_px, 1)
+            self._tophats[key] = (cv2.subtract(values, background), background)
+        return self._tophats[key]
 
     def channel(self, space: str, channel: str) -> np.ndarray:
         """Return one channel (uint8, H x W) of the image in ``space`` (the space's channels are split
@@ -237,26 +257,10 @@ def _integer_sobel_mask(gray: np.ndarray, spec: SobelMask) -> np.ndarray:
     return cv2.bitwise_or(cv2.inRange(s, lo, hi), cv2.inRange(s, -hi, -lo))
 
 
-def tophat_levels(rgb: np.ndarray | Channels, spec: TopHatMask) -> tuple[np.ndarray, np.ndarray]:
-    """Return how much each pixel is brighter than its surroundings (uint8 levels of
-    ``spec.channel``), and the surroundings: a horizontal white top-hat ``spec.width_px`` wide.
-
-    Examples
-    --------
-    >>> road = np.full((1, 9, 3), 80, np.uint8); road[0, 4] = 200
-    >>> tophat_levels(road, TopHatMask(space="gray", channel="y", width_px=5))[0].tolist()
-    [[0, 0, 0, 0, 120, 0, 0, 0, 0]]
-    """
-    ch = rgb if isinstance(rgb, Channels) else Channels(rgb)
-    values = ch.channel(spec.space, spec.channel)
-    background = morph(values, "open", spec.width_px, 1)
-    return cv2.subtract(values, background), background
-
-
 def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
     """Return the 0/255 mask of pixels brighter than their surroundings by [low, high] levels
     (and, with ``spec.ratio``, by that multiple of the surroundings; see ``TopHatMask``)."""
-    tophat, background = tophat_levels(rgb, spec)
+    tophat, background = (rgb if isinstance(rgb, Channels) else Channels(rgb)).tophat(spec)
     if spec.ratio <= 0 and spec.max_background >= 255:
         out = in_range(tophat, spec.low, spec.high)
     else:

@@ -108,7 +108,8 @@ def paint_strength(view: np.ndarray | thresholds.Channels, tconf: thresholds.Thr
     road; a seam, a barrier's foot or a vehicle's edge that passes the floor barely does, and
     counts half as much.
 
-    ``view`` is the view's RGB image, or its ``thresholds.Channels`` made already.
+    ``view`` is the view's RGB image, or its ``thresholds.Channels`` made already (whose top-hat the
+    mask read: it is not made again).
 
     Examples
     --------
@@ -121,7 +122,7 @@ def paint_strength(view: np.ndarray | thresholds.Channels, tconf: thresholds.Thr
         return None
     spec = tconf.line_tophat
     floor = min(spec.low, config.tophat_low) if config.tophat_low > 0 else spec.low
-    levels = thresholds.tophat_levels(view, spec)[0]
+    levels = (view if isinstance(view, thresholds.Channels) else thresholds.Channels(view)).tophat(spec)[0]
     return np.clip(levels.astype(np.float32) / (config.contrast_full * max(floor, 1)), 0.5, 1.0)
 
 
@@ -154,7 +155,9 @@ def find_every_line(raw: np.ndarray, setup: LinesSetup, config: LinesConfig,
     mask = thresholds.combine(bird, tconf, made=made)
     if config.tophat_low and tconf.line_tophat.enabled:  # far paint: blurred, dimmer
         far = replace(tconf.line_tophat, low=min(config.tophat_low, tconf.line_tophat.low))
-        low = thresholds.mask(bird, far)
+        # the view's own pixels, not CLAHE's: the channels the mask made when it saw those
+        unequalised = made.channels if made.channels is not None and not tconf.clahe else bird
+        low = thresholds.mask(unequalised, far)
         top = max(0, int(view.bottom_px - config.near_m / view.ym_per_px))
         half = int(config.near_half_width_m / view.xm_per_px)
         cx = int(view.car_x_px)
