@@ -6,6 +6,10 @@ scoreboard``, ``make scoreboard``):
 - **CULane dev** (``data.culane_dev``): every listed frame predicted on its own
   (``batch.predict_benchmark``: every line seen, up to two a side) with ``batch.benchmark_config``
   and scored by CULane's official rules (30 px lines on 1640x590, IoU > 0.5): precision, recall, F1.
+- **CULane dev, cameras moved**: the same frames and labels moved by whole pixels (``moved_culane``:
+  each sequence by the next of ``CAMERA_MOVES``, as another car's camera, pitched or turned a
+  little otherwise, sees the road), predicted with the same preset and scored alike: how much a
+  camera mounted otherwise than the preset's costs.
 - **TuSimple dev** (``data.tusimple_dev``): its 512x288 frames upscaled to 1280x720
   (``upscaled_tusimple``: bicubic, PNG, written once into a cache folder under ``out``), predicted
   and scored on the official 1280x720 rows of its full-resolution labels: accuracy, FP, FN.
@@ -36,6 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Callable, NamedTuple, Sequence
 
+import cv2
 import numpy as np
 
 from . import autogeometry, batch, data, evaluate, io
@@ -54,6 +59,9 @@ PLAUSIBLE_OFFSET_M = 0.6        # a plausible car's |offset| from the lane's cen
 SYNTH_FRAMES = 10               # frames of each synthetic benchmark sample (one sequence)
 TUSIMPLE_SIZE = tusimple.IMAGE_SIZE  # (width, height) of TuSimple's frames and official label rows
 TUSIMPLE_CACHE = "tusimple-dev-1280x720"  # under ``out``: the upscaled frames and their labels
+MOVED_CACHE = "culane-dev-moved"  # under ``out``: the moved CULane frames and their labels
+# (dx, dy) px that moved_culane moves the sequences' frames by, in turn: pitched down; turned left and pitched up
+CAMERA_MOVES = ((0, 15), (-40, -10))
 P1_VIDEOS = {"p1-white": "test_videos/solidWhiteRight.mp4", "p1-yellow": "test_videos/solidYellowLeft.mp4"}
 
 # how each figure prints: its label, and the format of its value
@@ -263,6 +271,51 @@ def _culane_dev(out: Path, settings: Settings) -> Measured:
                     _predict_ms(run))
 
 
+def moved_culane(root: str | Path, list_file: str | Path, cache: str | Path,
+                 moves: Sequence[tuple[int, int]] = CAMERA_MOVES) -> Path:
+    """Return the list file of CULane frames moved as another camera sees them, written under ``cache``.
+
+    The frames of each sequence (``batch.frame_sequence``) of ``list_file``, in list order, move by
+    the next (dx, dy) px of ``moves`` (the edge rows and columns repeated into the space left),
+    and their labelled points with them (points moved out of the image are left out): for small
+    angles a camera pitched or turned otherwise sees the same image moved. The frames are written
+    as PNG (lossless) under ``cache``, once (remove ``cache`` to write them again), with their
+    labels beside them and the list ``cache/list.txt``; nothing is written under ``root``.
+    """
+    root, cache = Path(root), Path(cache)
+    entries = culane.read_list(list_file)
+    sequences = list(dict.fromkeys(batch.frame_sequence("culane", e) for e in entries))
+    moved = []
+    for entry in entries:
+        dx, dy = moves[sequences.index(batch.frame_sequence("culane", entry)) % len(moves)]
+        name = str(PurePosixPath(entry).with_suffix(".png"))
+        target = cache.joinpath(*PurePosixPath(name.lstrip("/")).parts)
+        if not target.is_file():
+            image = root.joinpath(*PurePosixPath(entry.lstrip("/")).parts)
+            frame = io.read_image(image)
+            h, w = frame.shape[:2]
+            shifted = cv2.warpAffine(frame, np.float32([[1, 0, dx], [0, 1, dy]]), (w, h),
+                                     borderMode=cv2.BORDER_REPLICATE)
+            lanes = [lane + (dx, dy) for lane in culane.read_lines(culane.lines_path(root, entry))]
+            inside = [lane[(lane[:, 0] >= 0) & (lane[:, 0] <= w) & (lane[:, 1] >= 0) & (lane[:, 1] <= h)]
+                      for lane in lanes]
+            culane.write_labels(cache, {name: [lane for lane in inside if len(lane) >= 2]}, inputs=[image])
+            io.write_image(target, shifted, inputs=[image])
+        moved.append(name)
+    return culane.write_list(cache / "list.txt", moved)
+
+
+def _culane_moved(out: Path, settings: Settings) -> Measured:
+    root = _need(data.CULANE_DEV)
+    listed = moved_culane(root, root / data.CULANE_DEV_LIST, out / MOVED_CACHE)
+    run = _predict("culane", listed.parent, out / "culane-moved", listed,
+                   override(batch.benchmark_config("culane"), settings))
+    c = culane.evaluate(listed.parent, listed, run.output).counts
+    moves = ", ".join(f"({dx:+d}, {dy:+d})" for dx, dy in CAMERA_MOVES)
+    return Measured(f"{root / data.CULANE_DEV_LIST}, each sequence's frames moved by {moves} px in turn; "
+                    f"{_config_name('culane')}", c.images, detection_figures(c.tp, c.fp, c.fn), _predict_ms(run))
+
+
 def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:
     """Return the label file of TuSimple frames upscaled to 1280x720, written under ``cache``.
 
@@ -386,6 +439,7 @@ def _synth_clip(out: Path, settings: Settings) -> Measured:
 # key: (title, measure(out, settings) -> Measured); the real rows first
 ROWS: dict[str, tuple[str, Measure]] = {
     "culane": ("CULane dev", _culane_dev),
+    "culane-moved": ("CULane dev, cameras moved", _culane_moved),
     "tusimple": ("TuSimple dev", _tusimple_dev),
     "project": ("Udacity project video", _udacity_clip(data.PROJECT_VIDEO)),
     "challenge": ("Udacity challenge video", _udacity_clip(data.CHALLENGE_VIDEO)),

@@ -151,6 +151,7 @@ def test_two_local_workers_give_the_predictions_of_one_process(tmp_path, ts_root
     assert predict(ts_root, out, "--workers", "2") == 0
     text = capsys.readouterr().out
     assert "clips/synth01: road geometry from its frames" in text and "clips/synth02" in text
+    assert "clips/synth01: bird's-eye points " in text  # refined on the workers too (the preset's lines)
     assert "8 frames: 8 predicted" in text
     assert_same_predictions(out, reference)
     # evaluate scores the result as the one-process predictions

@@ -10,7 +10,7 @@ import pytest
 
 from lanelib import data, evaluate, io, scoreboard
 from lanelib.batch.video import VideoWriter
-from lanelib.benchmarks import tusimple
+from lanelib.benchmarks import culane, tusimple
 from lanelib.cli import main
 from lanelib.errors import InputError
 
@@ -82,11 +82,11 @@ def test_mean_ms_in_whole_ms():
 
 def test_rows_are_chosen_in_the_scoreboard_order_real_rows_first():
     keys = list(scoreboard.ROWS)
-    assert keys[:6] == ["culane", "tusimple", "project", "challenge", "p1-white", "p1-yellow"]
-    assert all(k.startswith("synth") for k in keys[6:])
+    assert keys[:7] == ["culane", "culane-moved", "tusimple", "project", "challenge", "p1-white", "p1-yellow"]
+    assert all(k.startswith("synth") for k in keys[7:])
     assert scoreboard.select(None) == keys
     assert scoreboard.select(["synth-clip", "culane"]) == ["culane", "synth-clip"]
-    with pytest.raises(InputError, match="--only nope: no such row; the rows are culane, tusimple"):
+    with pytest.raises(InputError, match="--only nope: no such row; the rows are culane, culane-moved, tusimple"):
         scoreboard.select(["culane", "nope"])
     with pytest.raises(InputError, match="give one row or more"):
         scoreboard.select([])
@@ -94,7 +94,7 @@ def test_rows_are_chosen_in_the_scoreboard_order_real_rows_first():
 
 def test_a_row_without_its_data_is_skipped_with_the_reason(monkeypatch, tmp_path):
     monkeypatch.setenv("LANELIB_DATA", str(tmp_path / "data"))
-    for key, missing in (("culane", "culane-dev/list.txt"), ("tusimple", "tusimple-dev/label_data_fullres.json"),
+    for key, missing in (("culane", "culane-dev/list.txt"), ("culane-moved", "culane-dev/list.txt"), ("tusimple", "tusimple-dev/label_data_fullres.json"),
                          ("challenge", "udacity-advanced/videos/challenge_video.mp4"),
                          ("p1-yellow", "udacity-lanelines-p1/test_videos/solidYellowLeft.mp4")):
         row = scoreboard.measure_row(key, tmp_path / "out")
@@ -161,6 +161,32 @@ def test_tusimple_frames_upscaled_once_as_png_with_their_labels(tmp_path):
     assert sorted(p.name for p in root.rglob("*")) == ["1", "20.jpg", "a", "clips", "label_data_fullres.json"]
 
 
+def test_culane_frames_moved_once_with_their_labels_sequence_by_sequence(tmp_path):
+    root, cache = tmp_path / "dev", tmp_path / "cache"
+    entries = ["/d/a.MP4/00000.jpg", "/d/a.MP4/00090.jpg", "/d/b.MP4/00000.jpg"]
+    frame = np.zeros((590, 1640, 3), np.uint8)
+    frame[:, 800:806] = 255  # a line at x 800..805, labelled at 802.5
+    line = np.array([[802.5, 590.0], [802.5, 300.0], [802.5, 5.0]])
+    for entry in entries:
+        io.write_image(root / entry.lstrip("/"), frame)
+    culane.write_labels(root, {e: [line] for e in entries})
+    listed = scoreboard.moved_culane(root, culane.write_list(root / "list.txt", entries), cache,
+                                     moves=((0, 15), (-40, -10)))
+    moved = culane.read_list(listed)
+    assert listed == cache / "list.txt" and moved == [e.replace(".jpg", ".png") for e in entries]
+    for entry, (dx, dy) in zip(moved, [(0, 15), (0, 15), (-40, -10)]):
+        image = io.read_image(cache / entry.lstrip("/"))
+        assert image[300, 802 + dx, 0] == 255 and image[300, 796 + dx, 0] == 0
+        (label,) = culane.read_lines(culane.lines_path(cache, entry))
+        inside = line + (dx, dy)  # the point moved out of the image is left out
+        assert np.array_equal(label, inside[(inside[:, 1] >= 0) & (inside[:, 1] <= 590)])
+    png = cache / moved[0].lstrip("/")
+    stamp = png.stat().st_mtime_ns  # written once: a second call keeps it
+    scoreboard.moved_culane(root, root / "list.txt", cache)
+    assert png.stat().st_mtime_ns == stamp
+    assert not list(root.rglob("*.png"))
+
+
 def test_a_clip_is_tracked_as_the_video_command_tracks_it(tmp_path):
     clip = tmp_path / "cut.mp4"
     source = data.bundled("videos") / "project.mp4"
@@ -181,7 +207,7 @@ def test_scoreboard_help_parses(capsys):
     assert e.value.code == 0
     out = " ".join(capsys.readouterr().out.split())
     assert out.startswith("usage: python -m lanelib scoreboard [-h] [--json FILE] [--out DIR] [--only ROW,...]")
-    assert "run only these rows: culane (CULane dev), tusimple (TuSimple dev)" in out
+    assert "run only these rows: culane (CULane dev), culane-moved (CULane dev, cameras moved), tusimple" in out
 
 
 def test_scoreboard_only_the_synthetic_clip(tmp_path, capsys):

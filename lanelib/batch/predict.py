@@ -22,6 +22,7 @@ from ..errors import ConfigError, GeometryError, InputError, LaneLibError, namin
 from ..lines.result import LinesResult
 from ..pipeline import LanePipeline
 from .geometry import with_geometry
+from .refine import PointsRefinement, sequence_refinement, shifted_points
 
 
 PREDICT_BENCHMARKS = ("tusimple", "culane")
@@ -97,7 +98,8 @@ class PredictRun:
     ``outcomes`` holds the frames run now, in list order; ``output`` is the prediction file
     (TuSimple) or folder (CULane) to pass to ``evaluate``; ``geometries`` the road geometry of each
     sequence whose estimate is used (``--auto-geometry``), ``fallbacks`` the sequences whose
-    estimate was refused or failed (they keep the config's points), both in list order.
+    estimate was refused or failed (they keep the config's points), ``refinements`` what
+    ``lines.refine_points_px`` did with each sequence's points, all in list order.
     """
 
     frames: int
@@ -107,6 +109,7 @@ class PredictRun:
     seconds: float
     geometries: tuple[tuple[str, RoadGeometry], ...] = ()
     fallbacks: tuple[GeometryFallback, ...] = ()
+    refinements: tuple[PointsRefinement, ...] = ()
 
     @property
     def failed(self) -> tuple[FrameOutcome, ...]:
@@ -375,6 +378,49 @@ def _sequence_configs(work: Sequence[FrameWork], sequences: Sequence[str], confi
     return configs, geometries, fallbacks
 
 
+def _sequence_setup(work: Sequence[FrameWork], sequences: Sequence[str], config: PipelineConfig,
+                    calibration: Calibration | None, auto_geometry: GeometryOptions | None, client,
+                    on_geometry: Callable[[str, RoadGeometry | GeometryFallback], None] | None,
+                    on_points: Callable[[PointsRefinement], None] | None) -> tuple:
+    """Return the config of each of ``sequences``, the geometries used, the fallbacks and the
+    refinements: ``config`` with each sequence's geometry estimate (``auto_geometry``,
+    ``_sequence_configs``), then its points refined from its lines (``lines.refine_points_px``
+    above 0, ``_refined_configs``)."""
+    configs, geometries, fallbacks = {sequence: config for sequence in sequences}, [], []
+    if auto_geometry is not None:
+        configs, geometries, fallbacks = _sequence_configs(work, sequences, config, calibration,
+                                                           auto_geometry, client, on_geometry)
+    refinements = []
+    if config.lines.refine_points_px > 0:
+        refinements = _refined_configs(work, sequences, configs, calibration, client)
+        for refinement in refinements:
+            if on_points is not None:
+                on_points(refinement)
+    return configs, geometries, fallbacks, refinements
+
+
+def _refined_configs(work: Sequence[FrameWork], sequences: Sequence[str], configs: dict[str, PipelineConfig],
+                     calibration: Calibration | None, client) -> list[PointsRefinement]:
+    """Return what ``refine.sequence_refinement`` makes of each of ``sequences`` (its frames in
+    ``work``, its config in ``configs``) and move the points of ``configs`` by it; here or on the
+    Dask ``client``'s workers, one task per sequence."""
+    args = [([w.image for w in work if w.sequence == s], configs[s], s) for s in sequences]
+    if client is None:
+        found = [sequence_refinement(images, config, calibration, s) for images, config, s in args]
+    else:
+        found = cluster.map_ordered(client, _refinement_task, args, calibration=calibration)
+    for refinement in found:
+        if refinement.moved:
+            configs[refinement.sequence] = shifted_points(configs[refinement.sequence], refinement.shift_px)
+    return found
+
+
+def _refinement_task(args: tuple, calibration: Calibration | None) -> PointsRefinement:
+    """``sequence_refinement`` of one (images, config, sequence), as one Dask task."""
+    images, config, sequence = args
+    return sequence_refinement(images, config, calibration, sequence)
+
+
 def _predict_frames(todo: Sequence[FrameWork], configs: dict[str, PipelineConfig],
                     calibration: Calibration | None, client, desc: str, progress: bool) -> list[FrameOutcome]:
     """Return the outcome of each frame of ``todo`` after predicting it here (``predict_frame``,
@@ -399,6 +445,7 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
                       calibration_file: str | os.PathLike | None = None,
                       auto_geometry: GeometryOptions | None = None, progress: bool = True,
                       on_geometry: Callable[[str, RoadGeometry | GeometryFallback], None] | None = None,
+                      on_points: Callable[[PointsRefinement], None] | None = None,
                       workers: int = 1, scheduler: str | None = None) -> PredictRun:
     """Return what the run did after predicting every labelled frame of a benchmark dataset.
 
@@ -433,6 +480,9 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     progress : show a tqdm bar.
     on_geometry : called with (sequence, geometry or ``GeometryFallback``) for each estimate, in
         list order, before any frame is predicted (the CLI prints them).
+    on_points : called with each sequence's ``PointsRefinement`` (``config.lines.refine_points_px``
+        above 0: the points moved to where the lines of the sequence's frames meet, after its
+        geometry estimate if any), in list order, before any frame is predicted.
     workers, scheduler : where the frames are predicted (``cluster.dask_client``): 1 worker (the
         default) in this process; more on a Dask ``LocalCluster`` of that many processes; or the
         workers of the Dask scheduler at ``scheduler``. With Dask the frames go in chunks
@@ -459,10 +509,8 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     # the cluster is reached before anything is written: a bad --scheduler leaves no trace
     with (cluster.dask_client(workers, scheduler) if todo else cluster.dask_client()) as client:
         sequences = list(dict.fromkeys(w.sequence for w in todo))
-        configs, geometries, fallbacks = {sequence: config for sequence in sequences}, [], []
-        if auto_geometry is not None:
-            configs, geometries, fallbacks = _sequence_configs(work, sequences, config, calibration,
-                                                               auto_geometry, client, on_geometry)
+        configs, geometries, fallbacks, refinements = _sequence_setup(
+            work, sequences, config, calibration, auto_geometry, client, on_geometry, on_points)
         if not recorded:
             _record_settings(out, settings)
         outcomes = _predict_frames(todo, configs, calibration, client, f"predict {benchmark}", progress)
@@ -470,4 +518,4 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
     if benchmark == "tusimple":
         output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
     return PredictRun(len(work), len(work) - len(todo), tuple(outcomes), output,
-                      time.perf_counter() - t0, tuple(geometries), tuple(fallbacks))
+                      time.perf_counter() - t0, tuple(geometries), tuple(fallbacks), tuple(refinements))

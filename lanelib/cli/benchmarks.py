@@ -227,7 +227,8 @@ def _run_predict(args) -> int:
 
     run = batch.predict_benchmark(args.benchmark, args.root, args.output, args.list_file, config,
                                   calibration, args.calibration, options, progress=not args.no_progress,
-                                  on_geometry=show, workers=args.workers, scheduler=args.scheduler)
+                                  on_geometry=show, on_points=lambda r: print(r.note()),
+                                  workers=args.workers, scheduler=args.scheduler)
     for o in run.failed:
         print(f"error: {o.error}", file=sys.stderr)
     done = len(run.outcomes) - len(run.failed)

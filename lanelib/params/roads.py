@@ -160,6 +160,10 @@ class LinesConfig:
         scattered, a vehicle's edge) clears only its own cells, so a lane line it crosses is
         still weighed. The ``culane`` preset turns it off: in stop-and-go traffic a vehicle's
         edge refused under the car crosses the ego lines ahead.
+    refine_points_px : ``predict`` moves the bird's-eye points of each sequence (one camera)
+        to where the lines it finds meet, when that is further than this many px (vertically;
+        twice as far sideways) from where the points' sides meet (``batch.refine``; 0: off): a
+        camera pitched or turned a little otherwise than the one the points were set for.
     """
 
     lane_width_m: float = 3.7
@@ -200,6 +204,7 @@ class LinesConfig:
     follow_ahead_m: float = 0.0
     seen_window_m: float = 2.0
     contrast_full: float = 0.0
+    refine_points_px: float = 0.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -211,9 +216,10 @@ class LinesConfig:
                               "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
-        if self.follow_ahead_m < 0 or self.seen_window_m < 0 or self.contrast_full < 0:
-            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m}, seen_window_m {self.seen_window_m} and "
-                              f"contrast_full {self.contrast_full} must be 0 (off) or more")
+        if min(self.follow_ahead_m, self.seen_window_m, self.contrast_full, self.refine_points_px) < 0:
+            raise ConfigError(f"follow_ahead_m {self.follow_ahead_m}, seen_window_m {self.seen_window_m}, "
+                              f"contrast_full {self.contrast_full} and refine_points_px "
+                              f"{self.refine_points_px} must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
