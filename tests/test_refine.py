@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from lanelib import batch, config, io
-from lanelib.batch.refine import MIN_LINES, PointsRefinement, refine_points, shifted_points
+from lanelib.batch.refine import MIN_LINES, PointsRefinement, refine_points, sequence_refinement, shifted_points
+from lanelib.camera import Calibration
 from lanelib.benchmarks import culane
 from lanelib.cli import main
 from lanelib.config import PipelineConfig
@@ -64,6 +65,16 @@ def test_frames_without_lines_keep_the_points(true_config):
     road = [np.full((590, 1640, 3), 90, np.uint8)] * 3
     r = refine_points(road, true_config, None, "seq")
     assert r == PointsRefinement("seq", None, (0.0, 0.0), 0, f"0 lines to tell from, fewer than {MIN_LINES}")
+
+
+def test_frames_the_calibration_does_not_fit_keep_the_points_with_the_reason(sample, true_config):
+    images = sorted(sample.rglob("*.jpg"))
+    square = Calibration(np.eye(3) * [1000, 1000, 1], np.zeros(5), (1000, 1000))  # another aspect
+    r = sequence_refinement(images, true_config, square, "seq")
+    assert not r.moved and r.meeting_px is None
+    assert r.reason.startswith("frame is 1640x590 but the calibration is for 1000x1000 with another aspect")
+    assert sequence_refinement([sample / "missing.jpg"], true_config, None, "seq").reason == (
+        "none of its images could be read")
 
 
 def test_predict_moves_each_sequences_points_and_finds_more_lines(tmp_path, sample, true_config, capsys):

@@ -94,7 +94,8 @@ def test_rows_are_chosen_in_the_scoreboard_order_real_rows_first():
 
 def test_a_row_without_its_data_is_skipped_with_the_reason(monkeypatch, tmp_path):
     monkeypatch.setenv("LANELIB_DATA", str(tmp_path / "data"))
-    for key, missing in (("culane", "culane-dev/list.txt"), ("culane-moved", "culane-dev/list.txt"), ("tusimple", "tusimple-dev/label_data_fullres.json"),
+    for key, missing in (("culane", "culane-dev/list.txt"), ("culane-moved", "culane-dev/list.txt"),
+                         ("tusimple", "tusimple-dev/label_data_fullres.json"),
                          ("challenge", "udacity-advanced/videos/challenge_video.mp4"),
                          ("p1-yellow", "udacity-lanelines-p1/test_videos/solidYellowLeft.mp4")):
         row = scoreboard.measure_row(key, tmp_path / "out")

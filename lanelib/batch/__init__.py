@@ -14,7 +14,9 @@ The modules, by job:
 - ``pipelines``: the advanced and the basic Hough pipeline on those (``process_images``,
   ``process_video``, ``hough_images``, ``hough_video``);
 - ``predict``: the benchmark predictions (``predict_benchmark``) and the config they are made with
-  by default (``benchmark_config``).
+  by default (``benchmark_config``);
+- ``refine``: a sequence's bird's-eye points moved to where the lines of its frames meet
+  (``refine_points``, ``PointsRefinement``), for a camera mounted otherwise than the preset's.
 
 Bad inputs: in a folder run, a file that cannot be read or processed (a lanelib error) gets its
 own row with an ``error`` and the run goes on; a video that breaks off half-way keeps the frames
@@ -28,6 +30,7 @@ from .pipelines import (VIDEO_LOG_COLUMNS, carry_lane_state, hough_images, hough
 from .predict import (PREDICT_BENCHMARKS, PREDICT_SETTINGS, TUSIMPLE_PARTS, TUSIMPLE_PREDICTIONS,
                       FrameOutcome, FrameWork, GeometryFallback, PredictRun, benchmark_config,
                       benchmark_work, frame_sequence, predict_benchmark, predict_frame, seen_lines)
+from .refine import PointsRefinement, refine_points
 from .segments import FrameState, SegmentOutcome, run_video_segments, video_segment
 from .video import FrameFn, VideoRun, clip_frames, run_video
 
@@ -37,6 +40,7 @@ __all__ = ["process_images", "process_video", "hough_images", "hough_video", "pr
            "lane_image_process", "lane_video_process", "carry_lane_state", "plan_lane_restarts",
            "video_log_row", "hough_log_row", "benchmark_config", "benchmark_work", "frame_sequence",
            "predict_frame", "seen_lines", "VideoRun", "FrameState", "SegmentOutcome", "FrameWork", "FrameOutcome",
-           "GeometryFallback", "PredictRun", "ImageFn", "FrameFn", "GRAYSCALE_NOTE",
+           "GeometryFallback", "PredictRun", "PointsRefinement", "refine_points", "ImageFn", "FrameFn",
+           "GRAYSCALE_NOTE",
            "VIDEO_LOG_COLUMNS", "PREDICT_BENCHMARKS", "PREDICT_SETTINGS", "TUSIMPLE_PARTS",
            "TUSIMPLE_PREDICTIONS"]

@@ -31,7 +31,7 @@ import numpy as np
 from .. import io
 from ..camera import Calibration, Lens
 from ..config import PipelineConfig
-from ..errors import InputError
+from ..errors import ConfigError, InputError, LaneLibError
 from ..lines.result import ImageLine
 from ..perspective import as_points
 from ..pipeline import LanePipeline
@@ -185,7 +185,8 @@ def sequence_refinement(images: Sequence[Path], config: PipelineConfig, calibrat
                         sequence: str) -> PointsRefinement:
     """Return ``refine_points`` on up to ``FRAMES`` of a sequence's ``images``, evenly spread; an
     image that cannot be read, or of another size than the first, is left out (``predict_frame``
-    reports it). A value, not an exception, so that a Dask task returns it alike."""
+    reports it), and frames the pipeline refuses (a lanelib error other than a bad config) keep
+    the points with the reason. A value, not an exception, so that a Dask task returns it alike."""
     step = max(1, math.ceil(len(images) / FRAMES))
     frames = []
     for image in images[::step]:
@@ -197,4 +198,9 @@ def sequence_refinement(images: Sequence[Path], config: PipelineConfig, calibrat
             frames.append(frame)
     if not frames:
         return PointsRefinement(sequence, None, (0.0, 0.0), 0, "none of its images could be read")
-    return refine_points(frames, config, calibration, sequence)
+    try:
+        return refine_points(frames, config, calibration, sequence)
+    except ConfigError:
+        raise
+    except LaneLibError as e:  # e.g. frames the calibration does not fit: each frame reports it
+        return PointsRefinement(sequence, None, (0.0, 0.0), 0, str(e))
