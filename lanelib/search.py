@@ -12,7 +12,7 @@ import numpy as np
 from .fit import fit_line_with_first, parallel_fits
 from .params import SearchConfig
 from .records import LaneSearch, LineFit, Window
-from .roads.stripes import double_line_fit
+from .roads.stripes import centre_side, double_line_fit
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -60,14 +60,6 @@ def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
     if mean <= 0:
         return 0.0
     return (float(hist[int(x)]) - mean) / mean
-
-
-def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
-    """Return the indices into ``xs`` of each run of occupied columns (split at empty columns)."""
-    order = np.argsort(xs, kind="stable")
-    sx = xs[order]
-    cuts = np.nonzero(np.diff(sx) > 1)[0] + 1
-    return np.split(order, cuts)
 
 
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
@@ -121,10 +113,7 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
             inside = ((row_xs >= x - margin) & (row_xs < x + margin)).nonzero()[0]
             windows.append(Window(side, int(x - margin), int(x + margin), y_low, y_high))
             if config.centre_first and len(inside) >= config.minpix:
-                full = [c for c in _window_clusters(row_xs[inside]) if len(c) >= config.minpix]
-                if full:
-                    near = max(full, key=lambda c: toward_centre * float(row_xs[inside[c[0]]]))
-                    inside = np.sort(inside[near])
+                inside = centre_side(row_xs, inside, config.minpix, toward_centre)
             chosen.append(inside + lo)
             if len(inside) >= config.minpix:
                 if config.window_histogram:

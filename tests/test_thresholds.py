@@ -348,3 +348,14 @@ def test_row_morphology_and_colour_boxes_equal_opencv_on_random_images():
         expected = cv2.inRange(cv2.cvtColor(rgb, cv2.COLOR_RGB2HLS), np.array(low, np.uint8),
                                np.array(high, np.uint8))
         assert np.array_equal(th.color_range_mask(rgb, spec), expected)
+
+
+def test_rows_opened_equals_the_whole_opening_on_sparse_and_full_masks():
+    # th.rows_opened opens only the rows holding a pixel: the same mask as th.morph on the whole
+    rng = np.random.default_rng(1)
+    for trial in range(40):
+        h, w = int(rng.integers(1, 30)), int(rng.integers(1, 150))
+        mask = np.where(rng.random((h, w)) < 0.5, 255, 0).astype(np.uint8)
+        mask[rng.random(h) < [0.0, 0.5, 1.0][trial % 3]] = 0  # no, some or all rows emptied
+        for width in (2, 3, 12):
+            assert np.array_equal(th.rows_opened(mask, width), th.morph(mask, "open", width, 1))

@@ -4,7 +4,8 @@
 keeps the stripe nearer the lane where the pixels form a resolved double line (as a whole, or on
 its rows nearest the car); ``stripe_spacing_px`` measures the stripes' spacing band by band, whose
 change along the rows is the change of the flat view's scale across the road. The search
-(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set.
+(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set, and
+a window's ``centre_side`` with ``SearchConfig.centre_first``.
 """
 from __future__ import annotations
 
@@ -397,3 +398,23 @@ def stripe_spread(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int,
     if not 0.7 <= 1.0 + slope / at_car * depth <= 2.5:
         return None
     return np.array([slope / at_car, 1.0])
+
+
+def centre_side(row_xs: np.ndarray, inside: np.ndarray, minpix: int, toward_centre: int) -> np.ndarray:
+    """Return which of a sliding window's pixels (``inside``: indices into ``row_xs``, their x) it
+    takes with ``SearchConfig.centre_first``: of its runs of occupied columns (split at empty
+    columns) holding ``minpix`` pixels or more, the one nearest the lane centre (``toward_centre``
+    1: to the right, -1: to the left), else all of them."""
+    full = [c for c in _window_clusters(row_xs[inside]) if len(c) >= minpix]
+    if not full:
+        return inside
+    near = max(full, key=lambda c: toward_centre * float(row_xs[inside[c[0]]]))
+    return np.sort(inside[near])
+
+
+def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:
+    """Return the indices into ``xs`` of each run of occupied columns (split at empty columns)."""
+    order = np.argsort(xs, kind="stable")
+    sx = xs[order]
+    cuts = np.nonzero(np.diff(sx) > 1)[0] + 1
+    return np.split(order, cuts)
