@@ -12,12 +12,15 @@ meet (``meeting_point``): the vanishing point as this camera sees it. Where it l
 the points' own vanishing point (where the sides of their trapezoid meet, ``points_vanishing``)
 than ``LinesConfig.refine_points_px`` vertically, or twice that sideways (a turned view only tilts
 the lines, which the vote's headings partly take up; a pitched one fans them), the four points
-move by the difference, and the search runs again through the moved points, up to
-``ROUNDS`` times: lines found through points that are off lean towards those points, so one
-round sees about half of the way. For the same reason a first round that sees the lines meet
-within half the threshold is the last: the points are right. The threshold is the estimate's own error on frames whose
-points are right: the near halves of real lines, through the lens and over grades, meet a few
-pixels from where the road's lines meet.
+move by the difference, and the search runs again through the moved points, up to ``ROUNDS``
+times: lines found through points that are off lean towards those points, so one round sees
+about half of the way. For the same reason a first round that sees the lines meet within half
+the threshold is the last: the points are right. The threshold is the estimate's own error on
+frames whose points are right: the near halves of real lines, through the lens and over grades,
+meet a few pixels from where the road's lines meet.
+
+The road's own shape moves the point too: a sequence driven mostly on one long bend or grade
+sees its lines meet aside or above where a straight, flat road's would, and the points follow.
 """
 from __future__ import annotations
 
