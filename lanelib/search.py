@@ -12,7 +12,7 @@ import numpy as np
 from .fit import fit_line_with_first, parallel_fits
 from .params import SearchConfig
 from .records import LaneSearch, LineFit, Window
-from .roads.stripes import centre_side, double_line_fit
+from .roads.stripes import centre_side, double_line_fit, fullest_column
 
 
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -117,9 +117,7 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
             chosen.append(inside + lo)
             if len(inside) >= config.minpix:
                 if config.window_histogram:
-                    wx = row_xs[inside]
-                    x0 = int(wx.min())
-                    x = float(x0 + int(np.argmax(np.bincount(wx - x0))))
+                    x = fullest_column(row_xs[inside])
                 else:  # their mean: the sum is exact in int64, so this is np.mean's float
                     x = int(row_xs[inside].sum()) / len(inside)
                 margin = config.margin_px

@@ -15,7 +15,7 @@ from lanelib.errors import ConfigError
 from lanelib.fit import fit_line, least_squares_poly, normal_width_m, offset_line
 from lanelib.perspective import PerspectiveConfig
 from lanelib.pipeline import LanePipeline
-from lanelib.roads.proposers import reacquire_half_px
+from lanelib.roads.proposers import reacquire_half_px, remembered_bases
 from lanelib.roads.stripes import stripe_spread
 from lanelib.tracking import LaneTracker, TrackerConfig
 
@@ -241,14 +241,14 @@ def test_remembered_bases_restart_the_windows_after_a_reset(pipe, history):
         # width drops most of the 6 px specks, so too few pixels rather than texture), no lane
         assert not r.found and "right line not found" in r.reason
         assert r.search.base_confidence[1] < TrackerConfig().min_base_peak
-        assert tracker.remembered_bases is None
+        assert remembered_bases(tracker) is None
         return
-    assert tracker.remembered_bases == pytest.approx((LEFT_X, RIGHT_X), abs=12)
+    assert remembered_bases(tracker) == pytest.approx((LEFT_X, RIGHT_X), abs=12)
     assert r.found and "remembered bases" in r.reason
     assert bottom_x(r, "right") == pytest.approx(RIGHT_X, abs=6)
     assert r.lane_width_m == pytest.approx(3.7, abs=0.1)
     tracker.reset()  # a new video forgets the bases too
-    assert tracker.remembered_bases is None
+    assert remembered_bases(tracker) is None
 
 
 def test_a_base_history_needs_a_count():

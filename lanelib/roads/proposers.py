@@ -1,11 +1,14 @@
-"""The hard-road proposers: the road seen from the car, re-acquisition, the asphalt edge, a faded line.
+"""The opt-in proposers that read the tracker: the road seen from the car, remembered bases,
+re-acquisition, the asphalt edge, a faded line.
 
 Each is a proposer (the protocol in ``lanelib.proposers``): it says ``where`` it has something
 to look for in a frame and ``propose``s candidate searches there. ``AsphaltEdge`` serves a single
-image (``LanePipeline.detect``) and the tracker; the others read the track.
+image (``LanePipeline.detect``) and the tracker; the others read the tracker.
 
 - ``RoadView``: when a line is refused, the look-ahead is also cut where the lane's interior
   stops looking like the road near the car (beyond a crest, a vehicle on the road).
+- ``RememberedBases``: without a track, a weak histogram peak is replaced by the median of the
+  recent accepted bases on that side (``TrackerConfig.base_history_frames``).
 - ``Reacquire``: a line the track has inferred for several frames is looked for in a band
   around its inference that widens with those frames (``reacquired``).
 - ``AsphaltEdge``: a lane with one line and no paint at all on the other side takes the
@@ -69,6 +72,42 @@ def road_view_top(tracker, raw: np.ndarray, track: tuple[np.ndarray, np.ndarray]
         return 0
     return road_view_top_px(pipe.birdseye_rows(raw, rows, (c0, c1)), rows, track, tracker.ym,
                             pipe.config.edge.min_saturation_step, tracker.config.road_view_run_m, w, c0)
+
+
+class RememberedBases:
+    """Without a track, when a histogram peak is weak (``min_base_peak``): windows started
+    from the median of the recent accepted bases (``base_history_frames``) on that side."""
+
+    name, rule, moves_lookahead = "remembered bases", "more lines", False
+
+    def where(self, frame):
+        if frame.track is not None or frame.best.pair:
+            return None
+        t = frame.tracker
+        remembered, search = remembered_bases(t), frame.first
+        if remembered is None or search.method != "windows":
+            return None
+        out, weak = [], False
+        for base, conf, memory in zip(search.bases_px, search.base_confidence, remembered):
+            if base is None or conf is None or conf < t.config.min_base_peak:
+                out.append(memory)
+                weak = True
+            else:
+                out.append(base)
+        return (out[0], out[1]) if weak else None
+
+    def propose(self, frame, where):
+        return [(frame.search(bases=where),
+                 "windows started from the remembered bases (weak histogram peak)")]
+
+
+def remembered_bases(tracker) -> tuple[float, float] | None:
+    """Return the median x (px, bottom row) of each line over the tracker's remembered frames
+    (``TrackerConfig.base_history_frames``), or None."""
+    if not tracker.state.base_history:
+        return None
+    left, right = np.median(np.array(tracker.state.base_history), axis=0)
+    return float(left), float(right)
 
 
 class Reacquire:
@@ -441,10 +480,11 @@ def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return rows, (v[lo] + v[hi]) / 2
 
 
-# the hard-road proposers in the tracker's chain (``tracking.PROPOSERS``), each asking only when
-# its switch is on: the road view before the tracker's own proposers (it cuts the look-ahead of
-# the windows from the track), the others after them
+# the opt-in proposers in the tracker's chain (``tracking.PROPOSERS``), each asking only when its
+# switch is on: the road view before the tracker's own proposer (it cuts the look-ahead of the
+# windows from the track), the others after it
 TRACKER_FIRST = (RoadView(),)
-TRACKER_LATER = (Reacquire(), FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(), Shoulder())
+TRACKER_LATER = (RememberedBases(), Reacquire(), FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(),
+                 Shoulder())
 # a single image's chain (``pipeline.DETECT_PROPOSERS``): those that need no track
 DETECT = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())

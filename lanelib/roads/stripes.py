@@ -4,8 +4,9 @@
 keeps the stripe nearer the lane where the pixels form a resolved double line (as a whole, or on
 its rows nearest the car); ``stripe_spacing_px`` measures the stripes' spacing band by band, whose
 change along the rows is the change of the flat view's scale across the road. The search
-(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set, and
-a window's ``centre_side`` with ``SearchConfig.centre_first``.
+(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set, a
+window's ``centre_side`` with ``SearchConfig.centre_first`` and its ``fullest_column`` with
+``SearchConfig.window_histogram``.
 """
 from __future__ import annotations
 
@@ -410,6 +411,13 @@ def centre_side(row_xs: np.ndarray, inside: np.ndarray, minpix: int, toward_cent
         return inside
     near = max(full, key=lambda c: toward_centre * float(row_xs[inside[c[0]]]))
     return np.sort(inside[near])
+
+
+def fullest_column(xs: np.ndarray) -> float:
+    """Return the x a sliding window recentres the next one on with ``SearchConfig.window_histogram``:
+    the column holding most of its pixels (``xs``, not empty), the leftmost of equals."""
+    x0 = int(xs.min())
+    return float(x0 + int(np.argmax(np.bincount(xs - x0))))
 
 
 def _window_clusters(xs: np.ndarray) -> list[np.ndarray]:

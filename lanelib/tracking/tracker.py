@@ -18,14 +18,13 @@ from ..roads.trend import predicted_lane
 from ..search import lookahead_top_px
 from ..thresholds import Made
 from .judge import TrackChecks
-from .proposers import RememberedBases, WindowsFromTrack
+from .proposers import WindowsFromTrack
 from .state import LostTrack, TrackState
 from .update import accept, hold_or_lose
 
-# the tracker's own proposers between the hard-road ones (``roads.proposers``), each of which
-# asks only when its switch is on
-PROPOSERS: tuple[Proposer, ...] = (*TRACKER_FIRST, WindowsFromTrack(), RememberedBases(),
-                                   *TRACKER_LATER)
+# the tracker's own proposer between the opt-in ones (``roads.proposers``), each of which asks
+# only when its switch is on
+PROPOSERS: tuple[Proposer, ...] = (*TRACKER_FIRST, WindowsFromTrack(), *TRACKER_LATER)
 
 
 class LaneTracker:
@@ -100,14 +99,6 @@ class LaneTracker:
         ``roads.trend.predicted_lane``; the lane itself while ``trend_frames`` is off).
         """
         return predicted_lane(self.state, self.config, frame)
-
-    @property
-    def remembered_bases(self) -> tuple[float, float] | None:
-        """The median x (px, bottom row) of each line over the remembered frames, or None."""
-        if not self.state.base_history:
-            return None
-        left, right = np.median(np.array(self.state.base_history), axis=0)
-        return float(left), float(right)
 
     @property
     def seen_width_m(self) -> float:
