@@ -359,3 +359,44 @@ def test_rows_opened_equals_the_whole_opening_on_sparse_and_full_masks():
         mask[rng.random(h) < [0.0, 0.5, 1.0][trial % 3]] = 0  # no, some or all rows emptied
         for width in (2, 3, 12):
             assert np.array_equal(th.rows_opened(mask, width), th.morph(mask, "open", width, 1))
+
+
+def _relative_reference(tophat, background, spec):
+    """The relative top-hat's mask by its definition (``TopHatMask``): top-hat at least ``low`` and
+    ``ratio`` times the background (to 1e-9), at most ``high``, background at most ``max_background``."""
+    t, b = tophat.astype(np.float64), background.astype(np.float64)
+    keep = (t >= spec.low) & (t >= spec.ratio * b - 1e-9) & (t <= spec.high) & (b <= spec.max_background)
+    return np.where(keep, 255, 0).astype(np.uint8)
+
+
+RELATIVE_SPECS = [th.TopHatMask("gray", "y", 5, low, high, ratio=ratio, max_background=dark)
+                  for ratio in (0.0, 0.0001, 1 / 3, 0.5, 0.65, 1.0, 1.000001, 1.7, 2.5, 255.0)
+                  for low in (0, 8, 30) for dark in (255, 120, 0) for high in (255, 200)]
+
+
+def test_the_relative_top_hat_keeps_what_its_definition_says_at_every_level():
+    # row b: a road of level b with every other pixel b + t, t = 0..255 (saturated): each background
+    # level under each top-hat, for ratios and floors the scaled levels match exactly or not
+    b = np.arange(256)[:, None]
+    img = np.repeat(b, 512, axis=1)
+    img[:, 1::2] = np.minimum(255, b + np.arange(256)[None, :])
+    rgb = np.repeat(img.astype(np.uint8)[:, :, None], 3, axis=2)
+    tophat, background = th.Channels(rgb).tophat(RELATIVE_SPECS[0])
+    assert np.array_equal(background, img * 0 + b) and np.array_equal(tophat[:, 1::2], img[:, 1::2] - b)
+    for spec in RELATIVE_SPECS:
+        assert np.array_equal(th.tophat_mask(rgb, spec), _relative_reference(tophat, background, spec)), spec
+
+
+def test_the_relative_top_hat_keeps_what_its_definition_says_on_random_images():
+    # widths that leave OpenCV's vector loops a tail of every length, and the shade top-hat's least width
+    rng = np.random.default_rng(2)
+    shade = th.ThresholdConfig().shade_tophat
+    for trial in range(40):
+        rgb = rng.integers(0, 256, (int(rng.integers(1, 9)), int(rng.integers(1, 140)), 3), dtype=np.uint8)
+        for spec in (shade, RELATIVE_SPECS[trial * 3 % len(RELATIVE_SPECS)]):
+            tophat, background = th.Channels(rgb).tophat(spec)
+            expected = _relative_reference(tophat, background, spec)
+            if spec.min_width_px > 1:
+                expected = th.morph(expected, "open", spec.min_width_px, 1)
+            assert np.array_equal(th.tophat_mask(rgb, spec), expected), spec
+
