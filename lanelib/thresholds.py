@@ -338,17 +338,32 @@ def mask(rgb: np.ndarray | Channels, spec) -> np.ndarray:
 # --------------------------------------------------------------------------- rule
 
 
-def _evaluate(node: ast.expr, get: Callable[[str], np.ndarray | None]) -> np.ndarray | None:
-    """Evaluate a compiled rule; disabled masks (None) drop out of the expression."""
+def _evaluate(node: ast.expr, get: Callable[[str], np.ndarray | None],
+              made: dict[str, np.ndarray | None]) -> np.ndarray | None:
+    """Evaluate a compiled rule; disabled masks (None) drop out of the expression. ``made``: the
+    expressions evaluated on the image, by their ``_source``, each evaluated once (a fallback rule
+    that extends the rule reuses it)."""
     if isinstance(node, ast.Name):
         return get(node.id)
+    key = _source(node)
+    if key in made:
+        return made[key]
     if isinstance(node, ast.UnaryOp):
-        m = _evaluate(node.operand, get)
-        return None if m is None else cv2.bitwise_not(m)
-    a, b = _evaluate(node.left, get), _evaluate(node.right, get)
-    if a is None or b is None:
-        return b if a is None else a
-    return cv2.bitwise_or(a, b) if isinstance(node.op, ast.BitOr) else cv2.bitwise_and(a, b)
+        m = _evaluate(node.operand, get, made)
+        out = None if m is None else cv2.bitwise_not(m)
+    else:
+        a, b = _evaluate(node.left, get, made), _evaluate(node.right, get, made)
+        if a is None or b is None:
+            out = b if a is None else a
+        else:
+            out = cv2.bitwise_or(a, b) if isinstance(node.op, ast.BitOr) else cv2.bitwise_and(a, b)
+    made[key] = out
+    return out
+
+
+# an expression's key in ``Made.expressions``: the same for the same expression in two rules, dumped
+# once per node (``compile_rule`` keeps the trees)
+_source = functools.lru_cache(maxsize=256)(ast.dump)
 
 
 def rule_masks(config: ThresholdConfig) -> tuple[str, ...]:
@@ -403,12 +418,14 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 
 @dataclass
 class Made:
-    """What ``combine`` made of one image (masks by name, colour conversions), so a second rule on it
-    (``fallback_rule``) makes only the masks it adds and converts no colour space twice.
+    """What ``combine`` made of one image (masks by name, colour conversions, the rules' expressions),
+    so a second rule on it (``fallback_rule``) makes only the masks and expressions it adds and
+    converts no colour space twice.
     """
 
     masks: dict[str, np.ndarray] = field(default_factory=dict)
     channels: Channels | None = None
+    expressions: dict[str, np.ndarray | None] = field(default_factory=dict)  # by ``_source``
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
@@ -439,7 +456,7 @@ def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
             cache[name] = mask(made.channels, spec)
         return cache[name]
 
-    out = _evaluate(compile_rule(rule or config.rule, mask_names(config)), get)
+    out = _evaluate(compile_rule(rule or config.rule, mask_names(config)), get, made.expressions)
     if out is None:
         out = np.zeros(rgb.shape[:2], np.uint8)
     out = _open(out, config.open_px)

@@ -400,3 +400,15 @@ def test_the_relative_top_hat_keeps_what_its_definition_says_on_random_images():
                 expected = th.morph(expected, "open", spec.min_width_px, 1)
             assert np.array_equal(th.tophat_mask(rgb, spec), expected), spec
 
+
+def test_a_fallback_rule_that_extends_the_rule_reuses_its_mask(road):
+    road[:, 130:290] = 30  # deep shade, and in it a stripe twice as bright: the shade top-hat's alone
+    road[40:60, 200:215] = 60
+    cfg = th.ThresholdConfig(fallback_rule="yellow | (white & line_tophat) | shade_tophat")
+    made = th.Made()
+    cheap = th.combine(road, cfg, made=made)
+    fallback = th.combine(road, cfg, rule=cfg.fallback_rule, made=made)
+    assert np.array_equal(fallback, th.combine(road, cfg, rule=cfg.fallback_rule))
+    assert np.array_equal(fallback, cheap | th.tophat_mask(road, cfg.shade_tophat))
+    assert cols(fallback) - cols(cheap) == set(range(200, 215))
+    assert any(m is cheap for m in made.expressions.values())  # the rule's mask, made once
