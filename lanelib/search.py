@@ -56,7 +56,7 @@ def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
     """
     if x is None:
         return None
-    mean = float(np.mean(hist)) if len(hist) else 0.0
+    mean = float(hist.sum()) / len(hist) if len(hist) else 0.0  # np.mean's: a sum of counts is exact
     if mean <= 0:
         return 0.0
     return (float(hist[int(x)]) - mean) / mean
