@@ -298,14 +298,13 @@ def _scaled_up(levels: np.ndarray, spec: TopHatMask) -> np.ndarray:
 
 @functools.lru_cache(maxsize=32)
 def _scales_exactly(spec: TopHatMask) -> bool:
-    """Return whether ``_scaled_up`` gives ``_least_tophat``'s table at every level 0-255, on OpenCV's
-    vector path (a row of all the levels) and on its scalar one (each level alone); not where
-    ``max_background`` is below 255, nor where a scaled level falls within 2**-12 above an integer.
-    """
-    table = _least_tophat(spec)
-    levels = np.arange(256, dtype=np.uint8).reshape(1, -1)
-    alone = [int(_scaled_up(levels[:, i:i + 1], spec)[0, 0]) for i in range(256)]
-    return np.array_equal(_scaled_up(levels, spec).ravel(), table) and alone == table.tolist()
+    """Return whether ``_scaled_up`` gives ``_least_tophat``'s table at every level 0-255 in rows 1 to
+    128 px wide (OpenCV's vector loop and its scalar tail of every length); not where
+    ``max_background`` is below 255, nor where a scaled level falls within 2**-12 above an integer."""
+    table = _least_tophat(spec)[:, None]
+    levels = np.repeat(np.arange(256, dtype=np.uint8)[:, None], 128, axis=1)  # level i on row i
+    return all(np.array_equal(_scaled_up(levels[:, :w], spec), np.repeat(table, w, axis=1))
+               for w in range(1, 129))
 
 
 @functools.lru_cache(maxsize=32)
