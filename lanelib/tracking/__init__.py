@@ -10,7 +10,7 @@
 3. **Check.** Each line alone and against the track (jump at the car, bend, a line seen only far
    ahead), the pair against the tracked width (``judge.TrackChecks``).
 4. **Propose.** While no pair passes, the proposers look again (``proposers``: windows from the
-   track, remembered bases; when switched on, ``roads.proposers``: the road seen from the car,
+   track; when switched on, ``roads.proposers``: the road seen from the car, remembered bases,
    re-acquisition, the asphalt edge, a faded line's shoulder, and ``roads.fallbacks``: fallback
    masks, shorter views, other peaks). The best candidate is kept.
 5. **Infer.** A line lost is inferred from the other at the width seen at the car.
