@@ -262,13 +262,18 @@ def _predict_ms(run: batch.PredictRun) -> int | None:
     return mean_ms([o.run_time_ms for o in run.outcomes])
 
 
-def _culane_dev(out: Path, settings: Settings) -> Measured:
-    root = _need(data.CULANE_DEV)
-    listed = root / data.CULANE_DEV_LIST
-    run = _predict("culane", root, out / "culane", listed, override(batch.benchmark_config("culane"), settings))
-    c = culane.evaluate(root, listed, run.output).counts
-    return Measured(f"{listed}; {_config_name('culane')}", c.images, detection_figures(c.tp, c.fp, c.fn),
+def _culane_scored(listed: Path, out: Path, settings: Settings, source: str) -> Measured:
+    """Return the CULane frames of ``listed`` (relative to its folder) predicted into ``out`` with
+    the culane preset and ``settings``, scored by the official rules; ``source`` names them."""
+    run = _predict("culane", listed.parent, out, listed, override(batch.benchmark_config("culane"), settings))
+    c = culane.evaluate(listed.parent, listed, run.output).counts
+    return Measured(f"{source}; {_config_name('culane')}", c.images, detection_figures(c.tp, c.fp, c.fn),
                     _predict_ms(run))
+
+
+def _culane_dev(out: Path, settings: Settings) -> Measured:
+    listed = _need(data.CULANE_DEV) / data.CULANE_DEV_LIST
+    return _culane_scored(listed, out / "culane", settings, str(listed))
 
 
 def moved_culane(root: str | Path, list_file: str | Path, cache: str | Path,
@@ -308,12 +313,9 @@ def moved_culane(root: str | Path, list_file: str | Path, cache: str | Path,
 def _culane_moved(out: Path, settings: Settings) -> Measured:
     root = _need(data.CULANE_DEV)
     listed = moved_culane(root, root / data.CULANE_DEV_LIST, out / MOVED_CACHE)
-    run = _predict("culane", listed.parent, out / "culane-moved", listed,
-                   override(batch.benchmark_config("culane"), settings))
-    c = culane.evaluate(listed.parent, listed, run.output).counts
     moves = ", ".join(f"({dx:+d}, {dy:+d})" for dx, dy in CAMERA_MOVES)
-    return Measured(f"{root / data.CULANE_DEV_LIST}, each sequence's frames moved by {moves} px in turn; "
-                    f"{_config_name('culane')}", c.images, detection_figures(c.tp, c.fp, c.fn), _predict_ms(run))
+    return _culane_scored(listed, out / "culane-moved", settings,
+                          f"{root / data.CULANE_DEV_LIST}, each sequence's frames moved by {moves} px in turn")
 
 
 def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:

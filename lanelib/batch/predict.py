@@ -393,9 +393,9 @@ def _sequence_setup(work: Sequence[FrameWork], sequences: Sequence[str], config:
     refinements = []
     if config.lines.refine_points_px > 0:
         refinements = _refined_configs(work, sequences, configs, calibration, client)
+    if on_points is not None:
         for refinement in refinements:
-            if on_points is not None:
-                on_points(refinement)
+            on_points(refinement)
     return configs, geometries, fallbacks, refinements
 
 

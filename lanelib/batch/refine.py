@@ -157,7 +157,7 @@ def refine_points(frames: Sequence[np.ndarray], config: PipelineConfig, calibrat
     home = points_vanishing(config.perspective.src_px)
     lens = Lens(calibration, (w, h))
     shift, n = (0.0, 0.0), 0
-    for _ in range(ROUNDS):
+    for round_ in range(ROUNDS):
         pipe = LanePipeline(shifted_points(config, shift), calibration, size=(w, h))
         found = [line for f in frames for line in pipe.detect_lines(f, ego=False).lines]
         directions = near_directions(found, lens)
@@ -166,15 +166,19 @@ def refine_points(frames: Sequence[np.ndarray], config: PipelineConfig, calibrat
             return PointsRefinement(sequence, None, (0.0, 0.0), n, f"{n} lines to tell from, fewer than {MIN_LINES}")
         x, y = meeting_point(directions)
         new = (x * sx - home[0], y * sy - home[1])
-        settled = math.dist(new, shift) < SETTLED_PX or (
-            shift == (0.0, 0.0) and abs(new[1]) <= limit / 2 and abs(new[0]) <= SIDEWAYS * limit / 2)
+        settled = math.dist(new, shift) < SETTLED_PX or (round_ == 0 and _within(new, limit / 2))
         shift = new
         if settled:
             break
     meeting = (round(shift[0], 1), round(shift[1], 1))
-    if abs(shift[1]) <= limit and abs(shift[0]) <= SIDEWAYS * limit:
+    if _within(shift, limit):
         return PointsRefinement(sequence, meeting, (0.0, 0.0), n, _where(shift) + f", within {limit:g} px")
     return PointsRefinement(sequence, meeting, meeting, n, _where(shift))
+
+
+def _within(shift: tuple[float, float], limit: float) -> bool:
+    """Return whether ``shift`` lies within ``limit`` px vertically and ``SIDEWAYS`` times it sideways."""
+    return abs(shift[1]) <= limit and abs(shift[0]) <= SIDEWAYS * limit
 
 
 def _where(shift: tuple[float, float]) -> str:
