@@ -46,7 +46,7 @@ import numpy as np
 from . import autogeometry, batch, data, evaluate, io
 from .bench import one_thread
 from .benchmarks import culane, tusimple
-from .benchmarks.metrics import MAX_RUN_TIME_MS, CULaneCounts
+from .benchmarks.metrics import MAX_RUN_TIME_MS, CULaneCounts, tusimple_f1
 from .camera import Calibration
 from .config import PipelineConfig, override, preset, preset_names
 from .errors import InputError, LaneLibError
@@ -102,14 +102,16 @@ def detection_figures(tp: int, fp: int, fn: int) -> dict:
 
 
 def tusimple_figures(accuracy: float, fp: float, fn: float) -> dict:
-    """Return TuSimple's accuracy (%, to 0.1) and its FP and FN rates (to 0.01).
+    """Return TuSimple's accuracy (%, to 0.1), its FP and FN rates (to 0.01) and their F1 (%, to
+    0.1: ``metrics.tusimple_f1``).
 
     Examples
     --------
     >>> tusimple_figures(0.87654, 0.1, 1 / 3)
-    {'accuracy_pct': 87.7, 'fp_rate': 0.1, 'fn_rate': 0.33}
+    {'accuracy_pct': 87.7, 'fp_rate': 0.1, 'fn_rate': 0.33, 'f1_pct': 76.6}
     """
-    return {"accuracy_pct": pct(accuracy), "fp_rate": round(float(fp), 2), "fn_rate": round(float(fn), 2)}
+    return {"accuracy_pct": pct(accuracy), "fp_rate": round(float(fp), 2), "fn_rate": round(float(fn), 2),
+            "f1_pct": pct(tusimple_f1(fp, fn))}
 
 
 def plausible(found: Sequence[bool], width_m: Sequence[float], offset_m: Sequence[float]) -> np.ndarray:

@@ -123,7 +123,7 @@ def test_tusimple_set_divides_by_the_labelled_images():
     s = tusimple_score([("a", a), ("b", b)], 2)
     assert (s.accuracy, s.fp, s.fn) == (0.75, 0.25, 0.125)
     assert s.to_dict() == {"benchmark": "tusimple", "images": 2, "Accuracy": 0.75, "FP": 0.25,
-                           "FN": 0.125}
+                           "FN": 0.125, "F1": 2 * 0.75 * 0.875 / (0.75 + 0.875)}
     assert "Accuracy  75.00 %" in s.table()
 
 
@@ -418,9 +418,9 @@ def test_cli_evaluate_tusimple_prints_and_writes_the_official_figures(tmp_path, 
                      "--json", str(out)]) == 0
     text = capsys.readouterr().out
     assert "TuSimple, 2 images" in text and "Accuracy  75.00 %" in text
-    assert "FP        0.0000" in text and "FN        0.2500" in text
+    assert "FP        0.0000" in text and "FN        0.2500" in text and "F1        85.71 %" in text
     assert json.loads(out.read_text()) == {"benchmark": "tusimple", "images": 2, "Accuracy": 0.75,
-                                           "FP": 0.0, "FN": 0.25}
+                                           "FP": 0.0, "FN": 0.25, "F1": 2 * 0.75 / 1.75}
 
 
 def test_cli_evaluate_culane_prints_and_writes_the_official_figures(tmp_path, capsys):

@@ -71,10 +71,11 @@ def test_partial_file_keeps_defaults(tmp_path):
     ({"thresholds": {"yellow": {"enabled": "yes"}}}, r"thresholds\.yellow\.enabled: expected true or false"),
     ({"thresholds": {"rule": "white | nothing"}}, r"unknown mask 'nothing'"),
     ({"perspective": {"lane_width_m": True}}, r"perspective\.lane_width_m: expected a number"),
-    ({"lines": {"follow_ahead_m": -5}}, r"lines: follow_ahead_m -5\.0, seen_window_m 2\.0, contrast_full 0\.0 and "
-                                      r"refine_points_px 0\.0 must be 0 \(off\) or more"),
-    ({"lines": {"contrast_full": -1}}, r"contrast_full -1\.0 and refine_points_px 0\.0 must be 0 \(off\) or more"),
-    ({"lines": {"refine_points_px": -6}}, r"refine_points_px -6\.0 must be 0 \(off\) or more"),
+    ({"lines": {"follow_ahead_m": -5}}, r"lines: follow_ahead_m -5\.0, seen_window_m 2\.0, contrast_full 0\.0, "
+                                      r"refine_points_px 0\.0 and min_lane_fraction 0\.0 must be 0 \(off\) or more"),
+    ({"lines": {"contrast_full": -1}}, r"contrast_full -1\.0, refine_points_px 0\.0 and min_lane_fraction 0\.0 must"),
+    ({"lines": {"refine_points_px": -6}}, r"refine_points_px -6\.0 and min_lane_fraction 0\.0 must be 0 \(off\)"),
+    ({"lines": {"min_lane_fraction": -0.7}}, r"min_lane_fraction -0\.7 must be 0 \(off\) or more"),
 ])
 def test_bad_keys_and_types_name_the_key(tmp_path, data, message):
     p = tmp_path / "bad.json"

@@ -177,10 +177,9 @@ def test_row_weights_count_far_rows_less():
     assert xs_at_bottom(reported(vote_candidates(near, cfg, XM, YM, row_weights=weights), cfg, H, YM)) == [300.5]
 
 
-@pytest.mark.parametrize("name, size", [("culane", (1640, 590)), ("tusimple", (1280, 720))])
-def test_the_presets_count_far_rows_of_the_lines_view_less(name, size):
+def test_the_culane_preset_counts_far_rows_of_the_lines_view_less():
     from lanelib.pipeline import LanePipeline
-    weights = LanePipeline(preset(name), None, size=size).lines_row_weights()
+    weights = LanePipeline(preset("culane"), None, size=(1640, 590)).lines_row_weights()
     assert weights[-1] == 1.0 and weights[0] < 0.5                  # the car's end counts fully
     assert np.all(np.diff(weights[weights > 0]) >= -1e-9)          # and nothing counts more further out
 
@@ -279,3 +278,22 @@ def test_a_faint_seam_beside_dashed_paint_outvotes_it_only_when_every_run_counts
     strength[:, 330:350] = 0.5
     weighed = vote_candidates(m, CFG, XM, YM, strength=strength if use_strength else None)
     assert xs_at_bottom(reported(weighed, CFG, H, YM)) == [x_bottom]
+
+
+@pytest.mark.parametrize("fraction, kept", [(0.0, [125.5, 310.5, 492.5, 592.5]), (0.7, [125.5, 310.5, 492.5])])
+def test_a_line_nearer_than_a_lane_beside_the_line_inside_it_is_refused(fraction, kept):
+    """The ego lines 1.8 m either side of the car (the view's middle, x 400), a neighbour line
+    3.7 m beyond the left one, and a barrier's foot 2 m beyond the right one, whose paint is
+    longer than the right line's dashes: no lane is 2 m wide, so with ``min_lane_fraction`` 0.7
+    (2.6 m) the foot, further from the car, is refused and says why; the neighbour stays."""
+    m = np.zeros((H, W), np.uint8)
+    for x in (125.5, 310.5):
+        paint(m, x)
+    paint(m, 492.5, rows=[y for y in range(H) if y % 60 < 30])
+    paint(m, 592.5)
+    config = LinesConfig(min_span_m=5.0, extend_m=0.0, min_lane_fraction=fraction)
+    weighed = vote_candidates(m, config, XM, YM)
+    assert xs_at_bottom(reported(weighed, config, H, YM)) == kept
+    refused = [c.refused for c in weighed if c.refused.startswith("it runs")]
+    assert refused == ([] if fraction == 0 else [
+        "it runs 2.0 m beside the line inside it, less than min_lane_fraction 0.70 of a lane: no lane is that narrow"])

@@ -33,9 +33,12 @@ def test_precision_recall_f1_of_line_counts(counts, expected):
 
 
 def test_tusimple_figures_are_rounded_to_what_they_mean():
+    # F1 of precision 1 - FP and recall 1 - FN: 2 * (29/30) * (1/30) / (30/30) = 0.0644
     assert scoreboard.tusimple_figures(0.97536, 1 / 30, 29 / 30) == {
-        "accuracy_pct": 97.5, "fp_rate": 0.03, "fn_rate": 0.97}
-    assert scoreboard.tusimple_figures(0.0, 0.0, 1.0) == {"accuracy_pct": 0.0, "fp_rate": 0.0, "fn_rate": 1.0}
+        "accuracy_pct": 97.5, "fp_rate": 0.03, "fn_rate": 0.97, "f1_pct": 6.4}
+    assert scoreboard.tusimple_figures(0.0, 0.0, 1.0) == {"accuracy_pct": 0.0, "fp_rate": 0.0, "fn_rate": 1.0,
+                                                          "f1_pct": 0.0}
+    assert scoreboard.tusimple_figures(0.9, 0.2, 0.2)["f1_pct"] == 80.0   # equal rates: F1 = 1 - rate
     assert scoreboard.pct(float("nan")) is None and scoreboard.pct(None) is None
 
 
@@ -238,7 +241,7 @@ def test_scoreboard_real_rows_run_on_the_dev_data(culane_dev, tusimple_dev, udac
     assert set(cu.figures) == {"precision_pct", "recall_pct", "f1_pct", "tp", "fp", "fn"}
     assert cu.figures["tp"] + cu.figures["fn"] == 445  # the labelled lines of culane-dev
     # "over_200ms" only when a frame took longer than TuSimple's limit (a loaded machine)
-    assert set(ts.figures) - {"over_200ms"} == {"accuracy_pct", "fp_rate", "fn_rate"}
+    assert set(ts.figures) - {"over_200ms"} == {"accuracy_pct", "fp_rate", "fn_rate", "f1_pct"}
     assert p1.figures["found_pct"] > 90.0
     assert all(isinstance(r.ms_per_frame, int) and r.ms_per_frame > 0 for r in rows)
     assert len(list((tmp_path / scoreboard.TUSIMPLE_CACHE).rglob("*.png"))) == 10

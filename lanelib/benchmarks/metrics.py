@@ -217,7 +217,8 @@ def tusimple_image(pred_lanes: Sequence[Sequence[float]], gt_lanes: Sequence[Seq
 
 @dataclass(frozen=True)
 class TuSimpleScore:
-    """The official TuSimple figures of a prediction set: ``Accuracy``, ``FP``, ``FN``.
+    """The official TuSimple figures of a prediction set: ``Accuracy``, ``FP``, ``FN``, and the F1
+    of the last two (``f1``).
 
     ``images`` is the number of labelled images the sums are divided by; ``per_image`` keeps each
     prediction's ``TuSimpleImage`` under its ``raw_file``.
@@ -229,17 +230,39 @@ class TuSimpleScore:
     fn: float
     per_image: tuple[tuple[str, TuSimpleImage], ...] = ()
 
+    @property
+    def f1(self) -> float:
+        """Return ``tusimple_f1`` of the FP and FN rates."""
+        return tusimple_f1(self.fp, self.fn)
+
     def to_dict(self) -> dict:
-        """Return the figures as JSON-able values, named as TuSimple's own output names them."""
+        """Return the figures as JSON-able values, named as TuSimple's own output names them (and
+        "F1")."""
         return {"benchmark": "tusimple", "images": self.images, "Accuracy": self.accuracy,
-                "FP": self.fp, "FN": self.fn}
+                "FP": self.fp, "FN": self.fn, "F1": self.f1}
 
     def table(self) -> str:
-        """Return the figures as printable lines (accuracy in %, FP and FN as fractions)."""
+        """Return the figures as printable lines (accuracy and F1 in %, FP and FN as fractions)."""
         return (f"TuSimple, {self.images} images\n"
                 f"Accuracy  {100.0 * self.accuracy:.2f} %\n"
                 f"FP        {self.fp:.4f}\n"
-                f"FN        {self.fn:.4f}")
+                f"FN        {self.fn:.4f}\n"
+                f"F1        {100.0 * self.f1:.2f} %")
+
+
+def tusimple_f1(fp: float, fn: float) -> float:
+    """Return the F1 of TuSimple's FP and FN rates: precision ``1 - fp`` and recall ``1 - fn``, as
+    lane detection papers report it beside the official figures (0 when both are 0). The
+    official accuracy credits a label the points of any line near it, false or not; the F1 counts
+    every false line and every missed one.
+
+    Examples
+    --------
+    >>> round(tusimple_f1(0.1, 1 / 3), 4), tusimple_f1(1.0, 1.0)
+    (0.766, 0.0)
+    """
+    precision, recall = 1.0 - float(fp), 1.0 - float(fn)
+    return 0.0 if precision + recall <= 0 else 2.0 * precision * recall / (precision + recall)
 
 
 def tusimple_score(images: Iterable[tuple[str, TuSimpleImage]], labelled: int) -> TuSimpleScore:

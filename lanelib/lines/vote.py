@@ -263,7 +263,29 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
         table[_same_cells(v.x0s, v.slopes, x0, s, v.height - 1, gap, crossing=crossing)] = 0.0
         reported += not why
         found.append(Candidate(x0, s, paint * ym_per_px, line, why))
-    return found
+    return _lanes_apart(found, config, xm_per_px, v)
+
+
+def _lanes_apart(found: list[Candidate], config: LinesConfig, xm_per_px: float, v: "_Votes") -> list[Candidate]:
+    """Return the candidates with each reported line refused that lies nearer than
+    ``min_lane_fraction`` of a lane width, on the view's bottom row, to the reported line kept
+    next to it towards the car on its side (the lines nearest the car first)."""
+    least_px = config.min_lane_fraction * config.lane_width_m / xm_per_px
+    if least_px <= 0:
+        return found
+    bottom = v.height - 1.0
+    at = {i: float(c.line.x_at(bottom)) - v.car_x for i, c in enumerate(found) if not c.refused}
+    out = list(found)
+    for side in (-1.0, 1.0):
+        kept = None
+        for i in sorted((i for i, x in at.items() if x * side >= 0), key=lambda i: abs(at[i])):
+            if kept is not None and abs(at[i] - kept) < least_px:
+                out[i] = replace(found[i], refused=(
+                    f"it runs {abs(at[i] - kept) * xm_per_px:.1f} m beside the line inside it, less than "
+                    f"min_lane_fraction {config.min_lane_fraction:.2f} of a lane: no lane is that narrow"))
+            else:
+                kept = at[i]
+    return out
 
 
 def _followed(v: _Votes, near: np.ndarray, voted: tuple, s: float, config: LinesConfig, xm_per_px: float,

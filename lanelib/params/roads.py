@@ -164,6 +164,10 @@ class LinesConfig:
         to where the lines it finds meet, when that is further than this many px (vertically;
         twice as far sideways) from where the points' sides meet (``batch.refine``; 0: off): a
         camera pitched or turned a little otherwise than the one the points were set for.
+    min_lane_fraction : a reported line nearer than this share of ``lane_width_m`` (on the view's
+        bottom row) to the next reported line towards the car on its side is refused (``lines.vote``;
+        0: off): no lane is that narrow, and the line further out is the one beside the paint (a
+        vehicle's edge, a barrier's foot, a slab joint), the lines nearest the car being seen best.
     """
 
     lane_width_m: float = 3.7
@@ -205,6 +209,7 @@ class LinesConfig:
     seen_window_m: float = 2.0
     contrast_full: float = 0.0
     refine_points_px: float = 0.0
+    min_lane_fraction: float = 0.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -216,10 +221,11 @@ class LinesConfig:
                               "headings 1 or more")
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
-        if min(self.follow_ahead_m, self.seen_window_m, self.contrast_full, self.refine_points_px) < 0:
+        if min(self.follow_ahead_m, self.seen_window_m, self.contrast_full, self.refine_points_px,
+               self.min_lane_fraction) < 0:
             raise ConfigError(f"follow_ahead_m {self.follow_ahead_m}, seen_window_m {self.seen_window_m}, "
-                              f"contrast_full {self.contrast_full} and refine_points_px "
-                              f"{self.refine_points_px} must be 0 (off) or more")
+                              f"contrast_full {self.contrast_full}, refine_points_px {self.refine_points_px} "
+                              f"and min_lane_fraction {self.min_lane_fraction} must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
