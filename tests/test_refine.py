@@ -15,7 +15,7 @@ import pytest
 from lanelib import batch, config, io
 from lanelib.batch.refine import MIN_LINES, PointsRefinement, refine_points, sequence_refinement, shifted_points
 from lanelib.camera import Calibration
-from lanelib.benchmarks import culane
+from lanelib.benchmarks import culane, why
 from lanelib.cli import main
 from lanelib.config import PipelineConfig
 from lanelib.synth.datasets import CULANE_DESIGNS, CULANE_SIZE, write_dataset
@@ -96,3 +96,25 @@ def test_predict_moves_each_sequences_points_and_finds_more_lines(tmp_path, samp
     assert refined > fixed
     run = batch.predict_benchmark("culane", sample, tmp_path / "library", config=wrong, progress=False)
     assert [r.moved for r in run.refinements] == [True]
+
+
+def test_why_sees_each_sequence_through_the_points_predict_gives_it(tmp_path, sample, true_config, capsys):
+    """``why`` moves the points as ``predict`` does: the frames it explains find as many labelled
+    lines as ``predict`` with the refinement, more than with the points kept, and it prints the
+    move, for the set and for one frame named."""
+    wrong = shifted_points(true_config, (0.0, -15.0))
+    (tmp_path / "wrong.json").write_text(json.dumps(config.to_dict(wrong)))
+    listed = sample / "list" / "test.txt"
+    assert main(["predict", "culane", str(sample), "-o", str(tmp_path / "pred"), "--no-progress",
+                 "--config", str(tmp_path / "wrong.json")]) == 0
+    tp = culane.evaluate(sample, listed, tmp_path / "pred").counts.tp
+    capsys.readouterr()
+    explained = why.explain_set("culane", sample, wrong, listed, on_points=lambda r: print(r.note()))
+    assert re.search(r"bird's-eye points moved by \([+-]\d+, \+1[4-6]\) px", capsys.readouterr().out)
+    assert explained.counts()[why.FOUND][0] == tp
+    kept = why.explain_set("culane", sample, replace(wrong, lines=replace(wrong.lines, refine_points_px=0)), listed)
+    assert kept.counts()[why.FOUND][0] < tp
+    frame = sorted(sample.rglob("*.jpg"))[0]
+    assert main(["why", "culane", str(frame), "--root", str(sample), "-o", str(tmp_path / "png"),
+                 "--config", str(tmp_path / "wrong.json")]) == 0
+    assert re.search(r"bird's-eye points moved by \([+-]\d+, \+1[4-6]\) px", capsys.readouterr().out)

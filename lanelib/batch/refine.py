@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -189,8 +189,9 @@ def _where(shift: tuple[float, float]) -> str:
 
 
 def sequence_refinement(images: Sequence[Path], config: PipelineConfig, calibration: Calibration | None,
-                        sequence: str) -> PointsRefinement:
-    """Return ``refine_points`` on up to ``FRAMES`` of a sequence's ``images``, evenly spread; an
+                        sequence: str, read: Callable[[Path], np.ndarray] = io.read_image) -> PointsRefinement:
+    """Return ``refine_points`` on up to ``FRAMES`` of a sequence's ``images``, evenly spread, each
+    read by ``read`` (RGB; e.g. a reader that also resizes, as ``why`` reads TuSimple frames); an
     image that cannot be read, or of another size than the first, is left out (``predict_frame``
     reports it), and frames the pipeline refuses (a lanelib error other than a bad config) keep
     the points with the reason. A value, not an exception, so that a Dask task returns it alike."""
@@ -198,7 +199,7 @@ def sequence_refinement(images: Sequence[Path], config: PipelineConfig, calibrat
     frames = []
     for image in images[::step]:
         try:
-            frame = io.read_image(image)
+            frame = read(image)
         except InputError:
             continue
         if not frames or frame.shape == frames[0].shape:

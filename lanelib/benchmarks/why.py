@@ -27,6 +27,7 @@ Each predicted line that matches no label is a **false line**, off a label line 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import re
 from collections import Counter
@@ -37,6 +38,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from .. import batch, data, io
+from ..batch.refine import PointsRefinement, sequence_refinement, shifted_points
 from ..config import PipelineConfig
 from ..errors import InputError
 from ..pipeline import LanePipeline
@@ -387,9 +389,7 @@ def explain_frame(benchmark: str, image, labels, config: PipelineConfig | None =
     if benchmark not in BENCHMARKS:
         raise InputError(f"{benchmark!r}: not a benchmark; choose one of {', '.join(BENCHMARKS)}")
     config = batch.benchmark_config(benchmark) if config is None else config
-    rgb = image if isinstance(image, np.ndarray) else io.read_image(image)
-    if benchmark == "tusimple":
-        rgb = tusimple.full_size(rgb)
+    rgb = read_frame(benchmark, image)
     size = (rgb.shape[1], rgb.shape[0])
     points, rows = label_lines(benchmark, labels)
     pipe = pipeline if pipeline is not None else LanePipeline(config, None, size=size)
@@ -495,10 +495,41 @@ def set_frames(benchmark: str, root: str | os.PathLike,
     return out
 
 
+def read_frame(benchmark: str, image) -> np.ndarray:
+    """Return a labelled frame (a path, or an RGB array) as ``predict`` sees it: RGB, a TuSimple
+    frame at the official 1280x720 (``tusimple.full_size``, as the scoreboard upscales it)."""
+    rgb = image if isinstance(image, np.ndarray) else io.read_image(image)
+    return tusimple.full_size(rgb) if benchmark == "tusimple" else rgb
+
+
+def refined_configs(benchmark: str, images: Iterable[tuple[str, Path]], config: PipelineConfig,
+                    on_points: Callable[[PointsRefinement], None] | None = None) -> dict[str, PipelineConfig]:
+    """Return the config of each sequence (``batch.frame_sequence``) of ``images`` ((name, path)
+    pairs) whose bird's-eye points ``predict`` moves: ``config`` with its points moved to where
+    the sequence's lines meet (``lines.refine_points_px``, ``batch.refine.sequence_refinement``
+    on the frames as ``read_frame`` reads them). Each sequence's ``PointsRefinement`` goes to
+    ``on_points``. Empty when the refinement is off."""
+    if config.lines.refine_points_px <= 0:
+        return {}
+    by_sequence: dict[str, list[Path]] = {}
+    for name, image in images:
+        by_sequence.setdefault(batch.frame_sequence(benchmark, name), []).append(Path(image))
+    out = {}
+    for sequence, paths in by_sequence.items():
+        found = sequence_refinement(paths, config, None, sequence, functools.partial(read_frame, benchmark))
+        if on_points is not None:
+            on_points(found)
+        if found.moved:
+            out[sequence] = shifted_points(config, found.shift_px)
+    return out
+
+
 def explain_set(benchmark: str, root: str | os.PathLike | None = None, config: PipelineConfig | None = None,
                 list_file: str | os.PathLike | None = None,
-                on_frame: Callable[[FrameWhy], None] | None = None) -> SetWhy:
-    """Return every labelled frame of a dataset explained (``explain_frame``), in list order.
+                on_frame: Callable[[FrameWhy], None] | None = None,
+                on_points: Callable[[PointsRefinement], None] | None = None) -> SetWhy:
+    """Return every labelled frame of a dataset explained (``explain_frame``), in list order,
+    each sequence through the points ``predict`` gives it (``refined_configs``).
 
     Parameters
     ----------
@@ -508,20 +539,23 @@ def explain_set(benchmark: str, root: str | os.PathLike | None = None, config: P
     config : the pipeline's config (default: ``batch.benchmark_config(benchmark)``).
     list_file : the frames (``set_frames``).
     on_frame : called with each frame's record as it is done (a progress line).
+    on_points : called with each sequence's ``PointsRefinement`` before its frames are explained.
     """
     if root is None:
         root = data.require(data.CULANE_DEV if benchmark == "culane" else data.TUSIMPLE_DEV)
     config = batch.benchmark_config(benchmark) if config is None else config
+    named = set_frames(benchmark, root, list_file)
+    configs = refined_configs(benchmark, ((name, image) for name, image, _ in named), config, on_points)
     pipelines: dict = {}
     frames = []
-    for name, image, labels in set_frames(benchmark, root, list_file):
-        rgb = io.read_image(image)
-        if benchmark == "tusimple":
-            rgb = tusimple.full_size(rgb)
-        size = (rgb.shape[1], rgb.shape[0])
-        if size not in pipelines:
-            pipelines[size] = LanePipeline(config, None, size=size)
-        frame = explain_frame(benchmark, rgb, labels, config, name=name, pipeline=pipelines[size],
+    for name, image, labels in named:
+        rgb = read_frame(benchmark, image)
+        sequence = batch.frame_sequence(benchmark, name)
+        own = configs.get(sequence, config)
+        key = (rgb.shape[1], rgb.shape[0], sequence if sequence in configs else None)
+        if key not in pipelines:
+            pipelines[key] = LanePipeline(own, None, size=key[:2])
+        frame = explain_frame(benchmark, rgb, labels, own, name=name, pipeline=pipelines[key],
                               keep_mask=False)
         if on_frame is not None:
             on_frame(frame)

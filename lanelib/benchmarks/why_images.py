@@ -6,16 +6,17 @@ from __future__ import annotations
 
 import os
 from pathlib import Path, PurePosixPath
-from typing import Sequence
+from typing import Callable, Sequence
 
 import cv2
 import numpy as np
 
-from .. import data, draw, io
+from .. import batch, data, draw, io
+from ..batch.refine import PointsRefinement
 from ..config import PipelineConfig
 from ..errors import InputError
 from . import culane
-from .why import FALSE, FOUND, REFUSED, FrameWhy, explain_frame, set_frames, written_points
+from .why import FALSE, FOUND, REFUSED, FrameWhy, explain_frame, refined_configs, set_frames, written_points
 
 COLOURS = {"label": (0, 220, 0), FOUND: (255, 40, 40), FALSE: (255, 150, 0), REFUSED: (170, 170, 170)}
 
@@ -131,12 +132,15 @@ def why_png(out_dir: Path, name: str) -> Path:
 
 
 def write_why(benchmark: str, frames: Sequence[str | os.PathLike], out_dir: str | os.PathLike,
-              root: str | os.PathLike | None = None,
-              config: PipelineConfig | None = None) -> list[tuple[FrameWhy, Path]]:
+              root: str | os.PathLike | None = None, config: PipelineConfig | None = None,
+              on_points: Callable[[PointsRefinement], None] | None = None) -> list[tuple[FrameWhy, Path]]:
     """Explain each frame (a path, or a name under ``root``) and write its ``draw_why`` image to
     ``out_dir`` (``why_png``), atomically; return each frame's record and image file.
 
     ``root`` defaults to the dev set (``data.culane_dev``, ``data.tusimple_dev``) when present.
+    Each frame's sequence is seen through the points ``predict`` gives it (``why.refined_configs``,
+    each ``PointsRefinement`` to ``on_points``), refined from the sequence's frames in the
+    dataset's list (``set_frames``), else from the frames named.
     Nothing is written when a frame is missing, or ``out_dir`` is a folder a frame lies in or
     the dataset root (``InputError``): every check runs before the first frame.
     """
@@ -149,13 +153,32 @@ def write_why(benchmark: str, frames: Sequence[str | os.PathLike], out_dir: str 
             if folder is not None and out.resolve() == folder.resolve():
                 raise InputError(f"{out}: is {what}; choose another output folder (-o), the images "
                                  "are never written among the inputs")
+    config = batch.benchmark_config(benchmark) if config is None else config
+    named = [(frame_labels(benchmark, p, base), p) for p in images]
+    sequence_of = [name if benchmark == "tusimple" else _relative(p, base).as_posix() for (name, _), p in named]
+    configs = refined_configs(benchmark, _sequence_images(benchmark, list(zip(sequence_of, images)), base),
+                              config, on_points)
     done = []
-    for p in images:
-        name, labels = frame_labels(benchmark, p, base)
-        frame = explain_frame(benchmark, p, labels, config, name=name)
-        target = why_png(out, name if benchmark == "tusimple" else _relative(p, base).as_posix())
+    for ((name, labels), p), rel in zip(named, sequence_of):
+        own = configs.get(batch.frame_sequence(benchmark, rel), config)
+        frame = explain_frame(benchmark, p, labels, own, name=name)
+        target = why_png(out, rel)
         done.append((frame, io.write_image(target, draw_why(p, frame), inputs=images)))
     return done
+
+
+def _sequence_images(benchmark: str, named: list[tuple[str, Path]], base: Path | None) -> list[tuple[str, Path]]:
+    """Return the (name, path) frames that the sequences of ``named`` are refined from, as
+    ``predict`` on the dataset refines them: each sequence's frames in the dataset's list
+    (``set_frames`` of ``base``), else the frames named."""
+    wanted = {batch.frame_sequence(benchmark, n) for n, _ in named}
+    try:
+        listed = [(n, i) for n, i, _ in set_frames(benchmark, base)] if base is not None else []
+    except InputError:  # a folder of frames without the dataset's list
+        listed = []
+    listed = [(n, i) for n, i in listed if batch.frame_sequence(benchmark, n) in wanted]
+    have = {batch.frame_sequence(benchmark, n) for n, _ in listed}
+    return listed + [(n, p) for n, p in named if batch.frame_sequence(benchmark, n) not in have]
 
 
 def _frame_path(frame: str | os.PathLike, base: Path | None) -> Path:

@@ -349,7 +349,8 @@ def _run_why(args) -> int:
     config = load_config(args, batch.benchmark_config(args.benchmark))
     if args.frames:
         out = args.output if args.output is not None else Path("out") / "why"
-        for frame, png in why_images.write_why(args.benchmark, args.frames, out, args.root, config):
+        for frame, png in why_images.write_why(args.benchmark, args.frames, out, args.root, config,
+                                               on_points=lambda r: print(r.note())):
             print(f"{frame.name}: {png}")
             for line in frame.summary():
                 print(f"  {line}")
@@ -357,7 +358,8 @@ def _run_why(args) -> int:
     target = args.output / f"why_{args.benchmark}.json" if args.output is not None else None
     if target is not None:
         check_output(target)
-    result = why.explain_set(args.benchmark, args.root, config, args.list_file)
+    result = why.explain_set(args.benchmark, args.root, config, args.list_file,
+                             on_points=lambda r: print(r.note()))
     print(result.table())
     if target is not None:
         write_json(target, result.to_dict())
