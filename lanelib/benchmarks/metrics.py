@@ -252,9 +252,9 @@ class TuSimpleScore:
 
 def tusimple_f1(fp: float, fn: float) -> float:
     """Return the F1 of TuSimple's FP and FN rates: precision ``1 - fp`` and recall ``1 - fn``, as
-    lane detection papers report it beside the official figures (0 when both are 0). The
-    official accuracy credits a label the points of any line near it, false or not; the F1 counts
-    every false line and every missed one.
+    lane detection papers report it beside the official figures (0 when both are 0: every line
+    false and every label missed). The official accuracy credits a label the points of any line
+    near it, false or not; the F1 counts every false line and every missed one.
 
     Examples
     --------

@@ -155,11 +155,11 @@ def write_why(benchmark: str, frames: Sequence[str | os.PathLike], out_dir: str 
                                  "are never written among the inputs")
     config = batch.benchmark_config(benchmark) if config is None else config
     named = [(frame_labels(benchmark, p, base), p) for p in images]
-    sequence_of = [name if benchmark == "tusimple" else _relative(p, base).as_posix() for (name, _), p in named]
-    configs = refined_configs(benchmark, _sequence_images(benchmark, list(zip(sequence_of, images)), base),
+    in_set = [name if benchmark == "tusimple" else _relative(p, base).as_posix() for (name, _), p in named]
+    configs = refined_configs(benchmark, _sequence_images(benchmark, list(zip(in_set, images)), base),
                               config, on_points)
     done = []
-    for ((name, labels), p), rel in zip(named, sequence_of):
+    for ((name, labels), p), rel in zip(named, in_set):
         own = configs.get(batch.frame_sequence(benchmark, rel), config)
         frame = explain_frame(benchmark, p, labels, own, name=name)
         target = why_png(out, rel)

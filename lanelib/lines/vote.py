@@ -266,7 +266,7 @@ def _weigh(table: np.ndarray, v: _Votes, config: LinesConfig, xm_per_px: float,
     return _lanes_apart(found, config, xm_per_px, v)
 
 
-def _lanes_apart(found: list[Candidate], config: LinesConfig, xm_per_px: float, v: "_Votes") -> list[Candidate]:
+def _lanes_apart(found: list[Candidate], config: LinesConfig, xm_per_px: float, v: _Votes) -> list[Candidate]:
     """Return the candidates with each reported line refused that lies nearer than
     ``min_lane_fraction`` of a lane width, on the view's bottom row, to the reported line kept
     next to it towards the car on its side (the lines nearest the car first)."""
