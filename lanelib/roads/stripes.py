@@ -257,8 +257,8 @@ def _median_spacing(spacing: np.ndarray, ys: np.ndarray) -> float:
     Each step of that sum is a rounded operation, which never reverses the order of its inputs:
     the spacing rises (or falls) with the row, equal on one row. Its middle values are then its
     values on the middle rows of ``ys``, read from the count of pixels per row (integer rows);
-    the middle two are averaged as ``np.median`` does. Rows that are not integers, or a spacing
-    not finite on the first and last row, take ``np.median``.
+    the middle two are averaged as ``np.median`` does (their sum halved). Rows that are not
+    integers, or a spacing not finite on the first and last row, take ``np.median``.
     """
     n = len(ys)
     if n < 2 or ys.dtype.kind not in "iu":
@@ -274,7 +274,7 @@ def _median_spacing(spacing: np.ndarray, ys: np.ndarray) -> float:
         middle = tuple(n - 1 - k for k in middle)
     rows = np.searchsorted(below, middle, side="right") + y0
     values = [float(spacing[int(np.argmax(ys == row))]) for row in rows]
-    return float(np.mean(values))
+    return sum(values) / len(values)
 
 
 def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int = 0,
