@@ -20,7 +20,7 @@ def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     ``cv2.findNonZero`` tests pixel by pixel; a contiguous mask whose width is a multiple of 4 is
     scanned as int32 words instead (a quarter of the tests), then the nonzero bytes of the nonzero
-    words are read: the same pixels in the same order.
+    words (gathered by flat index, ``take``) are read: the same pixels in the same order.
     """
     h, w = binary.shape[:2]
     words = binary.ndim == 2 and binary.dtype == np.uint8 and w % 4 == 0 and binary.flags.c_contiguous
@@ -28,10 +28,10 @@ def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if pts is None:
         return np.empty(0, np.int32), np.empty(0, np.int32)
     pts = pts.reshape(-1, 2)
-    ys, xs = pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
+    ys, xs = pts[:, 1], pts[:, 0]  # findNonZero scans row by row: already sorted by y
     if not words:
-        return ys, xs
-    which, byte = np.nonzero(binary.reshape(h, w // 4, 4)[ys, xs])
+        return ys.copy(), xs.copy()
+    which, byte = np.nonzero(binary.view(np.int32).ravel().take(ys * (w // 4) + xs).view(np.uint8).reshape(-1, 4))
     return ys[which], xs[which] * 4 + byte.astype(np.int32)
 
 

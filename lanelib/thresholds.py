@@ -269,18 +269,18 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
         if spec.high < 255:
             out = cv2.bitwise_and(out, in_range(tophat, 0, spec.high))
     if spec.min_width_px > 1:  # an opening 1 x k across the road
-        out = rows_opened(out, spec.min_width_px)
+        out = rows_opened(out, spec.min_width_px, inplace=True)  # ``out`` is this call's own
     return out
 
 
-def rows_opened(mask: np.ndarray, width_px: int) -> np.ndarray:
+def rows_opened(mask: np.ndarray, width_px: int, inplace: bool = False) -> np.ndarray:
     """Return ``morph(mask, "open", width_px, 1)`` of a uint8 mask, opening only its rows that hold a
     pixel: a kernel one row tall leaves an empty row empty, and a top-hat's mask holds pixels on a
-    fraction of its rows."""
+    fraction of its rows. With ``inplace`` they are opened in ``mask`` itself (no new mask to clear)."""
     rows = np.flatnonzero(cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))
     if len(rows) == len(mask):
         return morph(mask, "open", width_px, 1)
-    out = np.zeros_like(mask)
+    out = mask if inplace else np.zeros_like(mask)
     if len(rows):
         out[rows] = morph(mask[rows], "open", width_px, 1)
     return out
