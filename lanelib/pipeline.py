@@ -10,8 +10,6 @@ exactly what a video run uses. Runs over folders and videos are ``batch.process_
 """
 from __future__ import annotations
 
-import functools
-
 import cv2
 import numpy as np
 
@@ -28,15 +26,15 @@ from .lines.result import LinesResult
 from .lines.view import LinesView
 from .params import LinesConfig
 from .perspective import Perspective, scaled
-from .proposers import Candidate, Frame, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
 from .result import FrameResult, Rejected, line_confidence
-from .roads.proposers import DETECT
+from .roads.proposers import DETECT, detect_again
 from .search import search_around, sliding_windows
 
 
-# where a single image's lane is looked for again when its first search fails (``detect``): the
-# hard-road proposers that need no track, each asking only when its switch is on
+# where a single image's lane is looked for again when its first search fails (``detect``,
+# ``roads.proposers.detect_again``): the hard-road proposers that need no track, each asking only
+# when its switch is on
 DETECT_PROPOSERS = DETECT
 
 
@@ -189,19 +187,15 @@ class LanePipeline:
 
         The fits of ``search_frame`` go through ``result``: a lane that fails the checks is not found
         and kept in ``rejected``. Without a ``prior``, a failed lane is looked for again by the
-        proposers that need no track (``DETECT_PROPOSERS``, through ``proposers.choose``): fallback
+        proposers that need no track (``DETECT_PROPOSERS``, ``roads.proposers.detect_again``): fallback
         masks, shorter views, other histogram peaks, the asphalt edge. The first pair to pass is taken.
         """
-        made = Made()  # the masks made, which the fallback rule's mask reuses
+        made = Made()  # the masks and fits made, which the fallback rule's mask and searches reuse
         search, images = self.search_frame(raw, prior, keep_images, made=made)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        frame = Frame(self, raw, functools.partial(_passing, self), images, first=search, made=made)
-        best = choose(frame, DETECT_PROPOSERS).search
-        if best is not search and keep_images:
-            images["binary"] = frame.mask()  # the views show the mask the lane came from
-        images.pop("fallback binary", None)
+        best = detect_again(self, raw, images, search, made, keep_images)
         return result if best is search else self.result(best, images if keep_images else {})
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
@@ -321,12 +315,6 @@ class LanePipeline:
         return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
 
-
-def _passing(pipeline: LanePipeline, search: LaneSearch) -> Candidate:
-    """Return a search judged as a single image: both lines, or none when not both pass."""
-    if passes(pipeline, search):
-        return Candidate(search, search.left, search.right, [], False)
-    return Candidate(search, None, None, [], False)
 
 
 def _rejected(fit: LineFit, why: str) -> LineFit:

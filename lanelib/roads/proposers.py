@@ -20,7 +20,8 @@ image (``LanePipeline.detect``) and the tracker; the others read the tracker.
 
 The pipeline and the tracker are passed in (duck-typed): this package sits below both in the
 layers. ``TRACKER_FIRST``, ``TRACKER_LATER`` and ``DETECT`` are where these and those of
-``roads.fallbacks`` go in the tracker's chain and in a single image's, in their order.
+``roads.fallbacks`` go in the tracker's chain and in a single image's, in their order;
+``detect_again`` runs a single image's chain (``LanePipeline.detect``).
 """
 from __future__ import annotations
 
@@ -29,8 +30,10 @@ from dataclasses import replace
 import numpy as np
 
 from ..fit import joined_fit, offset_line, parallel_fits
+from ..proposers import Candidate, Frame, choose, passes
 from ..records import LaneSearch, LineFit, Window, near_row_px
 from ..search import fit_side, search_around
+from ..thresholds import Made
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
 from .fallbacks import FallbackMasks, OtherPeaks, ShorterViews
 
@@ -486,5 +489,30 @@ def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarra
 TRACKER_FIRST = (RoadView(),)
 TRACKER_LATER = (RememberedBases(), Reacquire(), FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(),
                  Shoulder())
-# a single image's chain (``pipeline.DETECT_PROPOSERS``): those that need no track
+# a single image's chain (``pipeline.DETECT_PROPOSERS``, ``detect_again``): those that need no track
 DETECT = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())
+
+
+def detect_again(pipeline, raw: np.ndarray, images: dict, first: LaneSearch, made: Made | None,
+                 keep_images: bool = False) -> LaneSearch:
+    """Return the search a single image's lane comes from when its first search ``first`` failed
+    the checks (``LanePipeline.detect``, without a prior): the first candidate of the proposers that
+    need no track (``DETECT``, through ``proposers.choose``) whose two lines pass a single image's
+    checks (``proposers.passes``), else ``first``, which ``detect`` has judged already (it is not
+    checked again). With ``keep_images``, a lane found so leaves the mask it came from in
+    ``images["binary"]`` for the views; the fallback masks' binary is not kept.
+    """
+    frame = Frame(pipeline, raw, lambda search: _passing(pipeline, search), images, first=first, made=made,
+                  best=Candidate(first, None, None, [], False), looked=[first])
+    best = choose(frame, DETECT).search
+    if best is not first and keep_images:
+        images["binary"] = frame.mask()  # the views show the mask the lane came from
+    images.pop("fallback binary", None)
+    return best
+
+
+def _passing(pipeline, search: LaneSearch) -> Candidate:
+    """Return a search judged as a single image: both lines, or none when not both pass."""
+    if passes(pipeline, search):
+        return Candidate(search, search.left, search.right, [], False)
+    return Candidate(search, None, None, [], False)
