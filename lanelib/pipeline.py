@@ -32,9 +32,8 @@ from .roads.proposers import DETECT, detect_again
 from .search import search_around, sliding_windows
 
 
-# where a single image's lane is looked for again when its first search fails (``detect``,
-# ``roads.proposers.detect_again``): the hard-road proposers that need no track, each asking only
-# when its switch is on
+# where a single image's lane is looked for again when its first search fails (``detect``): the
+# hard-road proposers that need no track, each asking only when its switch is on
 DETECT_PROPOSERS = DETECT
 
 
@@ -122,16 +121,16 @@ class LanePipeline:
         return bool(tc.fallback_rule) and tc.fallback_rule.replace(" ", "") != tc.rule.replace(" ", "")
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-               bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None) -> LaneSearch:
+               bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None, made=None) -> LaneSearch:
         """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows
         starting from ``bases`` (the lines' x, px, on the bottom row, e.g. the track's) or the
         histogram peaks nearest the car. ``top_px``: the look-ahead's first row (0: the whole view).
-        ``pixels``: the mask's ``lane_pixels``.
+        ``pixels``: the mask's ``lane_pixels``; ``made``: the image's ``Made``, whose line fits it reuses.
         """
         if prior is not None:
             return search_around(binary, prior[0], prior[1], self.config.search, top_px)
         return sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
-                               top_px=top_px, pixels=pixels)
+                               top_px=top_px, pixels=pixels, fits=None if made is None else made.fits)
 
     def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``checks.search_bands_px``)."""
@@ -165,13 +164,13 @@ class LanePipeline:
         With a ``prior`` and no ``keep_images`` only the bands around the prior fits are remapped and
         thresholded (``band_binary``): the same pixels for the search. ``images`` holds "birdseye" and
         "binary" when the whole view was thresholded. ``top_px``: the look-ahead (``search``).
-        ``made``: gets the whole view's masks and colour spaces, for a second rule (``binary``).
+        ``made``: gets the whole view's masks, colour spaces (for a second rule, ``binary``) and fits.
         """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
         mask = self.binary(bird, made=made)
-        return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
+        return self.search(mask, prior, top_px=top_px, made=made), {"birdseye": bird, "binary": mask}
 
     def check(self, search: LaneSearch, turn_back: bool = False) -> LaneCheck:
         """Return the plausibility checks (``checks.check_lane``, ``config.checks``) of a search's

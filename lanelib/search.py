@@ -66,13 +66,14 @@ def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     bases: tuple[float | None, float | None] | None = None,
                     car_x: float | None = None, top_px: int = 0,
-                    pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch:
+                    pixels: tuple[np.ndarray, np.ndarray] | None = None, fits: dict | None = None
+                    ) -> LaneSearch:
     """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
 
     With ``top_px`` > 0 only the rows from ``top_px`` down are read (``lookahead_top_px``): the
     histogram covers the lower ``histogram_fraction`` of them and the windows, as tall as in the
     whole view, stop there; fits and their span rules stay in the view's rows. ``pixels``: the
-    mask's ``lane_pixels``, when already made.
+    mask's ``lane_pixels``, when already made; ``fits``: ``fit_side``'s memo of the image.
     """
     h = binary.shape[0]
     top_px = int(min(max(top_px, 0), h - 1))
@@ -126,9 +127,10 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car", top_px)
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car",
+                                    top_px, fits)
     right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car",
-                                      top_px)
+                                      top_px, fits)
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -204,13 +206,24 @@ def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = Sea
 
 
 def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
-              missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+              missing: str, top_px: int = 0, fits: dict | None = None
+              ) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels (``side``: "left" or "right"; ``top_px``: the
     look-ahead) and the pixels it rests on. With ``double_line_px`` on, pixels scattering like a
     double line (RMS above a quarter of it) are read at the inner stripe
-    (``roads.stripes.double_line_fit``), so a single line costs no second fit.
+    (``roads.stripes.double_line_fit``), so a single line costs no second fit. ``fits``: the fits
+    of one image's searches so far (``thresholds.Made.fits``): a line on pixels that another of
+    its searches fitted (the fallback masks' windows often pick them again) is not fitted again.
     """
+    key = (side, top_px, missing, len(pixels[0]))
+    for ys, xs, out in fits.get(key, ()) if fits is not None else ():
+        if np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
+            return out
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
     if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        return double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
-    return fit, pixels
+        out = double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
+    else:
+        out = fit, pixels
+    if fits is not None:
+        fits.setdefault(key, []).append((*pixels, out))
+    return out

@@ -419,12 +419,13 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 class Made:
     """What ``combine`` made of one image (masks by name, colour conversions, the rules' expressions),
     so a second rule on it (``fallback_rule``) makes only the masks and expressions it adds and
-    converts no colour space twice.
+    converts no colour space twice; and the line fits of its searches (``search.fit_side``).
     """
 
     masks: dict[str, np.ndarray] = field(default_factory=dict)
     channels: Channels | None = None
     expressions: dict[str, np.ndarray | None] = field(default_factory=dict)  # by ``_source``
+    fits: dict = field(default_factory=dict)  # by side, look-ahead, reason if missing and pixel count
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),

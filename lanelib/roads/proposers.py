@@ -318,17 +318,21 @@ def shoulder_m(tracker, side: int) -> float:
     return median
 
 
-def measure_shoulders(tracker, raw: np.ndarray, bird: np.ndarray | None, search: LaneSearch,
-                      left: LineFit | None, right: LineFit | None) -> None:
-    """Remember the shoulder of each painted line of a frame that kept both lines at the car
-    (``shoulder_beside``, when clearly found)."""
+def measure_shoulders(tracker, frame: Frame, index: int) -> None:
+    """Remember the shoulder of each painted line of a frame (number ``index`` in the video) whose
+    best candidate kept both lines at the car (``shoulder_beside``, when clearly found); only with
+    the asphalt edge and ``shoulder_frames`` on, on one frame in ``shoulder_every``."""
+    cfg = tracker.config
+    if not (tracker.pipeline.config.edge.enabled and cfg.shoulder_frames and index % cfg.shoulder_every == 0):
+        return
+    left, right, search = frame.best.left, frame.best.right, frame.best.search
     if not (tracker.reach_car(left) and tracker.reach_car(right)):
         return
     grid = None
     for i, (fit, other) in enumerate(((left, right), (right, left))):
         if search.edge[i] or search.shoulder[i]:
             continue  # not paint
-        grid = grid or near_grid(tracker, raw, bird)
+        grid = grid or near_grid(tracker, frame.raw, frame.images.get("birdseye"))
         shoulder = shoulder_beside(tracker, grid, fit, other, i, (search.left_pixels, search.right_pixels)[i])
         if not np.isnan(shoulder):
             tracker.state.shoulders[i].append(round(shoulder, 4))
