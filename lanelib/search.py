@@ -215,7 +215,7 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     of one image's searches so far (``thresholds.Made.fits``): a line on pixels that another of
     its searches fitted (the fallback masks' windows often pick them again) is not fitted again.
     """
-    key = (side, top_px, missing, len(pixels[0]))
+    key = (side, top_px > 0, missing, len(pixels[0]))  # a fit reads only whether there is a look-ahead
     for ys, xs, out in fits.get(key, ()) if fits is not None else ():
         if np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
             return out
