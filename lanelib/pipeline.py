@@ -32,8 +32,7 @@ from .roads.proposers import DETECT, detect_again
 from .search import search_around, sliding_windows
 
 
-# where a single image's lane is looked for again when its first search fails (``detect``): the
-# hard-road proposers that need no track, each asking only when its switch is on
+# the hard-road proposers a single image's second look asks (``roads.proposers.detect_again``)
 DETECT_PROPOSERS = DETECT
 
 

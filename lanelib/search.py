@@ -220,10 +220,7 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
         if np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
             return out
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
-    if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        out = double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
-    else:
-        out = fit, pixels
+    out = double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
     if fits is not None:
         fits.setdefault(key, []).append((*pixels, out))
     return out

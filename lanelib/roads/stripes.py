@@ -4,9 +4,9 @@
 keeps the stripe nearer the lane where the pixels form a resolved double line (as a whole, or on
 its rows nearest the car); ``stripe_spacing_px`` measures the stripes' spacing band by band, whose
 change along the rows is the change of the flat view's scale across the road. The search
-(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set, a
-window's ``centre_side`` with ``SearchConfig.centre_first`` and its ``fullest_column`` with
-``SearchConfig.window_histogram``.
+(``search.fit_side``) calls ``double_line_fit`` on every line (which changes nothing while
+``SearchConfig.double_line_px`` is off), a window's ``centre_side`` with
+``SearchConfig.centre_first`` and its ``fullest_column`` with ``SearchConfig.window_histogram``.
 """
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ def double_line_fit(fit: LineFit, first: tuple, pixels: tuple[np.ndarray, np.nda
     """Return the fit of a line whose pixels scatter from their fit ``fit`` like a double line,
     and the pixels it rests on (``search.fit_side`` asks; ``first``: ``fit_line``'s first fit of
     the same pixels, ``fit.fit_line_with_first``): those of its inner stripe (``inner_stripe``)
-    where the stripes are resolved, else all of them.
+    where the stripes are resolved, else all of them. ``fit`` and all the pixels as they are with
+    ``SearchConfig.double_line_px`` off, or pixels scattering less than a quarter of it (RMS).
 
     A line resolved as a double line as a whole is its inner stripe's fit, found or not: a fit
     through both stripes runs between them, never on the line (a patch of double line too short
@@ -39,6 +40,8 @@ def double_line_fit(fit: LineFit, first: tuple, pixels: tuple[np.ndarray, np.nda
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them.
     """
+    if not (config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4):
+        return fit, pixels  # a single line costs no second fit
     stripes = two_stripes(*pixels, 2, height_px, first=first)
     keep, whole = inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
     if keep is not None:
