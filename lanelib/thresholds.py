@@ -29,6 +29,8 @@ _CONVERSIONS = {"rgb": None, "hls": cv2.COLOR_RGB2HLS, "hsv": cv2.COLOR_RGB2HSV,
 # colour space -> (its conversion, the letters of its channels)
 SPACES: dict[str, tuple[int | None, str]] = {s: (_CONVERSIONS[s], letters)
                                              for s, letters in SPACE_CHANNELS.items()}
+# rows of a band that ``Channels.space`` converts and splits while the band is still in the cache
+BAND_ROWS = 180
 
 
 def make_clahe(config: ThresholdConfig, size: tuple[int, int]) -> cv2.CLAHE | None:
@@ -73,9 +75,19 @@ class Channels:
         self._tophats: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def space(self, name: str) -> np.ndarray:
-        """Return the image converted to colour space ``name``."""
+        """Return the image converted to colour space ``name``. A three-channel space is converted
+        ``BAND_ROWS`` rows at a time, each band split into the planes ``channel`` reads while it is
+        still in the cache: the same planes, without reading the whole conversion back from memory."""
         if name not in self._spaces:
-            self._spaces[name] = cv2.cvtColor(self.rgb, SPACES[name][0])
+            code, letters = SPACES[name]
+            if len(letters) < 3:
+                self._spaces[name] = cv2.cvtColor(self.rgb, code)
+                return self._spaces[name]
+            img = self._spaces[name] = np.empty_like(self.rgb)
+            planes = self._planes[name] = [np.empty(img.shape[:2], img.dtype) for _ in letters]
+            for r in range(0, len(img), BAND_ROWS):
+                rows = slice(r, r + BAND_ROWS)
+                cv2.split(cv2.cvtColor(self.rgb[rows], code, dst=img[rows]), [p[rows] for p in planes])
         return self._spaces[name]
 
     def cut(self, pieces: list[tuple[slice, slice]], join: Callable[[list[np.ndarray]], np.ndarray]
