@@ -14,7 +14,7 @@ import numpy as np
 
 from .fit import curvature, fit_to_metres
 from .params import LaneChecks, SearchConfig
-from .records import LaneSearch, LineFit
+from .records import LaneSearch, LineFit, polyval2
 
 
 def line_problem(fit: LineFit, band_px: float, checks: LaneChecks = LaneChecks(),
@@ -178,13 +178,13 @@ def pair_problem(left: LineFit, right: LineFit, height_px: int, xm_per_px: float
     follows that, so only a change from one frame to the next is refused.
     """
     rows = np.linspace(float(top_px), height_px - 1.0, checks.check_rows)
-    width = (np.polyval(right.coeffs_px, rows) - np.polyval(left.coeffs_px, rows)) * xm_per_px
+    width = (polyval2(right.coeffs_px, rows) - polyval2(left.coeffs_px, rows)) * xm_per_px  # np.polyval's
     spread_of = width if width_reference_px is None else width - np.asarray(width_reference_px) * xm_per_px
     if not checks.min_width_m <= width[-1] <= checks.max_width_m:
         return (f"lane width {width[-1]:.2f} m at the car outside {checks.min_width_m}-"
                 f"{checks.max_width_m} m")
     dense = np.linspace(float(top_px), height_px - 1.0, 4 * checks.check_rows)
-    apart = np.polyval(right.coeffs_px, dense) - np.polyval(left.coeffs_px, dense)
+    apart = polyval2(right.coeffs_px, dense) - polyval2(left.coeffs_px, dense)
     if (apart <= 0).any():
         j = int(np.flatnonzero(apart <= 0)[-1])  # the crossing nearest the car: between j and j + 1
         row = dense[j] + (dense[j + 1] - dense[j]) * -apart[j] / (apart[j + 1] - apart[j])

@@ -10,8 +10,6 @@ exactly what a video run uses. Runs over folders and videos are ``batch.process_
 """
 from __future__ import annotations
 
-import functools
-
 import cv2
 import numpy as np
 
@@ -28,15 +26,13 @@ from .lines.result import LinesResult
 from .lines.view import LinesView
 from .params import LinesConfig
 from .perspective import Perspective, scaled
-from .proposers import Candidate, Frame, choose, passes
 from .records import LaneMeasurement, LaneSearch, LineFit, line_source
 from .result import FrameResult, Rejected, line_confidence
-from .roads.proposers import DETECT
+from .roads.proposers import DETECT, detect_again
 from .search import search_around, sliding_windows
 
 
-# where a single image's lane is looked for again when its first search fails (``detect``): the
-# hard-road proposers that need no track, each asking only when its switch is on
+# the hard-road proposers a single image's second look asks (``roads.proposers.detect_again``)
 DETECT_PROPOSERS = DETECT
 
 
@@ -124,16 +120,16 @@ class LanePipeline:
         return bool(tc.fallback_rule) and tc.fallback_rule.replace(" ", "") != tc.rule.replace(" ", "")
 
     def search(self, binary: np.ndarray, prior: tuple[LineFit, LineFit] | None = None,
-               bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None) -> LaneSearch:
+               bases: tuple[float, float] | None = None, top_px: int = 0, pixels=None, made=None) -> LaneSearch:
         """Return the lane search of a mask: around ``prior`` fits when given, else sliding windows
         starting from ``bases`` (the lines' x, px, on the bottom row, e.g. the track's) or the
         histogram peaks nearest the car. ``top_px``: the look-ahead's first row (0: the whole view).
-        ``pixels``: the mask's ``lane_pixels``.
+        ``pixels``: the mask's ``lane_pixels``; ``made``: the image's ``Made``, whose line fits it reuses.
         """
         if prior is not None:
             return search_around(binary, prior[0], prior[1], self.config.search, top_px)
         return sliding_windows(binary, self.config.search, bases=bases, car_x=self.car_x_px,
-                               top_px=top_px, pixels=pixels)
+                               top_px=top_px, pixels=pixels, fits=None if made is None else made.fits)
 
     def search_bands_px(self, search: LaneSearch) -> tuple[float, float]:
         """Return the width (px) of the band each line was searched in (``checks.search_bands_px``)."""
@@ -167,13 +163,13 @@ class LanePipeline:
         With a ``prior`` and no ``keep_images`` only the bands around the prior fits are remapped and
         thresholded (``band_binary``): the same pixels for the search. ``images`` holds "birdseye" and
         "binary" when the whole view was thresholded. ``top_px``: the look-ahead (``search``).
-        ``made``: gets the whole view's masks and colour spaces, for a second rule (``binary``).
+        ``made``: gets the whole view's masks, colour spaces (for a second rule, ``binary``) and fits.
         """
         if prior is not None and not keep_images and (prior[0].found or prior[1].found):
             return self.search(self.band_binary(raw, prior), prior, top_px=top_px), {}
         bird = self.birdseye(raw)
         mask = self.binary(bird, made=made)
-        return self.search(mask, prior, top_px=top_px), {"birdseye": bird, "binary": mask}
+        return self.search(mask, prior, top_px=top_px, made=made), {"birdseye": bird, "binary": mask}
 
     def check(self, search: LaneSearch, turn_back: bool = False) -> LaneCheck:
         """Return the plausibility checks (``checks.check_lane``, ``config.checks``) of a search's
@@ -189,19 +185,15 @@ class LanePipeline:
 
         The fits of ``search_frame`` go through ``result``: a lane that fails the checks is not found
         and kept in ``rejected``. Without a ``prior``, a failed lane is looked for again by the
-        proposers that need no track (``DETECT_PROPOSERS``, through ``proposers.choose``): fallback
+        proposers that need no track (``DETECT_PROPOSERS``, ``roads.proposers.detect_again``): fallback
         masks, shorter views, other histogram peaks, the asphalt edge. The first pair to pass is taken.
         """
-        made = Made()  # the masks made, which the fallback rule's mask reuses
+        made = Made()  # the masks and fits made, which the fallback rule's mask and searches reuse
         search, images = self.search_frame(raw, prior, keep_images, made=made)
         result = self.result(search, images if keep_images else {})
         if result.found or prior is not None:
             return result
-        frame = Frame(self, raw, functools.partial(_passing, self), images, first=search, made=made)
-        best = choose(frame, DETECT_PROPOSERS).search
-        if best is not search and keep_images:
-            images["binary"] = frame.mask()  # the views show the mask the lane came from
-        images.pop("fallback binary", None)
+        best = detect_again(self, raw, images, search, made, keep_images)
         return result if best is search else self.result(best, images if keep_images else {})
 
     def lines_view(self) -> tuple[LinesView, tuple[np.ndarray, np.ndarray], thresholds.ThresholdConfig]:
@@ -321,12 +313,6 @@ class LanePipeline:
         return draw.composite([("undistorted", im["undistorted"]), ("binary (bird's-eye)", im["binary"]),
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
 
-
-def _passing(pipeline: LanePipeline, search: LaneSearch) -> Candidate:
-    """Return a search judged as a single image: both lines, or none when not both pass."""
-    if passes(pipeline, search):
-        return Candidate(search, search.left, search.right, [], False)
-    return Candidate(search, None, None, [], False)
 
 
 def _rejected(fit: LineFit, why: str) -> LineFit:

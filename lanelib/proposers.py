@@ -93,8 +93,9 @@ class Frame:
     def search(self, prior: tuple[LineFit, LineFit] | None = None,
                bases: tuple[float, float] | None = None, top_px: int = 0) -> LaneSearch:
         """Return ``LanePipeline.search`` of ``mask()``, its pixels extracted once for all the
-        window searches of the frame."""
-        return self.pipeline.search(self.mask(), prior, bases=bases, top_px=top_px, pixels=self.pixels())
+        window searches of the frame, a line on pixels fitted already not fitted again (``made``)."""
+        return self.pipeline.search(self.mask(), prior, bases=bases, top_px=top_px, pixels=self.pixels(),
+                                    made=self.made)
 
     def birdseye(self) -> np.ndarray:
         """Return the frame's bird's-eye view, warped once."""

@@ -18,21 +18,22 @@ from .roads.stripes import centre_side, double_line_fit, fullest_column
 def lane_pixels(binary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return (ys, xs) of the nonzero pixels of a mask, sorted by y then x (int32 arrays).
 
-    ``cv2.findNonZero`` tests pixel by pixel; a contiguous mask whose width is a multiple of 4 is
-    scanned as int32 words instead (a quarter of the tests), then the nonzero bytes of the nonzero
-    words are read: the same pixels in the same order.
+    A contiguous uint8 mask whose width is a multiple of 8 is read as 64-bit words: the nonzero
+    words by one vectorised test (``np.flatnonzero``), then the nonzero bytes of those, word by
+    word; any other mask pixel by pixel (``cv2.findNonZero``). The same pixels in the same order.
     """
-    h, w = binary.shape[:2]
-    words = binary.ndim == 2 and binary.dtype == np.uint8 and w % 4 == 0 and binary.flags.c_contiguous
-    pts = cv2.findNonZero(binary.view(np.int32) if words else binary)
-    if pts is None:
-        return np.empty(0, np.int32), np.empty(0, np.int32)
-    pts = pts.reshape(-1, 2)
-    ys, xs = pts[:, 1].copy(), pts[:, 0].copy()  # findNonZero scans row by row: already sorted by y
-    if not words:
-        return ys, xs
-    which, byte = np.nonzero(binary.reshape(h, w // 4, 4)[ys, xs])
-    return ys[which], xs[which] * 4 + byte.astype(np.int32)
+    w = binary.shape[1]
+    if not (binary.ndim == 2 and binary.dtype == np.uint8 and w % 8 == 0 and binary.flags.c_contiguous):
+        pts = cv2.findNonZero(binary)
+        if pts is None:
+            return np.empty(0, np.int32), np.empty(0, np.int32)
+        pts = pts.reshape(-1, 2)  # findNonZero scans row by row: already sorted by y
+        return pts[:, 1].copy(), pts[:, 0].copy()
+    words = binary.view(np.uint64).ravel()
+    nonzero = np.flatnonzero(words != 0)
+    which, byte = np.nonzero(words.take(nonzero).view(np.uint8).reshape(-1, 8))
+    ys, first = np.divmod(nonzero[which], w // 8)  # each word's row and first column / 8
+    return ys.astype(np.int32), (first * 8 + byte).astype(np.int32)
 
 
 def histogram(binary: np.ndarray, fraction: float = 0.5) -> np.ndarray:
@@ -65,13 +66,14 @@ def base_peak_confidence(hist: np.ndarray, x: float | None) -> float | None:
 def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                     bases: tuple[float | None, float | None] | None = None,
                     car_x: float | None = None, top_px: int = 0,
-                    pixels: tuple[np.ndarray, np.ndarray] | None = None) -> LaneSearch:
+                    pixels: tuple[np.ndarray, np.ndarray] | None = None, fits: dict | None = None
+                    ) -> LaneSearch:
     """Return the lane pixels found by sliding windows from the histogram bases, and their fits.
 
     With ``top_px`` > 0 only the rows from ``top_px`` down are read (``lookahead_top_px``): the
     histogram covers the lower ``histogram_fraction`` of them and the windows, as tall as in the
     whole view, stop there; fits and their span rules stay in the view's rows. ``pixels``: the
-    mask's ``lane_pixels``, when already made.
+    mask's ``lane_pixels``, when already made; ``fits``: ``fit_side``'s memo of the image.
     """
     h = binary.shape[0]
     top_px = int(min(max(top_px, 0), h - 1))
@@ -125,9 +127,10 @@ def sliding_windows(binary: np.ndarray, config: SearchConfig = SearchConfig(),
                 margin += config.grow_margin_px
         idx = np.concatenate(chosen) if chosen else np.empty(0, np.int64)
         picked[side] = (ys[idx], xs[idx])
-    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car", top_px)
+    left, picked["left"] = fit_side(picked["left"], "left", h, config, "no lane pixels left of the car",
+                                    top_px, fits)
     right, picked["right"] = fit_side(picked["right"], "right", h, config, "no lane pixels right of the car",
-                                      top_px)
+                                      top_px, fits)
     left, right = parallel_fits(left, right, picked["left"], picked["right"], h, config)
     return LaneSearch(left, right, "windows", picked["left"], picked["right"], tuple(windows), bases,
                       confidence, top_px)
@@ -203,13 +206,21 @@ def lookahead_top_px(lines, size_px: tuple[int, int], config: SearchConfig = Sea
 
 
 def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, config: SearchConfig,
-              missing: str, top_px: int = 0) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
+              missing: str, top_px: int = 0, fits: dict | None = None
+              ) -> tuple[LineFit, tuple[np.ndarray, np.ndarray]]:
     """Return ``fit_line`` of one line's pixels (``side``: "left" or "right"; ``top_px``: the
     look-ahead) and the pixels it rests on. With ``double_line_px`` on, pixels scattering like a
     double line (RMS above a quarter of it) are read at the inner stripe
-    (``roads.stripes.double_line_fit``), so a single line costs no second fit.
+    (``roads.stripes.double_line_fit``), so a single line costs no second fit. ``fits``: the fits
+    of one image's searches so far (``thresholds.Made.fits``): a line on pixels that another of
+    its searches fitted (the fallback masks' windows often pick them again) is not fitted again.
     """
+    key = (side, top_px > 0, missing, len(pixels[0]))  # a fit reads only whether there is a look-ahead
+    for ys, xs, out in fits.get(key, ()) if fits is not None else ():
+        if np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
+            return out
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
-    if config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4:
-        return double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
-    return fit, pixels
+    out = double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
+    if fits is not None:
+        fits.setdefault(key, []).append((*pixels, out))
+    return out

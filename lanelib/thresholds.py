@@ -29,6 +29,8 @@ _CONVERSIONS = {"rgb": None, "hls": cv2.COLOR_RGB2HLS, "hsv": cv2.COLOR_RGB2HSV,
 # colour space -> (its conversion, the letters of its channels)
 SPACES: dict[str, tuple[int | None, str]] = {s: (_CONVERSIONS[s], letters)
                                              for s, letters in SPACE_CHANNELS.items()}
+# rows of a band that ``Channels.space`` converts and splits while the band is still in the cache
+BAND_ROWS = 180
 
 
 def make_clahe(config: ThresholdConfig, size: tuple[int, int]) -> cv2.CLAHE | None:
@@ -73,9 +75,19 @@ class Channels:
         self._tophats: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def space(self, name: str) -> np.ndarray:
-        """Return the image converted to colour space ``name``."""
+        """Return the image converted to colour space ``name``. A three-channel space is converted
+        ``BAND_ROWS`` rows at a time, each band split into the planes ``channel`` reads while it is
+        still in the cache: the same planes, without reading the whole conversion back from memory."""
         if name not in self._spaces:
-            self._spaces[name] = cv2.cvtColor(self.rgb, SPACES[name][0])
+            code, letters = SPACES[name]
+            if len(letters) < 3:
+                self._spaces[name] = cv2.cvtColor(self.rgb, code)
+                return self._spaces[name]
+            img = self._spaces[name] = np.empty_like(self.rgb)
+            planes = self._planes[name] = [np.empty(img.shape[:2], img.dtype) for _ in letters]
+            for r in range(0, len(img), BAND_ROWS):
+                rows = slice(r, r + BAND_ROWS)
+                cv2.split(cv2.cvtColor(self.rgb[rows], code, dst=img[rows]), [p[rows] for p in planes])
         return self._spaces[name]
 
     def cut(self, pieces: list[tuple[slice, slice]], join: Callable[[list[np.ndarray]], np.ndarray]
@@ -269,18 +281,18 @@ def tophat_mask(rgb: np.ndarray | Channels, spec: TopHatMask) -> np.ndarray:
         if spec.high < 255:
             out = cv2.bitwise_and(out, in_range(tophat, 0, spec.high))
     if spec.min_width_px > 1:  # an opening 1 x k across the road
-        out = rows_opened(out, spec.min_width_px)
+        out = rows_opened(out, spec.min_width_px, inplace=True)  # ``out`` is this call's own
     return out
 
 
-def rows_opened(mask: np.ndarray, width_px: int) -> np.ndarray:
+def rows_opened(mask: np.ndarray, width_px: int, inplace: bool = False) -> np.ndarray:
     """Return ``morph(mask, "open", width_px, 1)`` of a uint8 mask, opening only its rows that hold a
     pixel: a kernel one row tall leaves an empty row empty, and a top-hat's mask holds pixels on a
-    fraction of its rows."""
+    fraction of its rows. With ``inplace`` they are opened in ``mask`` itself (no new mask to clear)."""
     rows = np.flatnonzero(cv2.reduce(mask, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))
     if len(rows) == len(mask):
         return morph(mask, "open", width_px, 1)
-    out = np.zeros_like(mask)
+    out = mask if inplace else np.zeros_like(mask)
     if len(rows):
         out[rows] = morph(mask[rows], "open", width_px, 1)
     return out
@@ -419,12 +431,13 @@ def masks(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),
 class Made:
     """What ``combine`` made of one image (masks by name, colour conversions, the rules' expressions),
     so a second rule on it (``fallback_rule``) makes only the masks and expressions it adds and
-    converts no colour space twice.
+    converts no colour space twice; and the line fits of its searches (``search.fit_side``).
     """
 
     masks: dict[str, np.ndarray] = field(default_factory=dict)
     channels: Channels | None = None
     expressions: dict[str, np.ndarray | None] = field(default_factory=dict)  # by ``_source``
+    fits: dict = field(default_factory=dict)  # by side, look-ahead or not, reason if missing, pixel count
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),

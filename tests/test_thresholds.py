@@ -412,3 +412,22 @@ def test_a_fallback_rule_that_extends_the_rule_reuses_its_mask(road):
     assert np.array_equal(fallback, cheap | th.tophat_mask(road, cfg.shade_tophat))
     assert cols(fallback) - cols(cheap) == set(range(200, 215))
     assert any(m is cheap for m in made.expressions.values())  # the rule's mask, made once
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
+def test_channels_convert_in_bands_as_opencv_converts_the_whole_image(dtype):
+    # th.Channels.space converts a three-channel space th.BAND_ROWS rows at a time and splits each
+    # band: the same conversion and planes as cv2.cvtColor and cv2.split of the whole image, for
+    # images of fewer rows than a band and of several, contiguous or a view
+    import cv2
+    rng = np.random.default_rng(3)
+    for h in (1, th.BAND_ROWS - 1, th.BAND_ROWS, 2 * th.BAND_ROWS + 7):
+        big = rng.integers(0, 256, (h + 2, 37, 3)).astype(np.uint8)
+        big = big if dtype == np.uint8 else big.astype(np.float32) / 255
+        for img in (np.ascontiguousarray(big[:h, :31]), big[1:h + 1, 3:34]):
+            ch = th.Channels(img)
+            for space, (code, letters) in th.SPACES.items():
+                whole = img if code is None else cv2.cvtColor(img, code)
+                assert np.array_equal(ch.space(space), whole)
+                for i, letter in enumerate(letters):
+                    assert np.array_equal(ch.channel(space, letter), whole if whole.ndim == 2 else whole[..., i])

@@ -13,7 +13,8 @@ from a double line's stripes, and a restart from one line.
 - restart from one line (``restart_frames``): soon after a reset, one line where the lost track's
   was restarts the lane (``restart``).
 
-The tracker is passed in (duck-typed): this package sits below it in the layers.
+``tracking.update.accept`` keeps what these parts and the proposers of ``roads.proposers``
+remember of an accepted frame through ``remember_accepted``. The tracker is passed in (duck-typed): this package sits below it in the layers.
 """
 from __future__ import annotations
 
@@ -77,6 +78,25 @@ def paint_at_car(t, fit: LineFit | None, faded_run: int) -> bool:
         return False
     return not faded_run or fit.gap_px * t.ym <= t.config.return_gap_m
 
+
+
+def remember_accepted(t, best, track, seen: list, coeffs: dict) -> None:
+    """Keep what the hard-road parts remember of an accepted frame (``tracking.update.accept``;
+    ``seen``: its lines seen as paint, ``coeffs``: the pixel coefficients of both, one maybe
+    inferred): the width at the car a restart from one line goes on with, how many accepted frames
+    each side's paint has been missing at the car (``paint_at_car``: a faded line), the lines'
+    bases (``base_history_frames``) and which side's line is the asphalt edge (an inferred line
+    keeps its side's kind)."""
+    s, search = t.state, best.search
+    if track is None and (best.left is None or best.right is None):  # restarted from one line
+        s.restart_width = s.lost_track.width_m
+    at_car = [paint_at_car(t, fit, run) for fit, run in zip(seen, s.faded_run)]
+    s.faded_run = [0 if near else run + 1 for run, near in zip(s.faded_run, at_car)]
+    if s.base_history.maxlen:
+        s.base_history.append(t.bases((coeffs["left"], coeffs["right"])))
+    for i, fit in enumerate((best.left, best.right)):
+        if fit is not None:
+            s.edge[i] = bool(search.edge[i])
 
 # ---- the grade a double line's stripes show (grade pair check, stripe spread) ---------------
 

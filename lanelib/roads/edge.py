@@ -410,7 +410,7 @@ def _edge_points_every_row(grid: VergeGrid, s: _EdgeSearch, refs: np.ndarray,
     """Return the edge points (y, x in view px) of every row with a road reference, each searched
     over the range from the guide (``road_edge`` without a trace)."""
     k, row0 = grid.scale, grid.row0
-    use = ~np.isnan(refs[:, 0]) & (np.nan_to_num(refs[:, 0], nan=1.0) <= config.max_road_saturation)
+    use = refs[:, 0] <= config.max_road_saturation  # False where a row has no road reference (NaN)
     a, b = s.a, s.b
     ys, xs = _edge_steps(grid.sat, grid.grain, grid.seen, s.rows[use] - row0, a[use], b[use], s.pad, s.win,
                          s.sign, refs[use, 0].astype(grid.sat.dtype),

@@ -20,7 +20,8 @@ image (``LanePipeline.detect``) and the tracker; the others read the tracker.
 
 The pipeline and the tracker are passed in (duck-typed): this package sits below both in the
 layers. ``TRACKER_FIRST``, ``TRACKER_LATER`` and ``DETECT`` are where these and those of
-``roads.fallbacks`` go in the tracker's chain and in a single image's, in their order.
+``roads.fallbacks`` go in the tracker's chain and in a single image's, in their order;
+``detect_again`` runs a single image's chain (``LanePipeline.detect``).
 """
 from __future__ import annotations
 
@@ -29,8 +30,10 @@ from dataclasses import replace
 import numpy as np
 
 from ..fit import joined_fit, offset_line, parallel_fits
+from ..proposers import Candidate, Frame, choose, passes
 from ..records import LaneSearch, LineFit, Window, near_row_px
 from ..search import fit_side, search_around
+from ..thresholds import Made
 from .edge import VergeGrid, grid_rows_px, road_edge, road_view_interior, road_view_top_px, verge_grid
 from .fallbacks import FallbackMasks, OtherPeaks, ShorterViews
 
@@ -315,17 +318,21 @@ def shoulder_m(tracker, side: int) -> float:
     return median
 
 
-def measure_shoulders(tracker, raw: np.ndarray, bird: np.ndarray | None, search: LaneSearch,
-                      left: LineFit | None, right: LineFit | None) -> None:
-    """Remember the shoulder of each painted line of a frame that kept both lines at the car
-    (``shoulder_beside``, when clearly found)."""
+def measure_shoulders(tracker, frame: Frame, index: int) -> None:
+    """Remember the shoulder of each painted line of a frame (number ``index`` in the video) whose
+    best candidate kept both lines at the car (``shoulder_beside``, when clearly found); only with
+    the asphalt edge and ``shoulder_frames`` on, on one frame in ``shoulder_every``."""
+    cfg = tracker.config
+    if not (tracker.pipeline.config.edge.enabled and cfg.shoulder_frames and index % cfg.shoulder_every == 0):
+        return
+    left, right, search = frame.best.left, frame.best.right, frame.best.search
     if not (tracker.reach_car(left) and tracker.reach_car(right)):
         return
     grid = None
     for i, (fit, other) in enumerate(((left, right), (right, left))):
         if search.edge[i] or search.shoulder[i]:
             continue  # not paint
-        grid = grid or near_grid(tracker, raw, bird)
+        grid = grid or near_grid(tracker, frame.raw, frame.images.get("birdseye"))
         shoulder = shoulder_beside(tracker, grid, fit, other, i, (search.left_pixels, search.right_pixels)[i])
         if not np.isnan(shoulder):
             tracker.state.shoulders[i].append(round(shoulder, 4))
@@ -486,5 +493,30 @@ def row_medians(keys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarra
 TRACKER_FIRST = (RoadView(),)
 TRACKER_LATER = (RememberedBases(), Reacquire(), FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge(),
                  Shoulder())
-# a single image's chain (``pipeline.DETECT_PROPOSERS``): those that need no track
+# a single image's chain (``pipeline.DETECT_PROPOSERS``, ``detect_again``): those that need no track
 DETECT = (FallbackMasks(), ShorterViews(), OtherPeaks(), AsphaltEdge())
+
+
+def detect_again(pipeline, raw: np.ndarray, images: dict, first: LaneSearch, made: Made | None,
+                 keep_images: bool = False) -> LaneSearch:
+    """Return the search a single image's lane comes from when its first search ``first`` failed
+    the checks (``LanePipeline.detect``, without a prior): the first candidate of the proposers that
+    need no track (``DETECT``, through ``proposers.choose``) whose two lines pass a single image's
+    checks (``proposers.passes``), else ``first``, which ``detect`` has judged already (it is not
+    checked again). With ``keep_images``, a lane found so leaves the mask it came from in
+    ``images["binary"]`` for the views; the fallback masks' binary is not kept.
+    """
+    frame = Frame(pipeline, raw, lambda search: _passing(pipeline, search), images, first=first, made=made,
+                  best=Candidate(first, None, None, [], False), looked=[first])
+    best = choose(frame, DETECT).search
+    if best is not first and keep_images:
+        images["binary"] = frame.mask()  # the views show the mask the lane came from
+    images.pop("fallback binary", None)
+    return best
+
+
+def _passing(pipeline, search: LaneSearch) -> Candidate:
+    """Return a search judged as a single image: both lines, or none when not both pass."""
+    if passes(pipeline, search):
+        return Candidate(search, search.left, search.right, [], False)
+    return Candidate(search, None, None, [], False)

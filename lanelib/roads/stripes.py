@@ -4,9 +4,9 @@
 keeps the stripe nearer the lane where the pixels form a resolved double line (as a whole, or on
 its rows nearest the car); ``stripe_spacing_px`` measures the stripes' spacing band by band, whose
 change along the rows is the change of the flat view's scale across the road. The search
-(``search.fit_side``) calls ``double_line_fit`` when ``SearchConfig.double_line_px`` is set, a
-window's ``centre_side`` with ``SearchConfig.centre_first`` and its ``fullest_column`` with
-``SearchConfig.window_histogram``.
+(``search.fit_side``) calls ``double_line_fit`` on every line (which changes nothing while
+``SearchConfig.double_line_px`` is off), a window's ``centre_side`` with
+``SearchConfig.centre_first`` and its ``fullest_column`` with ``SearchConfig.window_histogram``.
 """
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ def double_line_fit(fit: LineFit, first: tuple, pixels: tuple[np.ndarray, np.nda
     """Return the fit of a line whose pixels scatter from their fit ``fit`` like a double line,
     and the pixels it rests on (``search.fit_side`` asks; ``first``: ``fit_line``'s first fit of
     the same pixels, ``fit.fit_line_with_first``): those of its inner stripe (``inner_stripe``)
-    where the stripes are resolved, else all of them.
+    where the stripes are resolved, else all of them. ``fit`` and all the pixels as they are with
+    ``SearchConfig.double_line_px`` off, or pixels scattering less than a quarter of it (RMS).
 
     A line resolved as a double line as a whole is its inner stripe's fit, found or not: a fit
     through both stripes runs between them, never on the line (a patch of double line too short
@@ -39,6 +40,8 @@ def double_line_fit(fit: LineFit, first: tuple, pixels: tuple[np.ndarray, np.nda
     (``two_stripes``, fitted once for both: ``LineFit.stripe_scatter_px``) when each stripe holds
     at least a fifth of them.
     """
+    if not (config.double_line_px and fit.found and fit.scatter_px > config.double_line_px / 4):
+        return fit, pixels  # a single line costs no second fit
     stripes = two_stripes(*pixels, 2, height_px, first=first)
     keep, whole = inner_stripe_mask(*pixels, side, config.double_line_px, height_px, stripes, first)
     if keep is not None:
@@ -120,7 +123,7 @@ def inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: flo
     bands, counts, distinct = _row_bands(ys, y_min, span)
     y = ys.astype(np.float64)
     r = xs - polyval2(model[0], y)  # from the centre curve
-    inner = _inner_side(bands, None, model, side, spacing_px, r)
+    inner = _inner_side(bands, None, model, side, spacing_px, r, ys)
     if inner is not None:
         return inner, True
     # the near rows: the run of bands from the car's end where the stripes are resolved
@@ -135,7 +138,7 @@ def inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: flo
             if not held[band]:
                 continue
             g = bands == band
-            if not (_stripes_resolved(r[g], spacing[g], upper[g], spacing_px, pair=False)
+            if not (_stripes_resolved(r[g], spacing[g], upper[g], ys[g], spacing_px, pair=False)
                     or _band_resolved_alone(ys[g], xs[g], spacing_px, height_px, (span + 1) / 8,
                                             None if distinct is None else distinct[band])):
                 break
@@ -156,7 +159,7 @@ def inner_stripe_mask(ys: np.ndarray, xs: np.ndarray, side: str, spacing_px: flo
         r = None
     if r is None:
         r = xs - polyval2(model[0], y)
-    return _inner_side(bands, near, model, side, spacing_px, r), False
+    return _inner_side(bands, near, model, side, spacing_px, r, ys), False
 
 
 def _row_bands(ys: np.ndarray, y_min, span: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -177,15 +180,15 @@ def _row_bands(ys: np.ndarray, y_min, span: float) -> tuple[np.ndarray, np.ndarr
 
 
 def _inner_side(bands: np.ndarray, rows: np.ndarray | None, model: tuple, side: str, spacing_px: float,
-                r: np.ndarray) -> np.ndarray | None:
+                r: np.ndarray, ys: np.ndarray) -> np.ndarray | None:
     """Return which pixels of ``rows`` (a mask; None: all) lie on the inner stripe of the
     two-stripe ``model`` (``two_stripes``' curve, spacing per pixel and side per pixel; ``r``:
-    each pixel's residual from its curve), or None when those pixels are not a double line there
-    (``inner_stripe``: resolved, side by side)."""
+    each pixel's residual from its curve; ``ys``: each pixel's row), or None when those pixels
+    are not a double line there (``inner_stripe``: resolved, side by side)."""
     _, spacing, upper, _ = model
-    on_rows, r, spacing, up = (bands, r, spacing, upper) if rows is None else (
-        bands[rows], r[rows], spacing[rows], upper[rows])
-    if not _stripes_resolved(r, spacing, up, spacing_px):
+    on_rows, r, spacing, up, ys = (bands, r, spacing, upper, ys) if rows is None else (
+        bands[rows], r[rows], spacing[rows], upper[rows], ys[rows])
+    if not _stripes_resolved(r, spacing, up, ys, spacing_px):
         return None
     # side by side, not one after the other: both stripes on most of the rows either is on
     # (a curve the first fit misses leaves residuals of one sign on some rows, the other on others)
@@ -216,19 +219,20 @@ def _band_resolved_alone(ys: np.ndarray, xs: np.ndarray, spacing_px: float, heig
     if least_squares_rss(ys, xs, 1, float(height_px))[3] < len(ys) * (BAND_ONE_STRIPE_RMS * spacing_px) ** 2:
         return False
     coeffs, spacing, upper, _ = two_stripes(ys, xs, 1, height_px)
-    return _stripes_resolved(xs - polyval2(coeffs, ys.astype(np.float64)), spacing, upper, spacing_px)
+    return _stripes_resolved(xs - polyval2(coeffs, ys.astype(np.float64)), spacing, upper, ys, spacing_px)
 
 
-def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spacing_px: float,
-                      pair: bool = True) -> bool:
+def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, ys: np.ndarray,
+                      spacing_px: float, pair: bool = True) -> bool:
     """Return whether pixels at residuals ``r`` (px) from a two-stripe curve, with the stripes'
-    ``spacing`` (px) on their rows and ``upper`` their side, lie on two resolved stripes: each
+    ``spacing`` (px) on their rows ``ys`` and ``upper`` their side, lie on two resolved stripes: each
     stripe is narrow (its pixels' RMS distance from it under a quarter of their median spacing:
     the view's scale and the stripes' width scale alike) and the gap between them is clear
     (under 5 % of the pixels within an eighth of the spacing of its middle). With ``pair`` the
     pixels must also show both: each stripe holds at least a fifth of them and their median
     spacing is 0.6-1.5 x ``spacing_px``; without it a band of rows where one stripe is worn
-    away still counts (which stripe its pixels lie on is clear)."""
+    away still counts (which stripe its pixels lie on is clear). The spacing is linear in the
+    row, pixel by pixel (``_median_spacing`` reads its median from the rows)."""
     n = len(r)
     if n == 0:
         return False
@@ -238,7 +242,7 @@ def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spa
     # the median lies between the least and the greatest spacing: those decide most lines at once
     if pair and (float(spacing.max()) < 0.6 * spacing_px or float(spacing.min()) > 1.5 * spacing_px):
         return False
-    apart = float(np.median(spacing))
+    apart = _median_spacing(spacing, ys)
     if pair and not 0.6 * spacing_px <= apart <= 1.5 * spacing_px:
         return False
     off = r - np.where(upper, 0.5, -0.5) * spacing  # from the pixel's stripe
@@ -247,6 +251,33 @@ def _stripes_resolved(r: np.ndarray, spacing: np.ndarray, upper: np.ndarray, spa
         return False
     # no clear gap between them: one line the first fit misses (or a blur of both), not two
     return np.count_nonzero(np.abs(r) < np.abs(spacing) / 8) <= 0.05 * n
+
+
+def _median_spacing(spacing: np.ndarray, ys: np.ndarray) -> float:
+    """Return ``np.median(spacing)`` to the bit, for a spacing computed pixel by pixel as a line in
+    the pixel's row ``ys`` (``two_stripes``: ``p + q * t``, t from the row), without sorting it.
+
+    Each step of that sum is a rounded operation, which never reverses the order of its inputs:
+    the spacing rises (or falls) with the row, equal on one row. Its middle values are then its
+    values on the middle rows of ``ys``, read from the count of pixels per row (integer rows);
+    the middle two are averaged as ``np.median`` does (their sum halved). Rows that are not
+    integers, or a spacing not finite on the first and last row, take ``np.median``.
+    """
+    n = len(ys)
+    if n < 2 or ys.dtype.kind not in "iu":
+        return float(np.median(spacing))
+    first, last = int(np.argmin(ys)), int(np.argmax(ys))
+    s0, s1 = float(spacing[first]), float(spacing[last])
+    if not (math.isfinite(s0) and math.isfinite(s1)):
+        return float(np.median(spacing))
+    y0 = int(ys[first])
+    below = np.cumsum(np.bincount(ys - y0))  # pixels on each row and the rows above it
+    middle = (n // 2,) if n % 2 else (n // 2 - 1, n // 2)
+    if s1 < s0:  # falling with the row: the k-th least spacing lies on the k-th greatest row
+        middle = tuple(n - 1 - k for k in middle)
+    rows = np.searchsorted(below, middle, side="right") + y0
+    values = [float(spacing[int(np.argmax(ys == row))]) for row in rows]
+    return sum(values) / len(values)
 
 
 def stripe_spacing_px(binary: np.ndarray, coeffs_px, spacing_px: float, top_px: int = 0,

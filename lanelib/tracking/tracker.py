@@ -152,10 +152,9 @@ class LaneTracker:
 
     def _report(self, f: Frame, keep_images: bool, index: int) -> FrameResult:
         """Update the state with the frame's best candidate and return its result."""
-        best, cfg = f.best, self.config
+        best = f.best
         search = best.search
-        if self.pipeline.config.edge.enabled and cfg.shoulder_frames and index % cfg.shoulder_every == 0:
-            measure_shoulders(self, f.raw, f.images.get("birdseye"), search, best.left, best.right)
+        measure_shoulders(self, f, index)  # the shoulders beside paint, on the frames they are measured on
         images = f.images if keep_images else {}
         if keep_images and search is not f.first and "fallback binary" in images:
             images["binary"] = images["fallback binary"]  # the views show the mask the lane came from

@@ -15,7 +15,7 @@ from ..fit import normal_width_m
 from ..records import LineFit, line_source
 from ..result import FrameResult
 from ..proposers import SIDES, Candidate
-from ..roads.checks import bent_gap, paint_at_car
+from ..roads.checks import bent_gap, remember_accepted
 from .state import Accepted
 
 
@@ -40,8 +40,6 @@ def accept(t: "LaneTracker", best: Candidate, track, images: dict,
             widened = " at the car, widened ahead as its double stripes" if spread is not None else ""
             width = "the tracked width" if track is not None else "the width seen before the loss"
             notes.append(f"{side} line inferred from the {other} line and {width}{widened}")
-    if track is None and (left is None or right is None):  # restarted from one line
-        s.restart_width = s.lost_track.width_m
     accepted = Accepted(coeffs["left"], coeffs["right"], confs["left"], confs["right"],
                         search.top_px, s.frame, (left is None, right is None))
     s.history.append(accepted)
@@ -50,18 +48,12 @@ def accept(t: "LaneTracker", best: Candidate, track, images: dict,
     # a line placed the shoulder inside the asphalt edge is no paint seen: its paint is still
     # missing, and the width at the car is not measured on it
     seen = [None if search.shoulder[i] else fit for i, fit in enumerate((left, right))]
-    at_car = [paint_at_car(t, fit, run) for fit, run in zip(seen, s.faded_run)]
-    s.faded_run = [0 if near else run + 1 for run, near in zip(s.faded_run, at_car)]
     if (t.reach_car(seen[0]) and t.reach_car(seen[1])  # both seen at the car: measured there
             and not any(bent_gap(t, fit, track, i) for i, fit in enumerate(seen))):
         s.seen_widths.append(normal_width_m(coeffs["left"], coeffs["right"], t.bottom, t.xm, t.ym))
-    if s.base_history.maxlen:
-        s.base_history.append(t.bases((coeffs["left"], coeffs["right"])))
     s.lost = s.blind = 0
     s.conf = (confs["left"], confs["right"])
-    for i, fit in enumerate((left, right)):
-        if fit is not None:  # an inferred line keeps the side's kind
-            s.edge[i] = bool(search.edge[i])
+    remember_accepted(t, best, track, seen, coeffs)  # what the hard-road parts remember of the frame
     kinds = tuple("inferred" if fit is None else line_source(search, i) for i, fit in enumerate((left, right)))
     return _result(t, t.lane, s.conf, search.method, {"left": left, "right": right}, best, notes, images, kinds)
 
