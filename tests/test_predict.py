@@ -390,3 +390,27 @@ def test_a_benchmark_is_predicted_with_its_preset_or_the_defaults(tmp_path, monk
     (tmp_path / "culane.json").write_text(json.dumps({"search": {"margin_px": 61}}))
     assert batch.benchmark_config("culane").search.margin_px == 61
     assert batch.benchmark_config("tusimple") == PipelineConfig()
+
+
+def test_predict_tusimple_on_the_test_sets_layout(tmp_path, ts_root, capsys):
+    """TuSimple's test set holds its clips beside ``test_tasks_0627.json`` (the frames to predict,
+    with their rows and no lanes) and, once released, ``test_label.json``: ``predict`` reads the
+    task file with no flags, ``evaluate`` the labels, and a folder with neither says what it
+    looks for."""
+    test_set = tmp_path / "test_set"
+    shutil.copytree(ts_root / "clips", test_set / "clips")
+    labels = tusimple.read_labels(ts_root)
+    tasks = [{"h_samples": list(r.h_samples), "raw_file": r.raw_file} for r in labels]  # no lanes
+    (test_set / "test_tasks_0627.json").write_text("".join(json.dumps(t) + "\n" for t in tasks))
+    assert main(["predict", "tusimple", str(test_set), "-o", str(tmp_path / "pred"), "--no-progress",
+                 "--config", "highway"]) == 0
+    assert "4 frames: 4 predicted" in capsys.readouterr().out
+    preds = tusimple.read_predictions(tmp_path / "pred" / batch.TUSIMPLE_PREDICTIONS)
+    assert [p.raw_file for p in preds] == [r.raw_file for r in labels]
+    first = sorted(ts_root.glob("label_data_*.json"))[0]
+    shutil.copy(first, test_set / "test_label.json")
+    assert tusimple.read_labels(test_set) == tusimple.read_labels(first)
+    with pytest.raises(InputError, match=r"holds no label_data\*\.json or test_label\*\.json; pass"):
+        tusimple.read_labels(tmp_path / "pred")
+    assert main(["predict", "tusimple", str(ts_root / "clips"), "-o", str(tmp_path / "p2")]) == 2
+    assert "or test_tasks*.json" in capsys.readouterr().err

@@ -150,8 +150,10 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
 
     Parameters
     ----------
-    benchmark : "tusimple" (labels: ``list_file``, a label file, or every ``label_data*.json`` of
-        ``root``) or "culane" (``list_file``, default ``root/list/test.txt``).
+    benchmark : "tusimple" (labels: ``list_file``, a label file, or the label files of ``root``,
+        ``tusimple.label_files``: every ``label_data*.json``, else ``test_label*.json``, else the
+        test set's task file ``test_tasks*.json``) or "culane" (``list_file``, default
+        ``root/list/test.txt``).
     root : the dataset root the labels' image paths are relative to.
     out_dir : the prediction folder (``PRED_DIR``); each frame's target lies under it.
 
@@ -173,7 +175,7 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
     if benchmark == "tusimple":
         labels = Path(list_file) if list_file is not None else r
         source = str(labels)
-        named = [(rec.raw_file, tuple(rec.h_samples)) for rec in tusimple.read_labels(labels)]
+        named = [(rec.raw_file, tuple(rec.h_samples)) for rec in tusimple.read_labels(labels, tasks=True)]
     else:
         source = str(Path(list_file) if list_file is not None else r / "list" / "test.txt")
         named = [(entry, culane.SAMPLE_ROWS_PX) for entry in culane.read_list(source)]
@@ -516,6 +518,6 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
         outcomes = _predict_frames(todo, configs, calibration, client, f"predict {benchmark}", progress)
     output = out
     if benchmark == "tusimple":
-        output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root))
+        output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root, tasks=True))
     return PredictRun(len(work), len(work) - len(todo), tuple(outcomes), output,
                       time.perf_counter() - t0, tuple(geometries), tuple(fallbacks), tuple(refinements))

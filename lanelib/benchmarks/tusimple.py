@@ -89,7 +89,7 @@ def _numbers(value, where: str, what: str) -> tuple[float, ...]:
     return tuple(float(v) for v in value)
 
 
-def parse_record(line: str, where: str, prediction: bool) -> TuSimpleRecord:
+def parse_record(line: str, where: str, prediction: bool, task: bool = False) -> TuSimpleRecord:
     """Return one JSON line of a label or prediction file as a ``TuSimpleRecord``.
 
     Parameters
@@ -97,18 +97,23 @@ def parse_record(line: str, where: str, prediction: bool) -> TuSimpleRecord:
     line : the text of the line.
     where : ``FILE:LINE``, named in every error.
     prediction : True for a prediction line (``run_time`` is required, ``h_samples`` optional).
+    task : a line of the test set's task file (``test_tasks_0627.json``): the frame to predict and
+        its rows; ``lanes`` may be absent (no lanes).
     """
     try:
         obj = json.loads(line)
     except json.JSONDecodeError as e:
         raise InputError(f"{where}: not a JSON object ({e.msg}); each line of a TuSimple file is one "
                          "JSON object with raw_file, lanes and h_samples") from None
-    need = ("raw_file", "lanes", "run_time") if prediction else ("raw_file", "lanes", "h_samples")
+    need = (("raw_file", "lanes", "run_time") if prediction else
+            ("raw_file", "h_samples") if task else ("raw_file", "lanes", "h_samples"))
     missing = [k for k in need if not isinstance(obj, dict) or k not in obj]
     if missing:
         raise InputError(f"{where}: no {', '.join(missing)}; each line needs {', '.join(need)}")
     if not isinstance(obj["raw_file"], str) or not obj["raw_file"]:
         raise InputError(f"{where}: raw_file must be the image path as text")
+    if task:
+        obj = {**obj, "lanes": obj.get("lanes", [])}
     if not isinstance(obj["lanes"], list):
         raise InputError(f"{where}: lanes must be a list of lanes, each a list of x values")
     lanes = tuple(_numbers(lane, where, f"lane {i + 1}") for i, lane in enumerate(obj["lanes"]))
@@ -128,7 +133,7 @@ def parse_record(line: str, where: str, prediction: bool) -> TuSimpleRecord:
     return TuSimpleRecord(obj["raw_file"], lanes, rows, run_time)
 
 
-def _read(path: Path, prediction: bool) -> list[TuSimpleRecord]:
+def _read(path: Path, prediction: bool, task: bool = False) -> list[TuSimpleRecord]:
     what = "TuSimple prediction file" if prediction else "TuSimple label file"
     if not path.is_file():
         raise InputError(f"{path}: no such {what}; check the path")
@@ -138,7 +143,7 @@ def _read(path: Path, prediction: bool) -> list[TuSimpleRecord]:
         raise InputError(f"{path}: not text; pass the {what} (JSON lines)") from None
     except OSError as e:
         raise InputError(f"{path}: cannot be read ({e.strerror or e}); check its permissions") from None
-    records = [parse_record(line, f"{path}:{n}", prediction)
+    records = [parse_record(line, f"{path}:{n}", prediction, task)
                for n, line in enumerate(text.splitlines(), 1) if line.strip()]
     if not records:
         raise InputError(f"{path}: holds no lines; pass a {what} with one JSON object per image")
@@ -151,27 +156,33 @@ def _read(path: Path, prediction: bool) -> list[TuSimpleRecord]:
     return records
 
 
-def label_files(path: str | os.PathLike) -> list[Path]:
-    """Return the label files at ``path``: the file itself, or a folder's ``label_data*.json``."""
+def label_files(path: str | os.PathLike, tasks: bool = False) -> list[Path]:
+    """Return the label files at ``path``: the file itself, or a folder's ``label_data*.json`` (the
+    train set's), else its ``test_label*.json`` (the test set's labels), else, with ``tasks`` (the
+    frames to predict), its ``test_tasks*.json`` (the test set's task file)."""
     p = Path(path)
-    if p.is_dir():
-        files = sorted(p.glob("label_data*.json"))
-        if not files:
-            raise InputError(f"{p}: holds no label_data*.json; pass a TuSimple label file or the "
-                             "folder that holds label_data_*.json")
-        return files
-    return [p]
+    if not p.is_dir():
+        return [p]
+    kinds = ("label_data*.json", "test_label*.json") + (("test_tasks*.json",) if tasks else ())
+    for kind in kinds:
+        files = sorted(p.glob(kind))
+        if files:
+            return files
+    raise InputError(f"{p}: holds no {' or '.join(kinds)}; pass a TuSimple label file or the folder "
+                     "that holds one (the train set's root, or test_set/)")
 
 
-def read_labels(path: str | os.PathLike) -> list[TuSimpleRecord]:
-    """Return the labelled images of a TuSimple label file, or of every ``label_data*.json`` in a folder.
+def read_labels(path: str | os.PathLike, tasks: bool = False) -> list[TuSimpleRecord]:
+    """Return the labelled images of a TuSimple label file, or of a folder's label files
+    (``label_files``); with ``tasks``, also the frames of the test set's task file, whose lines
+    may have no lanes.
 
     A malformed line, a lane whose length is not that of ``h_samples``, or an image given twice
     raises ``InputError`` naming the file and line.
     """
     records = []
-    for f in label_files(path):
-        records.extend(_read(f, prediction=False))
+    for f in label_files(path, tasks):
+        records.extend(_read(f, prediction=False, task=tasks))
     seen = set()
     for r in records:
         if r.raw_file in seen:

@@ -48,7 +48,8 @@ def add_evaluate(sub) -> None:
                    help="images|video: folder of images, or video file")
     b = p.add_argument_group("benchmarks (tusimple, culane)")
     b.add_argument("--gt", type=Path, metavar="PATH",
-                   help="tusimple: the label file (test_label.json), or a folder of label_data*.json; "
+                   help="tusimple: the label file (test_label.json), or a folder of label_data*.json "
+                        "(else its test_label*.json); "
                         "culane: the dataset root the list's paths are relative to")
     b.add_argument("--pred", type=Path, metavar="PATH",
                    help="tusimple: the prediction file; culane: the folder of .lines.txt predictions "
@@ -191,7 +192,8 @@ def add_predict(sub) -> None:
                    help="the folder the labels' image paths are relative to")
     p.add_argument("--list", dest="list_file", type=Path, metavar="FILE",
                    help="tusimple: the label file whose frames to predict (default: every "
-                        "label_data*.json of DATASET_ROOT); culane: the list of images (default: "
+                        "label_data*.json of DATASET_ROOT, else its test_label*.json, else its "
+                        "test_tasks*.json, the test set's task file); culane: the list of images (default: "
                         "DATASET_ROOT/list/test.txt)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="PRED_DIR",
                    help="folder for the predictions (not DATASET_ROOT)")
