@@ -245,8 +245,9 @@ def test_predict_bad_input(tmp_path, ts_root, cu_root, capsys):
     # predictions among the labels
     assert main(["predict", "culane", str(cu_root), "-o", str(cu_root)]) == 2
     assert "the prediction folder is the dataset root" in capsys.readouterr().err
-    # a folder without the list
-    assert main(["predict", "culane", str(tmp_path), "-o", str(tmp_path / "p")]) == 2
+    # a folder without a list
+    (tmp_path / "no_list").mkdir()
+    assert main(["predict", "culane", str(tmp_path / "no_list"), "-o", str(tmp_path / "p")]) == 2
     assert "no such CULane list file" in capsys.readouterr().err
 
 
@@ -414,3 +415,21 @@ def test_predict_tusimple_on_the_test_sets_layout(tmp_path, ts_root, capsys):
         tusimple.read_labels(tmp_path / "pred")
     assert main(["predict", "tusimple", str(ts_root / "clips"), "-o", str(tmp_path / "p2")]) == 2
     assert "or test_tasks*.json" in capsys.readouterr().err
+
+
+def test_predict_culane_reads_the_roots_list_when_none_is_named(tmp_path, cu_root, capsys):
+    """Without ``--list`` a CULane root's frames are its ``list/test.txt`` (the official layout),
+    else a ``list.txt`` at the root (the dev set's layout); with neither, the error names the
+    official list."""
+    flat = tmp_path / "flat"
+    shutil.copytree(cu_root, flat)
+    (flat / "list" / "test.txt").rename(flat / "list.txt")
+    assert culane.default_list(cu_root) == cu_root / "list" / "test.txt"
+    assert culane.default_list(flat) == flat / "list.txt"
+    assert main(["predict", "culane", str(flat), "-o", str(tmp_path / "pred"), "--no-progress",
+                 "--config", "highway"]) == 0
+    entries = culane.read_list(flat / "list.txt")
+    assert all(culane.lines_path(tmp_path / "pred", e).is_file() for e in entries)
+    (flat / "list.txt").unlink()
+    assert main(["predict", "culane", str(flat), "-o", str(tmp_path / "p2"), "--no-progress"]) == 2
+    assert "list/test.txt: no such CULane list file" in capsys.readouterr().err

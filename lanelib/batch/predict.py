@@ -153,7 +153,7 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
     benchmark : "tusimple" (labels: ``list_file``, a label file, or the label files of ``root``,
         ``tusimple.label_files``: every ``label_data*.json``, else ``test_label*.json``, else the
         test set's task file ``test_tasks*.json``) or "culane" (``list_file``, default
-        ``root/list/test.txt``).
+        ``culane.default_list``: ``root/list/test.txt``, else ``root/list.txt``).
     root : the dataset root the labels' image paths are relative to.
     out_dir : the prediction folder (``PRED_DIR``); each frame's target lies under it.
 
@@ -177,7 +177,7 @@ def benchmark_work(benchmark: str, root: str | os.PathLike, out_dir: str | os.Pa
         source = str(labels)
         named = [(rec.raw_file, tuple(rec.h_samples)) for rec in tusimple.read_labels(labels, tasks=True)]
     else:
-        source = str(Path(list_file) if list_file is not None else r / "list" / "test.txt")
+        source = str(Path(list_file) if list_file is not None else culane.default_list(r))
         named = [(entry, culane.SAMPLE_ROWS_PX) for entry in culane.read_list(source)]
     work = []
     for n, (name, rows) in enumerate(named, 1):

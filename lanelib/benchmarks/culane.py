@@ -30,6 +30,15 @@ SAMPLE_ROWS_PX = tuple(range(CULANE_IMAGE_SIZE[1] - 10, 0, -10))
 LINES_PER_SIDE = 2  # CULane labels at most two lines on each side of the car (predict keeps as many)
 
 
+def default_list(root: str | os.PathLike) -> Path:
+    """Return the list of a CULane root's frames when none is named: its ``list/test.txt`` (the
+    official test list), else a ``list.txt`` at the root (as the dev set has); ``list/test.txt``
+    when it holds neither (``read_list`` then says it is missing)."""
+    r = Path(root)
+    official, flat = r / "list" / "test.txt", r / "list.txt"
+    return flat if not official.is_file() and flat.is_file() else official
+
+
 def read_list(path: str | os.PathLike) -> list[str]:
     """Return the image entries of a CULane list file (the first column, blank lines skipped)."""
     p = Path(path)

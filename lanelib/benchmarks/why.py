@@ -468,15 +468,14 @@ def set_frames(benchmark: str, root: str | os.PathLike,
                list_file: str | os.PathLike | None = None) -> list[tuple[str, Path, object]]:
     """Return (name, image, labels) of every labelled frame of a dataset, in list order.
 
-    CULane: the images of ``list_file`` (default: ``data.CULANE_DEV_LIST`` when ``root`` holds it,
-    else ``list/test.txt``) and their ``.lines.txt``. TuSimple: the records of ``list_file``
-    (default: ``data.TUSIMPLE_DEV_FULLRES`` when ``root`` holds it, else every
-    ``label_data*.json``). A missing image raises ``InputError`` naming it.
+    CULane: the images of ``list_file`` (default: ``culane.default_list``: ``list/test.txt``, else
+    the dev set's ``list.txt``) and their ``.lines.txt``. TuSimple: the records of ``list_file``
+    (default: ``data.TUSIMPLE_DEV_FULLRES`` when ``root`` holds it, else the root's label files,
+    ``tusimple.label_files``). A missing image raises ``InputError`` naming it.
     """
     r = Path(root)
     if benchmark == "culane":
-        listed = Path(list_file) if list_file else (
-            r / data.CULANE_DEV_LIST if (r / data.CULANE_DEV_LIST).is_file() else r / "list" / "test.txt")
+        listed = Path(list_file) if list_file else culane.default_list(r)
         labels = culane.read_labels(r, listed)
         named = list(zip(labels.entries, labels.lanes))
     elif benchmark == "tusimple":

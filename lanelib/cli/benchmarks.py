@@ -194,7 +194,7 @@ def add_predict(sub) -> None:
                    help="tusimple: the label file whose frames to predict (default: every "
                         "label_data*.json of DATASET_ROOT, else its test_label*.json, else its "
                         "test_tasks*.json, the test set's task file); culane: the list of images (default: "
-                        "DATASET_ROOT/list/test.txt)")
+                        "DATASET_ROOT/list/test.txt, else DATASET_ROOT/list.txt)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="PRED_DIR",
                    help="folder for the predictions (not DATASET_ROOT)")
     common_pipeline_args(p, default="the preset named like the benchmark (tusimple or culane: its "
@@ -337,9 +337,9 @@ def add_why(sub) -> None:
     p.add_argument("--root", type=Path, metavar="DATASET_ROOT",
                    help="the dataset (default: the dev set in LANELIB_DATA: culane-dev, tusimple-dev)")
     p.add_argument("--list", dest="list_file", type=Path, metavar="FILE",
-                   help="without FRAME: culane: the list of images (default list.txt, else "
-                        "list/test.txt); tusimple: the label file (default label_data_fullres.json, "
-                        "else every label_data*.json)")
+                   help="without FRAME: culane: the list of images (default list/test.txt, else "
+                        "list.txt); tusimple: the label file (default label_data_fullres.json, else "
+                        "every label_data*.json, else test_label*.json)")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="PipelineConfig JSON or a preset's name (default: the preset named like the "
                         "benchmark)")
