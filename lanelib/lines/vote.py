@@ -25,7 +25,9 @@ across the road, set by the car's heading). The search, in the order it runs:
    ``seen_window_m``). It is refused, saying why (``Candidate.refused``), with less than
    ``min_peak_m`` of paint, paint spanning less than ``min_span_m``, runs scattering more than
    ``max_scatter_m`` about the fit, or when it runs under the car (``min_offset_m``) while its
-   paint starts more than ``near_paint_m`` ahead (a vehicle's edge).
+   paint starts more than ``near_paint_m`` ahead (a vehicle's edge). With ``min_lane_fraction``,
+   of two reported lines on one side of the car nearer than that share of a lane, the outer one
+   is refused: no lane is that narrow (``_lanes_apart``).
 
 With ``follow_ahead_m`` the view goes on beyond ``view_ahead_m``: the vote weighs only the rows
 within it, and ``follow_ahead`` follows each line found along its paint beyond.
@@ -174,7 +176,8 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     down to half of ``min_peak_m`` of paint, so that a line that narrowly misses says so.
     Refusals: too little paint, more than ``max_lines``, fewer than 3 runs near it, paint
     spanning less than ``min_span_m``, runs scattering more than ``max_scatter_m`` around the
-    fit, or a line under the car whose paint starts ahead (``min_offset_m``, ``near_paint_m``).
+    fit, a line under the car whose paint starts ahead (``min_offset_m``, ``near_paint_m``), or a
+    line nearer than ``min_lane_fraction`` of a lane beside the line inside it.
 
     Parameters
     ----------
