@@ -212,15 +212,15 @@ def fit_side(pixels: tuple[np.ndarray, np.ndarray], side: str, height_px: int, c
     look-ahead) and the pixels it rests on. With ``double_line_px`` on, pixels scattering like a
     double line (RMS above a quarter of it) are read at the inner stripe
     (``roads.stripes.double_line_fit``), so a single line costs no second fit. ``fits``: the fits
-    of one image's searches so far (``thresholds.Made.fits``): a line on pixels that another of
-    its searches fitted (the fallback masks' windows often pick them again) is not fitted again.
+    of one image's searches so far (``thresholds.Made.fits``): pixels that another of its searches
+    fitted under the same config (fallback windows often pick them again) are not fitted again.
     """
-    key = (side, top_px > 0, missing, len(pixels[0]))  # a fit reads only whether there is a look-ahead
-    for ys, xs, out in fits.get(key, ()) if fits is not None else ():
-        if np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
+    key = (side, top_px > 0, missing, len(pixels[0]), height_px)  # only whether there is a look-ahead
+    for c, ys, xs, out in fits.get(key, ()) if fits is not None else ():  # ``c``: the entry's config, held
+        if c is config and np.array_equal(ys, pixels[0]) and np.array_equal(xs, pixels[1]):
             return out
     fit, first = fit_line_with_first(*pixels, height_px, config, missing, top_px)
     out = double_line_fit(fit, first, pixels, side, height_px, config, missing, top_px)
     if fits is not None:
-        fits.setdefault(key, []).append((*pixels, out))
+        fits.setdefault(key, []).append((config, *pixels, out))
     return out

@@ -437,7 +437,7 @@ class Made:
     masks: dict[str, np.ndarray] = field(default_factory=dict)
     channels: Channels | None = None
     expressions: dict[str, np.ndarray | None] = field(default_factory=dict)  # by ``_source``
-    fits: dict = field(default_factory=dict)  # by side, look-ahead or not, reason if missing, pixel count
+    fits: dict = field(default_factory=dict)  # by side, look-ahead, reason if missing, pixels, height; with config
 
 
 def combine(rgb: np.ndarray, config: ThresholdConfig = ThresholdConfig(),

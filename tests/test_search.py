@@ -194,3 +194,20 @@ def test_lane_pixels_equal_find_non_zero_for_any_width_and_view():
             ys, xs = lane_pixels(view)
             assert ys.dtype == xs.dtype == np.int32
             assert np.array_equal(ys, pts[:, 1]) and np.array_equal(xs, pts[:, 0])
+
+
+def test_a_fit_is_reused_only_for_the_same_pixels_under_the_same_config():
+    """One image's searches share their fits (``fits``): the same pixels under the same config
+    give the fit already made (the same object), under another config their own fit."""
+    from lanelib.search import fit_side
+    ys = np.arange(200, 720, dtype=np.int32)
+    xs = (300 + 0.1 * (ys - 200)).astype(np.int32)
+    loose, strict = SearchConfig(min_line_pixels=100), SearchConfig(min_line_pixels=1000)
+    memo: dict = {}
+    first, _ = fit_side((ys, xs), "left", 720, loose, "no lane pixels", fits=memo)
+    again, _ = fit_side((ys.copy(), xs.copy()), "left", 720, loose, "no lane pixels", fits=memo)
+    assert first.found and again is first
+    other, _ = fit_side((ys, xs), "left", 720, strict, "no lane pixels", fits=memo)
+    assert not other.found  # 520 pixels, fewer than this config's 1000: not the loose config's fit
+    moved, _ = fit_side((ys, xs + 50), "left", 720, loose, "no lane pixels", fits=memo)
+    assert moved.found and moved.coeffs_px[2] == pytest.approx(first.coeffs_px[2] + 50)
