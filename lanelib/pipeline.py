@@ -314,7 +314,6 @@ class LanePipeline:
                                ("search and fits", im["search"]), ("result", im["result"])], self.size)
 
 
-
 def _rejected(fit: LineFit, why: str) -> LineFit:
     """Return ``fit`` unchanged when ``why`` is empty, else a not-found fit saying ``why``."""
     if not why or not fit.found:

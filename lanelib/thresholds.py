@@ -71,7 +71,7 @@ class Channels:
     def __init__(self, rgb: np.ndarray):
         self.rgb = rgb
         self._spaces: dict[str, np.ndarray] = {"rgb": rgb}
-        self._planes: dict[str, tuple[np.ndarray, ...]] = {}  # each space's channels, split once
+        self._planes: dict[str, list | tuple] = {}  # each space's channels, split once
         self._tophats: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def space(self, name: str) -> np.ndarray:

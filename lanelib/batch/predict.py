@@ -518,6 +518,6 @@ def predict_benchmark(benchmark: str, root: str | os.PathLike, out_dir: str | os
         outcomes = _predict_frames(todo, configs, calibration, client, f"predict {benchmark}", progress)
     output = out
     if benchmark == "tusimple":
-        output = _assemble_tusimple(work, out, tusimple.label_files(list_file if list_file is not None else root, tasks=True))
+        output = _assemble_tusimple(work, out, tusimple.label_files(list_file or root, tasks=True))
     return PredictRun(len(work), len(work) - len(todo), tuple(outcomes), output,
                       time.perf_counter() - t0, tuple(geometries), tuple(fallbacks), tuple(refinements))

@@ -244,7 +244,8 @@ class TrackerConfig:
     smooth_frames : good frames averaged (weighted towards the newest) for the reported fit.
     recency_decay : weight of a frame relative to the next newer one in the average (0-1].
     hold_frames : frames the last good lane is kept after detection fails, before a reset.
-    base_history_frames : 0 (off), or accepted frames whose line bases are remembered (``roads.proposers.RememberedBases``).
+    base_history_frames : 0 (off), or accepted frames whose line bases are remembered
+        (``roads.proposers.RememberedBases``).
     min_base_peak : a histogram base whose (peak - mean) / mean is below this is weak, and the
         remembered base is tried instead (with ``base_history_frames``).
     lookahead_growth_m : how far (m of road) the look-ahead may reach beyond the rows the tracked

@@ -14,7 +14,8 @@ from a double line's stripes, and a restart from one line.
   was restarts the lane (``restart``).
 
 ``tracking.update.accept`` keeps what these parts and the proposers of ``roads.proposers``
-remember of an accepted frame through ``remember_accepted``. The tracker is passed in (duck-typed): this package sits below it in the layers.
+remember of an accepted frame through ``remember_accepted``. The tracker is passed in
+(duck-typed): this package sits below it in the layers.
 """
 from __future__ import annotations
 
@@ -79,7 +80,6 @@ def paint_at_car(t, fit: LineFit | None, faded_run: int) -> bool:
     return not faded_run or fit.gap_px * t.ym <= t.config.return_gap_m
 
 
-
 def remember_accepted(t, best, track, seen: list, coeffs: dict) -> None:
     """Keep what the hard-road parts remember of an accepted frame (``tracking.update.accept``;
     ``seen``: its lines seen as paint, ``coeffs``: the pixel coefficients of both, one maybe
@@ -97,6 +97,7 @@ def remember_accepted(t, best, track, seen: list, coeffs: dict) -> None:
     for i, fit in enumerate((best.left, best.right)):
         if fit is not None:
             s.edge[i] = bool(search.edge[i])
+
 
 # ---- the grade a double line's stripes show (grade pair check, stripe spread) ---------------
 
