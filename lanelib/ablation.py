@@ -120,6 +120,9 @@ PARTS: tuple[Part, ...] = (
     Part("vote: lanes apart", ("lines.min_lane_fraction=0",), True,
          "a line nearer than 0.7 of a lane beside the line inside it is refused (tusimple preset: "
          "highway lanes are never that narrow)"),
+    Part("vote: tight lines of other headings", ("lines.tight_scatter_m=0",), True,
+         "a line tighter than 4 cm found at another heading than the one kept is reported too, "
+         "apart from the lines kept: a bend's chord, a merging lane (culane and tusimple presets)"),
     Part("points refined from the lines", ("lines.refine_points_px=0",), True,
          "predict moves a sequence's bird's-eye points to where its lines meet, when that is far "
          "from where the points' sides meet: a camera pitched or turned otherwise than the preset's"),

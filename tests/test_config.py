@@ -72,10 +72,12 @@ def test_partial_file_keeps_defaults(tmp_path):
     ({"thresholds": {"rule": "white | nothing"}}, r"unknown mask 'nothing'"),
     ({"perspective": {"lane_width_m": True}}, r"perspective\.lane_width_m: expected a number"),
     ({"lines": {"follow_ahead_m": -5}}, r"lines: follow_ahead_m -5\.0, seen_window_m 2\.0, contrast_full 0\.0, "
-                                      r"refine_points_px 0\.0 and min_lane_fraction 0\.0 must be 0 \(off\) or more"),
-    ({"lines": {"contrast_full": -1}}, r"contrast_full -1\.0, refine_points_px 0\.0 and min_lane_fraction 0\.0 must"),
-    ({"lines": {"refine_points_px": -6}}, r"refine_points_px -6\.0 and min_lane_fraction 0\.0 must be 0 \(off\)"),
-    ({"lines": {"min_lane_fraction": -0.7}}, r"min_lane_fraction -0\.7 must be 0 \(off\) or more"),
+                                      r"refine_points_px 0\.0, min_lane_fraction 0\.0 and tight_scatter_m 0\.0 "
+                                      r"must be 0 \(off\) or more"),
+    ({"lines": {"contrast_full": -1}}, r"contrast_full -1\.0, refine_points_px 0\.0, min_lane_fraction 0\.0 and"),
+    ({"lines": {"refine_points_px": -6}}, r"refine_points_px -6\.0, min_lane_fraction 0\.0 and tight_scatter_m"),
+    ({"lines": {"min_lane_fraction": -0.7}}, r"min_lane_fraction -0\.7 and tight_scatter_m 0\.0 must be 0 \(off\)"),
+    ({"lines": {"tight_scatter_m": -0.04}}, r"tight_scatter_m -0\.04 must be 0 \(off\) or more"),
 ])
 def test_bad_keys_and_types_name_the_key(tmp_path, data, message):
     p = tmp_path / "bad.json"

@@ -117,10 +117,12 @@ def test_culane_preset_makes_the_dev_labels_parallel():
     assert len(slopes) > 20 and np.median(np.abs(slopes)) < 0.15
 
 
-def test_junk_that_outvotes_the_paint_for_a_heading_does_not_set_it():
+@pytest.mark.parametrize("tight", [0.0, 0.04])
+def test_junk_that_outvotes_the_paint_for_a_heading_does_not_set_it(tight):
     """A ragged band of texture along a slanted line (a verge, a truck's side) holds the most
     votes of any heading but is no clean line; the parallel dashes of the lane at heading 0 are
-    what the vote reports when it tries more than one heading."""
+    what the vote reports when it tries more than one heading, with or without the tight lines of
+    other headings (``tight_scatter_m``)."""
     rng = np.random.default_rng(1)
     m = np.zeros((H, W), np.uint8)
     for x0 in (250.5, 435.5):                                       # the ego lane, 3.7 m
@@ -129,7 +131,8 @@ def test_junk_that_outvotes_the_paint_for_a_heading_does_not_set_it():
         for dx in rng.uniform(-40, 40, 6):
             x = int(650 + 0.25 * (H - 1 - y) + dx)
             m[y, x:x + 3] = 255
-    kw = dict(min_span_m=5.0, extend_m=0.0, max_slope=0.3, vote_tolerance_m=0.25, max_scatter_m=0.13)
+    kw = dict(min_span_m=5.0, extend_m=0.0, max_slope=0.3, vote_tolerance_m=0.25, max_scatter_m=0.13,
+              tight_scatter_m=tight)
     assert xs_at_bottom(vote_lines(m, LinesConfig(headings=5, **kw), XM, YM)) == pytest.approx([250.5, 435.5], abs=0.5)
     assert vote_lines(m, LinesConfig(headings=1, **kw), XM, YM) == []  # the band's heading: nothing
 
@@ -297,3 +300,17 @@ def test_a_line_nearer_than_a_lane_beside_the_line_inside_it_is_refused(fraction
     refused = [c.refused for c in weighed if c.refused.startswith("it runs")]
     assert refused == ([] if fraction == 0 else [
         "it runs 2.0 m beside the line inside it, less than min_lane_fraction 0.70 of a lane: no lane is that narrow"])
+
+
+@pytest.mark.parametrize("tight, kept", [(0.0, [150.5, 335.5]), (0.04, [150.5, 335.5, 520.5])])
+def test_a_tight_line_at_another_heading_is_reported_with_tight_scatter(tight, kept):
+    """The ego lines run straight ahead; the line beyond the right one bends away (a bend's
+    chord, a lane that merges), 0.1 m across per m along: the vote keeps the ego lines' heading,
+    and with ``tight_scatter_m`` the other line, tight and apart from them, is reported too."""
+    m = np.zeros((H, W), np.uint8)
+    for x in (150.5, 335.5):
+        paint(m, x)
+    paint(m, 520.5, slope_px=0.5)
+    config = LinesConfig(min_span_m=5.0, extend_m=0.0, max_slope=0.3, headings=5, max_scatter_m=0.13,
+                         tight_scatter_m=tight)
+    assert xs_at_bottom(reported(vote_candidates(m, config, XM, YM), config, H, YM)) == pytest.approx(kept, abs=0.5)

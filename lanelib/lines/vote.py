@@ -16,7 +16,9 @@ across the road, set by the car's heading). The search, in the order it runs:
 3. **Heading.** Lane lines are parallel: only slopes within ``heading_spread`` of a common
    heading count. The ``headings`` slopes with the most strong votes are tried, and the one whose
    reported lines hold the most paint is kept (junk beside the road can outvote the paint for a
-   heading, but it does not pass as lines).
+   heading, but it does not pass as lines). On a bend or where a lane merges the lines do not
+   share one heading: with ``tight_scatter_m``, a line of another heading whose runs scatter less
+   than that about its fit is reported too, apart from the lines kept (``_tight_others``).
 4. **Lines.** The strongest cell left is weighed, then every cell that is the same line as it
    (nearer than ``min_gap_fraction`` of a lane width, or crossing it, within the view) is
    cleared. Its runs are fitted (a parabola when they span ``curved_span_m``); with
@@ -168,7 +170,8 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
                     ym_per_px: float = 0.1, car_x_px: float | None = None,
                     row_weights: np.ndarray | None = None, strength: np.ndarray | None = None) -> list[Candidate]:
     """Return every straight line the vote weighs in a bird's-eye lane mask, strongest first, each
-    with its fit and why it is refused ("" for a reported line).
+    with its fit and why it is refused ("" for a reported line): those of the heading kept, then
+    the tight lines of other headings reported with them (``tight_scatter_m``).
 
     Each distinct line is weighed once: the strongest cell left is weighed, then the cells that
     are the same line as it (nearer than ``min_gap_fraction`` of a lane width, or crossing it,
@@ -211,16 +214,37 @@ def vote_candidates(binary: np.ndarray, config: LinesConfig = LinesConfig(), xm_
     spread = config.heading_spread * ym_per_px / xm_per_px
     votes = _Votes(rows, t, xc, slopes, np.arange(table.shape[1]) * tol, h, tol,
                    w / 2.0 if car_x_px is None else float(car_x_px))
-    best: tuple[float, list[Candidate]] = (-1.0, [])
+    every = []
     for k in _headings(table, slopes, least, spread, config.headings) or [None]:
         kept = table.copy()
         if k is not None:  # None: no slope holds a strong cell, every one is weighed
             kept[np.abs(slopes - slopes[k]) > spread] = 0.0
-        found = _weigh(kept, votes, config, xm_per_px, ym_per_px)
-        paint = sum(c.paint_m for c in found if not c.refused)
-        if paint > best[0]:
-            best = (paint, found)
-    return best[1]
+        every.append(_weigh(kept, votes, config, xm_per_px, ym_per_px))
+    best = max(every, key=lambda found: sum(c.paint_m for c in found if not c.refused))  # the first of equals
+    return _tight_others(best, every, config, xm_per_px, votes)
+
+
+def _tight_others(best: list[Candidate], every: list[list[Candidate]], config: LinesConfig, xm_per_px: float,
+                  v: _Votes) -> list[Candidate]:
+    """Return the kept heading's candidates ``best`` with the reported lines of the other headings
+    (``every``, in turn) that are tighter than ``tight_scatter_m`` and stay ``min_gap_fraction``
+    of a lane from every reported line without crossing one (on rows 10 apart), up to
+    ``max_lines`` in all; ``_lanes_apart`` then weighs them with the rest."""
+    if config.tight_scatter_m <= 0 or len(every) < 2:
+        return best
+    gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
+    ts = np.arange(0.0, v.height, 10.0)
+    out = list(best)
+    for found in every:
+        for c in found if found is not best else ():
+            if c.refused or c.line.scatter_px * xm_per_px >= config.tight_scatter_m:
+                continue
+            xs = c.line.x_at(ts)
+            apart = (xs - o.line.x_at(ts) for o in out if not o.refused)
+            room = sum(not o.refused for o in out) < config.max_lines
+            if room and all(np.abs(d).min() >= gap and not np.any(d[:-1] * d[1:] < 0) for d in apart):
+                out.append(c)
+    return _lanes_apart(out, config, xm_per_px, v)
 
 
 class _Votes(NamedTuple):

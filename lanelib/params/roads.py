@@ -168,6 +168,11 @@ class LinesConfig:
         bottom row) to the next reported line towards the car on its side is refused (``lines.vote``;
         0: off): no lane is that narrow, and the line further out is the one beside the paint (a
         vehicle's edge, a barrier's foot, a slab joint), the lines nearest the car being seen best.
+    tight_scatter_m : a line found at another of the ``headings`` than the one kept is reported
+        too when its runs scatter less than this about its fit and it stays ``min_gap_fraction``
+        of a lane from every reported line without crossing one (``lines.vote``; 0: off). Lane
+        lines are parallel, but on a bend or where a lane merges a dashed line's chord and a solid
+        line's do not share one heading; a line that tight is paint, not texture.
     """
 
     lane_width_m: float = 3.7
@@ -210,6 +215,7 @@ class LinesConfig:
     contrast_full: float = 0.0
     refine_points_px: float = 0.0
     min_lane_fraction: float = 0.0
+    tight_scatter_m: float = 0.0
 
     def __post_init__(self):
         if self.row_weight_power < 0 or self.row_weight_full <= 0:
@@ -222,10 +228,11 @@ class LinesConfig:
         if min(self.view_half_width_m, self.view_ahead_m, self.view_xm_per_px, self.view_ym_per_px) <= 0:
             raise ConfigError("lines: the view's width, length and metres per pixel must be positive")
         if min(self.follow_ahead_m, self.seen_window_m, self.contrast_full, self.refine_points_px,
-               self.min_lane_fraction) < 0:
+               self.min_lane_fraction, self.tight_scatter_m) < 0:
             raise ConfigError(f"follow_ahead_m {self.follow_ahead_m}, seen_window_m {self.seen_window_m}, "
-                              f"contrast_full {self.contrast_full}, refine_points_px {self.refine_points_px} "
-                              f"and min_lane_fraction {self.min_lane_fraction} must be 0 (off) or more")
+                              f"contrast_full {self.contrast_full}, refine_points_px {self.refine_points_px}, "
+                              f"min_lane_fraction {self.min_lane_fraction} and tight_scatter_m "
+                              f"{self.tight_scatter_m} must be 0 (off) or more")
         if min(self.lane_width_m, self.min_gap_fraction, self.band_m, self.window_m, self.margin_m,
                self.min_span_m) <= 0 or self.bands < 1 or self.max_empty_windows < 0:
             raise ConfigError("lines: widths, heights and spans must be positive, bands 1 or more")
