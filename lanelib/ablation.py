@@ -31,11 +31,12 @@ from .scoreboard import ROWS, Row, run as run_scoreboard, select
 DEFAULT_OUT = Path("out") / "ablation"
 # the figure of each row that the ablation compares (higher is better on every one; TuSimple's
 # F1 of its FP and FN rates, which counts false lines: its accuracy credits them)
-HEADLINE = {"culane": "f1_pct", "culane-moved": "f1_pct", "tusimple": "f1_pct", "project": "plausible_pct",
-            "challenge": "plausible_pct", "p1-white": "plausible_pct", "p1-yellow": "plausible_pct",
-            "synth-culane": "f1_pct", "synth-tusimple": "f1_pct", "synth-clip": "point_accuracy_pct"}
-REAL = ("culane", "culane-moved", "tusimple", "project", "challenge", "p1-white", "p1-yellow")
-PER_LINE = ("culane", "culane-moved", "tusimple", "synth-culane", "synth-tusimple")  # scored line by line
+HEADLINE = {"culane": "f1_pct", "culane-moved": "f1_pct", "tusimple": "f1_pct", "tusimple-bilinear": "f1_pct",
+            "project": "plausible_pct", "challenge": "plausible_pct", "p1-white": "plausible_pct",
+            "p1-yellow": "plausible_pct", "synth-culane": "f1_pct", "synth-tusimple": "f1_pct",
+            "synth-clip": "point_accuracy_pct"}
+REAL = ("culane", "culane-moved", "tusimple", "tusimple-bilinear", "project", "challenge", "p1-white", "p1-yellow")
+PER_LINE = ("culane", "culane-moved", "tusimple", "tusimple-bilinear", "synth-culane", "synth-tusimple")  # by line
 LINES_PER_FRAME = 4  # about as many lines as a benchmark frame labels
 ROUNDING = 0.1  # percentage points: the figures are rounded to 0.1
 

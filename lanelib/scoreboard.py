@@ -13,6 +13,10 @@ scoreboard``, ``make scoreboard``):
 - **TuSimple dev** (``data.tusimple_dev``): its 512x288 frames upscaled to 1280x720
   (``upscaled_tusimple``: bicubic, PNG, written once into a cache folder under ``out``), predicted
   and scored on the official 1280x720 rows of its full-resolution labels: accuracy, FP, FN.
+- **TuSimple dev, upscaled bilinear**: the same frames upscaled bilinear (``TUSIMPLE_UPSCALES``),
+  blurrier, predicted and scored alike: how much the figure owes to the upscale (a frame at
+  TuSimple's own resolution is sharper than either, and faint paint such as raised dots is at
+  the masks' floors at 512x288).
 - **Udacity project and challenge videos** (the highway camera, ``data.udacity_calibration``, the
   default config) and the **P1 clips** ``solidWhiteRight`` and ``solidYellowLeft`` (the ``p1``
   preset, no calibration): tracked through the whole clip as the ``video`` command tracks
@@ -59,6 +63,9 @@ PLAUSIBLE_OFFSET_M = 0.6        # a plausible car's |offset| from the lane's cen
 SYNTH_FRAMES = 10               # frames of each synthetic benchmark sample (one sequence)
 TUSIMPLE_SIZE = tusimple.IMAGE_SIZE  # (width, height) of TuSimple's frames and official label rows
 TUSIMPLE_CACHE = "tusimple-dev-1280x720"  # under ``out``: the upscaled frames and their labels
+# how the TuSimple dev rows upscale the 512x288 frames: (cache folder under ``out``, OpenCV flag)
+TUSIMPLE_UPSCALES = {"bicubic": (TUSIMPLE_CACHE, cv2.INTER_CUBIC),
+                     "bilinear": (TUSIMPLE_CACHE + "-bilinear", cv2.INTER_LINEAR)}
 MOVED_CACHE = "culane-dev-moved"  # under ``out``: the moved CULane frames and their labels
 # (dx, dy) px that moved_culane moves the sequences' frames by, in turn: pitched down; turned left and pitched up
 CAMERA_MOVES = ((0, 15), (-40, -10))
@@ -320,12 +327,13 @@ def _culane_moved(out: Path, settings: Settings) -> Measured:
                           f"{root / data.CULANE_DEV_LIST}, each sequence's frames moved by {moves} px in turn")
 
 
-def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:
+def upscaled_tusimple(root: str | Path, cache: str | Path, interpolation: int = cv2.INTER_CUBIC) -> Path:
     """Return the label file of TuSimple frames upscaled to 1280x720, written under ``cache``.
 
     Each frame of ``root``'s full-resolution labels (``data.TUSIMPLE_DEV_FULLRES``: TuSimple's
     official 1280x720 rows, whose frames ``root`` holds downscaled) is resized to
-    ``TUSIMPLE_SIZE`` (``tusimple.full_size``: bicubic) and written as PNG (lossless) to the same path under ``cache``
+    ``TUSIMPLE_SIZE`` (``tusimple.full_size`` with ``interpolation``, an OpenCV flag: bicubic by
+    default) and written as PNG (lossless) to the same path under ``cache``
     with the suffix ``.png``, once: a frame already there is kept (remove ``cache`` to write them
     again). The labels are written to ``cache/label_data_fullres.json`` with their images named
     so. Every file is written atomically; nothing is written under ``root``.
@@ -338,21 +346,33 @@ def upscaled_tusimple(root: str | Path, cache: str | Path) -> Path:
         target = cache.joinpath(*name.parts)
         if not target.is_file():
             image = root.joinpath(*PurePosixPath(rec.raw_file.lstrip("/")).parts)
-            big = tusimple.full_size(io.read_image(image))
+            big = tusimple.full_size(io.read_image(image), interpolation)
             io.write_image(target, big, inputs=[image])
         records.append(dataclasses.replace(rec, raw_file=str(name)))
     return tusimple.write_labels(cache / data.TUSIMPLE_DEV_FULLRES, records, inputs=[source])
 
 
-def _tusimple_dev(out: Path, settings: Settings) -> Measured:
+def _tusimple_scored(out: Path, settings: Settings, key: str, upscale: str) -> Measured:
+    """Return the TuSimple dev frames upscaled by ``upscale`` (``TUSIMPLE_UPSCALES``), predicted
+    under ``out/key`` with the tusimple preset and ``settings`` and scored on the official rows."""
     root = _need(data.TUSIMPLE_DEV)
-    labels = upscaled_tusimple(root, out / TUSIMPLE_CACHE)
-    run = _predict("tusimple", labels.parent, out / "tusimple", labels,
+    cache, interpolation = TUSIMPLE_UPSCALES[upscale]
+    labels = upscaled_tusimple(root, out / cache, interpolation)
+    run = _predict("tusimple", labels.parent, out / key, labels,
                    override(batch.benchmark_config("tusimple"), settings))
     s = tusimple.evaluate(labels, run.output)
-    return Measured(f"{root / data.TUSIMPLE_DEV_FULLRES}, frames upscaled to 1280x720; "
+    how = "" if upscale == "bicubic" else f" ({upscale})"
+    return Measured(f"{root / data.TUSIMPLE_DEV_FULLRES}, frames upscaled to 1280x720{how}; "
                     f"{_config_name('tusimple')}", s.images,
                     tusimple_figures(s.accuracy, s.fp, s.fn) | _over_time(run), _predict_ms(run))
+
+
+def _tusimple_dev(out: Path, settings: Settings) -> Measured:
+    return _tusimple_scored(out, settings, "tusimple", "bicubic")
+
+
+def _tusimple_bilinear(out: Path, settings: Settings) -> Measured:
+    return _tusimple_scored(out, settings, "tusimple-bilinear", "bilinear")
 
 
 def _over_time(run: batch.PredictRun) -> dict:
@@ -445,6 +465,7 @@ ROWS: dict[str, tuple[str, Measure]] = {
     "culane": ("CULane dev", _culane_dev),
     "culane-moved": ("CULane dev, cameras moved", _culane_moved),
     "tusimple": ("TuSimple dev", _tusimple_dev),
+    "tusimple-bilinear": ("TuSimple dev, upscaled bilinear", _tusimple_bilinear),
     "project": ("Udacity project video", _udacity_clip(data.PROJECT_VIDEO)),
     "challenge": ("Udacity challenge video", _udacity_clip(data.CHALLENGE_VIDEO)),
     "p1-white": ("P1 solidWhiteRight", _p1_clip(P1_VIDEOS["p1-white"])),

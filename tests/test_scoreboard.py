@@ -85,8 +85,9 @@ def test_mean_ms_in_whole_ms():
 
 def test_rows_are_chosen_in_the_scoreboard_order_real_rows_first():
     keys = list(scoreboard.ROWS)
-    assert keys[:7] == ["culane", "culane-moved", "tusimple", "project", "challenge", "p1-white", "p1-yellow"]
-    assert all(k.startswith("synth") for k in keys[7:])
+    assert keys[:8] == ["culane", "culane-moved", "tusimple", "tusimple-bilinear", "project", "challenge",
+                        "p1-white", "p1-yellow"]
+    assert all(k.startswith("synth") for k in keys[8:])
     assert scoreboard.select(None) == keys
     assert scoreboard.select(["synth-clip", "culane"]) == ["culane", "synth-clip"]
     with pytest.raises(InputError, match="--only nope: no such row; the rows are culane, culane-moved, tusimple"):
@@ -99,6 +100,7 @@ def test_a_row_without_its_data_is_skipped_with_the_reason(monkeypatch, tmp_path
     monkeypatch.setenv("LANELIB_DATA", str(tmp_path / "data"))
     for key, missing in (("culane", "culane-dev/list.txt"), ("culane-moved", "culane-dev/list.txt"),
                          ("tusimple", "tusimple-dev/label_data_fullres.json"),
+                         ("tusimple-bilinear", "tusimple-dev/label_data_fullres.json"),
                          ("challenge", "udacity-advanced/videos/challenge_video.mp4"),
                          ("p1-yellow", "udacity-lanelines-p1/test_videos/solidYellowLeft.mp4")):
         row = scoreboard.measure_row(key, tmp_path / "out")
@@ -163,6 +165,12 @@ def test_tusimple_frames_upscaled_once_as_png_with_their_labels(tmp_path):
     scoreboard.upscaled_tusimple(root, cache)
     assert png.stat().st_mtime_ns == stamp
     assert sorted(p.name for p in root.rglob("*")) == ["1", "20.jpg", "a", "clips", "label_data_fullres.json"]
+    # bilinear: the same frame as OpenCV's bilinear resize of it, blurrier than the bicubic one
+    soft_labels = scoreboard.upscaled_tusimple(root, tmp_path / "soft", cv2.INTER_LINEAR)
+    soft = io.read_image(soft_labels.parent / png.relative_to(cache))
+    source = io.read_image(root / "clips" / "a" / "1" / "20.jpg")
+    assert np.array_equal(soft, cv2.resize(source, (1280, 720), interpolation=cv2.INTER_LINEAR))
+    assert np.abs(np.diff(soft[400].astype(int), axis=0)).max() < np.abs(np.diff(big[400].astype(int), axis=0)).max()
 
 
 def test_culane_frames_moved_once_with_their_labels_sequence_by_sequence(tmp_path):

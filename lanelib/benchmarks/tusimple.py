@@ -36,9 +36,10 @@ IMAGE_SIZE = (1280, 720)  # (width, height) px of TuSimple's frames, the size it
 MAX_LINES = 4
 
 
-def full_size(rgb: np.ndarray) -> np.ndarray:
+def full_size(rgb: np.ndarray, interpolation: int = cv2.INTER_CUBIC) -> np.ndarray:
     """Return a TuSimple frame at ``IMAGE_SIZE``, where the official label rows lie: resized
-    (bicubic) when it is stored smaller (a downscaled copy), else the frame itself.
+    (``interpolation``, an OpenCV flag: bicubic by default) when it is stored smaller (a
+    downscaled copy), else the frame itself.
 
     Examples
     --------
@@ -47,7 +48,7 @@ def full_size(rgb: np.ndarray) -> np.ndarray:
     """
     if (rgb.shape[1], rgb.shape[0]) == IMAGE_SIZE:
         return rgb
-    return cv2.resize(rgb, IMAGE_SIZE, interpolation=cv2.INTER_CUBIC)
+    return cv2.resize(rgb, IMAGE_SIZE, interpolation=interpolation)
 
 
 @dataclass(frozen=True)
