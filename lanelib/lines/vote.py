@@ -235,15 +235,18 @@ def _tight_others(best: list[Candidate], every: list[list[Candidate]], config: L
     gap = config.min_gap_fraction * config.lane_width_m / xm_per_px
     ts = np.arange(0.0, v.height, 10.0)
     out = list(best)
+    kept = [c.line.x_at(ts) for c in best if not c.refused]  # each reported line's x on those rows
     for found in every:
-        for c in found if found is not best else ():
-            if c.refused or c.line.scatter_px * xm_per_px >= config.tight_scatter_m:
+        if found is best:
+            continue
+        for c in found:
+            tight = not c.refused and c.line.scatter_px * xm_per_px < config.tight_scatter_m
+            if not tight or len(kept) >= config.max_lines:
                 continue
             xs = c.line.x_at(ts)
-            apart = (xs - o.line.x_at(ts) for o in out if not o.refused)
-            room = sum(not o.refused for o in out) < config.max_lines
-            if room and all(np.abs(d).min() >= gap and not np.any(d[:-1] * d[1:] < 0) for d in apart):
+            if all(np.abs(xs - k).min() >= gap and not np.any(np.diff(np.sign(xs - k))) for k in kept):
                 out.append(c)
+                kept.append(xs)
     return _lanes_apart(out, config, xm_per_px, v)
 
 
